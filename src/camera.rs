@@ -1,0 +1,86 @@
+//! The pinhole camera.
+
+use crate::geometry::{DVec3, Ray};
+
+/// Why a camera is degenerate.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CameraError {
+    /// eye, look_at or up is NaN or infinite.
+    #[error("the camera's vectors must be finite")]
+    NotFinite,
+    /// look_at equals eye.
+    #[error("the camera looks at its own eye position: look_at must differ from eye")]
+    NoViewDirection,
+    /// up is zero or parallel to the view direction.
+    #[error("the up vector is zero or parallel to the view direction")]
+    BadUp,
+    /// fov outside (0, 180).
+    #[error("the field of view must be greater than 0 and less than 180 degrees, not {0}")]
+    BadFov(f64),
+}
+
+/// A pinhole camera at `eye` looking at `look_at`, with `fov` the FULL horizontal field of view
+/// in degrees. Image-plane coordinates run from the top-left corner `(0, 0)` to
+/// `(width, height)`; the vertical extent follows the image's aspect ratio.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Camera {
+    /// Eye position.
+    pub eye: DVec3,
+    /// Point the camera looks at.
+    pub look_at: DVec3,
+    /// Approximate up direction.
+    pub up: DVec3,
+    /// Full horizontal field of view, degrees, in (0, 180).
+    pub fov_degrees: f64,
+    forward: DVec3,
+    right: DVec3,
+    true_up: DVec3,
+}
+
+impl Camera {
+    /// A camera, or why it is degenerate.
+    pub fn new(
+        eye: DVec3,
+        look_at: DVec3,
+        up: DVec3,
+        fov_degrees: f64,
+    ) -> Result<Self, CameraError> {
+        if !(eye.is_finite() && look_at.is_finite() && up.is_finite() && fov_degrees.is_finite()) {
+            return Err(CameraError::NotFinite);
+        }
+        if !(fov_degrees > 0.0 && fov_degrees < 180.0) {
+            return Err(CameraError::BadFov(fov_degrees));
+        }
+        let forward = (look_at - eye).normalize_or_zero();
+        if forward == DVec3::ZERO {
+            return Err(CameraError::NoViewDirection);
+        }
+        let right = forward.cross(up);
+        if up.length() == 0.0 || right.length() <= 1e-9 * up.length() {
+            return Err(CameraError::BadUp);
+        }
+        let right = right.normalize();
+        let true_up = right.cross(forward);
+        Ok(Self {
+            eye,
+            look_at,
+            up,
+            fov_degrees,
+            forward,
+            right,
+            true_up,
+        })
+    }
+
+    /// The primary ray through image-plane point `(x, y)` (pixels; `(0,0)` the top-left corner
+    /// of the image, `(x + 0.5, y + 0.5)` the centre of pixel `(x, y)`) of a `width × height`
+    /// image. The direction is unit length.
+    pub fn ray(&self, x: f64, y: f64, width: u32, height: u32) -> Ray {
+        let half_w = (self.fov_degrees.to_radians() * 0.5).tan();
+        let half_h = half_w * height as f64 / width as f64;
+        let sx = (2.0 * x / width as f64 - 1.0) * half_w;
+        let sy = (1.0 - 2.0 * y / height as f64) * half_h;
+        let dir = (self.forward + sx * self.right + sy * self.true_up).normalize();
+        Ray::new(self.eye, dir)
+    }
+}

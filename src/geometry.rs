@@ -1,0 +1,269 @@
+//! Rays, axis-aligned boxes and affine object frames: the vocabulary every shape speaks.
+//!
+//! All geometry is `f64`. World space is right-handed; nothing here assumes a unit of length.
+
+pub use glam::{DMat3, DVec3};
+
+/// A half-line `origin + t·dir`, `t ≥ 0`. `dir` need not be unit length: every `t` in the
+/// library is measured in multiples of `dir`, so `t` is shared between world and object space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Where the ray starts (world or object space, as the context says).
+    pub origin: DVec3,
+    /// Direction; non-zero, not necessarily normalised.
+    pub dir: DVec3,
+}
+
+impl Ray {
+    /// A ray from `origin` along `dir` (not normalised).
+    pub fn new(origin: DVec3, dir: DVec3) -> Self {
+        Self { origin, dir }
+    }
+
+    /// The point `origin + t·dir`.
+    #[inline]
+    pub fn at(&self, t: f64) -> DVec3 {
+        self.origin + t * self.dir
+    }
+}
+
+/// An axis-aligned box `[min, max]`. An empty box has `min > max` on some axis; an infinite
+/// one (a plane's bounds) has infinite components.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    /// Lower corner.
+    pub min: DVec3,
+    /// Upper corner.
+    pub max: DVec3,
+}
+
+impl Aabb {
+    /// The box that contains nothing; the identity for [`Aabb::union`].
+    pub const EMPTY: Aabb = Aabb {
+        min: DVec3::splat(f64::INFINITY),
+        max: DVec3::splat(f64::NEG_INFINITY),
+    };
+
+    /// The box that contains everything.
+    pub const EVERYTHING: Aabb = Aabb {
+        min: DVec3::splat(f64::NEG_INFINITY),
+        max: DVec3::splat(f64::INFINITY),
+    };
+
+    /// The box with the given corners (`min ≤ max` componentwise for a non-empty box).
+    pub fn new(min: DVec3, max: DVec3) -> Self {
+        Self { min, max }
+    }
+
+    /// The smallest box holding every point given.
+    pub fn from_points(points: impl IntoIterator<Item = DVec3>) -> Self {
+        points.into_iter().fold(Self::EMPTY, |b, p| b.including(p))
+    }
+
+    /// This box grown to hold `p`.
+    pub fn including(self, p: DVec3) -> Self {
+        Self::new(self.min.min(p), self.max.max(p))
+    }
+
+    /// The smallest box holding both boxes.
+    pub fn union(self, other: Aabb) -> Self {
+        Self::new(self.min.min(other.min), self.max.max(other.max))
+    }
+
+    /// True when every coordinate of both corners is finite.
+    pub fn is_finite(&self) -> bool {
+        self.min.is_finite() && self.max.is_finite()
+    }
+
+    /// True when `p` lies inside or on the box.
+    pub fn contains(&self, p: DVec3) -> bool {
+        p.cmpge(self.min).all() && p.cmple(self.max).all()
+    }
+
+    /// The part `[t_enter, t_exit]` of `[t_min, t_max]` where the ray is inside the box, or
+    /// `None` when the ray misses it there. Exact slab test; robust to zero direction
+    /// components (a ray parallel to a slab is inside it iff its origin is).
+    #[inline]
+    pub fn clip(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
+        let mut t0 = t_min;
+        let mut t1 = t_max;
+        for axis in 0..3 {
+            let o = ray.origin[axis];
+            let d = ray.dir[axis];
+            let (lo, hi) = (self.min[axis], self.max[axis]);
+            if d == 0.0 {
+                if o < lo || o > hi {
+                    return None;
+                }
+                continue;
+            }
+            let inv = 1.0 / d;
+            let (mut a, mut b) = ((lo - o) * inv, (hi - o) * inv);
+            if a > b {
+                std::mem::swap(&mut a, &mut b);
+            }
+            // NaN (infinite box with o on the boundary) must not shrink the interval.
+            if a > t0 {
+                t0 = a;
+            }
+            if b < t1 {
+                t1 = b;
+            }
+            if t0 > t1 {
+                return None;
+            }
+        }
+        Some((t0, t1))
+    }
+}
+
+/// Why an object frame could not be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FrameError {
+    /// A basis vector or the position is NaN or infinite.
+    #[error("the position and basis vectors must be finite")]
+    NotFinite,
+    /// The three basis vectors are (nearly) linearly dependent, so the object would be flat.
+    #[error("the basis vectors u, v, w are linearly dependent (or nearly so): the matrix [u v w] has no usable inverse")]
+    Singular,
+}
+
+/// An affine placement of an object: `p_world = M·p_object + position` with `M = [u v w]`
+/// (u, v, w as columns). Any invertible `M` is allowed (rotation, non-uniform scale, shear).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    /// World position of the object-space origin.
+    pub position: DVec3,
+    /// Object-to-world linear part `[u v w]`.
+    pub m: DMat3,
+    /// World-to-object linear part `M⁻¹`.
+    pub m_inv: DMat3,
+    /// `(M⁻¹)ᵀ`, which carries object-space normals to world space.
+    pub normal_matrix: DMat3,
+}
+
+impl Frame {
+    /// The smallest `|det M| / (|u|·|v|·|w|)` accepted: below it the basis is treated as
+    /// singular. The ratio is 1 for an orthogonal basis at any scale and 0 for a flat one.
+    pub const MIN_INDEPENDENCE: f64 = 1e-9;
+
+    /// The frame with origin `position` and basis columns `u`, `v`, `w`.
+    pub fn new(position: DVec3, u: DVec3, v: DVec3, w: DVec3) -> Result<Self, FrameError> {
+        if !(position.is_finite() && u.is_finite() && v.is_finite() && w.is_finite()) {
+            return Err(FrameError::NotFinite);
+        }
+        let m = DMat3::from_cols(u, v, w);
+        let scale = u.length() * v.length() * w.length();
+        let det = m.determinant();
+        let independence = det.abs() / scale;
+        let usable = scale > 0.0 && scale.is_finite() && independence >= Self::MIN_INDEPENDENCE;
+        if !usable {
+            return Err(FrameError::Singular);
+        }
+        let m_inv = m.inverse();
+        if !m_inv.is_finite() {
+            return Err(FrameError::Singular);
+        }
+        Ok(Self {
+            position,
+            m,
+            m_inv,
+            normal_matrix: m_inv.transpose(),
+        })
+    }
+
+    /// The identity placement (object space = world space).
+    pub fn identity() -> Self {
+        Self {
+            position: DVec3::ZERO,
+            m: DMat3::IDENTITY,
+            m_inv: DMat3::IDENTITY,
+            normal_matrix: DMat3::IDENTITY,
+        }
+    }
+
+    /// The world ray expressed in object space; the direction is not renormalised, so a `t`
+    /// found in object space is the same `t` in world space.
+    #[inline]
+    pub fn ray_to_object(&self, ray: &Ray) -> Ray {
+        Ray::new(
+            self.m_inv * (ray.origin - self.position),
+            self.m_inv * ray.dir,
+        )
+    }
+
+    /// A world point in object coordinates.
+    #[inline]
+    pub fn point_to_object(&self, p: DVec3) -> DVec3 {
+        self.m_inv * (p - self.position)
+    }
+
+    /// An object point in world coordinates.
+    #[inline]
+    pub fn point_to_world(&self, p: DVec3) -> DVec3 {
+        self.m * p + self.position
+    }
+
+    /// An object-space normal (any length) as a unit world-space normal, same side.
+    #[inline]
+    pub fn normal_to_world(&self, n: DVec3) -> DVec3 {
+        (self.normal_matrix * n).normalize()
+    }
+
+    /// The world box holding the object-space box `b` (exact for the parallelepiped image).
+    pub fn bounds_to_world(&self, b: &Aabb) -> Aabb {
+        if !b.is_finite() {
+            return Aabb::EVERYTHING;
+        }
+        Aabb::from_points((0..8).map(|i| {
+            let c = DVec3::new(
+                if i & 1 == 0 { b.min.x } else { b.max.x },
+                if i & 2 == 0 { b.min.y } else { b.max.y },
+                if i & 4 == 0 { b.min.z } else { b.max.z },
+            );
+            self.point_to_world(c)
+        }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clip_hits_and_misses() {
+        let b = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
+        let r = Ray::new(DVec3::new(-5.0, 0.0, 0.0), DVec3::X);
+        assert_eq!(b.clip(&r, 0.0, f64::INFINITY), Some((4.0, 6.0)));
+        let miss = Ray::new(DVec3::new(-5.0, 2.0, 0.0), DVec3::X);
+        assert_eq!(b.clip(&miss, 0.0, f64::INFINITY), None);
+        let behind = Ray::new(DVec3::new(5.0, 0.0, 0.0), DVec3::X);
+        assert_eq!(b.clip(&behind, 0.0, f64::INFINITY), None);
+    }
+
+    #[test]
+    fn frame_round_trips_and_rejects_singular() {
+        let f = Frame::new(
+            DVec3::new(1.0, 2.0, 3.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(0.5, 1.0, 0.0),
+            DVec3::new(0.0, 0.0, 3.0),
+        )
+        .unwrap();
+        let p = DVec3::new(0.3, -0.7, 1.1);
+        assert!((f.point_to_object(f.point_to_world(p)) - p).length() < 1e-14);
+        assert_eq!(
+            Frame::new(DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::X + DVec3::Y),
+            Err(FrameError::Singular)
+        );
+        assert_eq!(
+            Frame::new(
+                DVec3::ZERO,
+                DVec3::X,
+                DVec3::Y,
+                DVec3::new(f64::NAN, 0.0, 1.0)
+            ),
+            Err(FrameError::NotFinite)
+        );
+    }
+}

@@ -1,0 +1,66 @@
+//! Surface properties: what a surface does with light in the Whitted model.
+
+use crate::geometry::DVec3;
+
+/// How a surface reflects and transmits light. Colours are linear RGB, normally in `[0, 1]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    /// Lambert diffuse colour (also scales the ambient term).
+    pub diffuse: DVec3,
+    /// Optional 3-D checker pattern: the second colour and the cell size (world units, > 0);
+    /// cells alternate between `diffuse` and this colour.
+    pub checker: Option<(DVec3, f64)>,
+    /// Specular highlight weight `ks ≥ 0` (white highlight of weight ks).
+    pub specular: f64,
+    /// Specular exponent (Blinn–Phong), ≥ 1.
+    pub shininess: f64,
+    /// Mirror reflection weight `kr` in `[0, 1]`.
+    pub reflect: f64,
+    /// Transmission weight `kt` in `[0, 1]`.
+    pub transmit: f64,
+    /// Index of refraction of the inside (> 0; 1 = no bending).
+    pub ior: f64,
+    /// Beer–Lambert absorption per unit length inside the object, per channel (≥ 0).
+    pub attenuation: DVec3,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            diffuse: DVec3::splat(0.8),
+            checker: None,
+            specular: 0.0,
+            shininess: 32.0,
+            reflect: 0.0,
+            transmit: 0.0,
+            ior: 1.0,
+            attenuation: DVec3::ZERO,
+        }
+    }
+}
+
+impl Material {
+    /// A plain diffuse material of the given colour.
+    pub fn diffuse(colour: DVec3) -> Self {
+        Self {
+            diffuse: colour,
+            ..Self::default()
+        }
+    }
+
+    /// The diffuse colour at world point `p` (the checker pattern applied, if any).
+    pub fn diffuse_at(&self, p: DVec3) -> DVec3 {
+        match self.checker {
+            None => self.diffuse,
+            Some((other, size)) => {
+                let c = (p / size).floor();
+                let parity = (c.x as i64 + c.y as i64 + c.z as i64).rem_euclid(2);
+                if parity == 0 {
+                    self.diffuse
+                } else {
+                    other
+                }
+            }
+        }
+    }
+}

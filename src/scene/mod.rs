@@ -1,0 +1,101 @@
+//! The scene: objects with materials, lights, camera, image settings; and its text format
+//! (see docs/scene-format.md), read by [`parse`].
+
+mod error;
+mod parser;
+
+pub use error::{InvalidScene, SceneError};
+pub use parser::{parse, parse_file};
+
+use crate::camera::Camera;
+use crate::geometry::{Aabb, DVec3, Ray};
+use crate::lights::Light;
+use crate::materials::Material;
+use crate::roots::Solver;
+use crate::shapes::Shape;
+
+/// The text of the built-in default scene (identical to `scenes/heart.scene`).
+pub const DEFAULT_SCENE: &str = include_str!("../../scenes/heart.scene");
+
+/// Choices made when a scene is loaded that the scene text does not make.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LoadOptions {
+    /// Root-isolation strategy for polynomial surfaces (hearts, implicit surfaces).
+    pub solver: Solver,
+}
+
+/// One thing in the scene: a shape, how it looks, and where it was written.
+#[derive(Debug)]
+pub struct Object {
+    /// The geometry.
+    pub shape: Box<dyn Shape>,
+    /// Its surface properties.
+    pub material: Material,
+    /// The scene keyword that made it, upper case (`"HEART"`, `"SPHERE"`, …).
+    pub keyword: &'static str,
+    /// 1-based line of the scene text the object was written on.
+    pub line: usize,
+    /// Cached `shape.bounds()`.
+    pub bounds: Aabb,
+}
+
+/// The nearest surface a ray meets.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SceneHit {
+    /// Index into [`Scene::objects`].
+    pub object: usize,
+    /// Ray parameter, in units of the ray's direction.
+    pub t: f64,
+    /// World hit point `ray.at(t)`.
+    pub point: DVec3,
+    /// Unit outward normal of the surface at the hit (not flipped toward the ray).
+    pub normal: DVec3,
+}
+
+/// A complete scene, ready to render.
+#[derive(Debug)]
+pub struct Scene {
+    /// Image width in pixels (1 ..= 32768).
+    pub width: u32,
+    /// Image height in pixels (1 ..= 32768).
+    pub height: u32,
+    /// The camera.
+    pub camera: Camera,
+    /// Colour of rays that hit nothing (linear RGB).
+    pub background: DVec3,
+    /// Ambient light (linear RGB), multiplied by each surface's diffuse colour.
+    pub ambient: DVec3,
+    /// Light sources.
+    pub lights: Vec<Light>,
+    /// Objects, in the order written.
+    pub objects: Vec<Object>,
+}
+
+impl Scene {
+    /// Largest accepted image side, in pixels.
+    pub const MAX_SIDE: u32 = 32768;
+
+    /// The nearest hit with `t_min < t < t_max`, if any.
+    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SceneHit> {
+        let mut best: Option<(usize, f64)> = None;
+        let mut t_far = t_max;
+        for (i, obj) in self.objects.iter().enumerate() {
+            if obj.bounds.clip(ray, t_min, t_far).is_none() {
+                continue;
+            }
+            if let Some(t) = obj.shape.intersect(ray, t_min, t_far) {
+                t_far = t;
+                best = Some((i, t));
+            }
+        }
+        best.map(|(object, t)| {
+            let point = ray.at(t);
+            SceneHit {
+                object,
+                t,
+                point,
+                normal: self.objects[object].shape.normal(point),
+            }
+        })
+    }
+}

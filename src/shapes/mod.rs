@@ -1,0 +1,55 @@
+//! Shapes: everything a ray can hit. Each shape implements the small [`Shape`] trait; a new
+//! primitive is one new file here plus one keyword in `scene::parser`.
+
+use crate::geometry::{Aabb, DVec3, Ray};
+
+mod boxes;
+mod ellipsoid;
+pub mod heart;
+mod plane;
+mod polygon;
+mod sphere;
+
+pub use boxes::Parallelepiped;
+pub use ellipsoid::Ellipsoid;
+pub use heart::Heart;
+pub use plane::Plane;
+pub use polygon::Polygon;
+pub use sphere::Sphere;
+
+/// Why a shape's parameters do not describe a valid shape; the message completes the sentence
+/// "this shape is invalid because …" and names the offending parameter.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct ShapeError(pub String);
+
+impl From<crate::geometry::FrameError> for ShapeError {
+    fn from(e: crate::geometry::FrameError) -> Self {
+        ShapeError(e.to_string())
+    }
+}
+
+/// A surface in world space.
+///
+/// Contract shared by every shape:
+/// - `intersect` returns the smallest `t` with `t_min < t < t_max` where `ray.at(t)` is on the
+///   surface, measured in units of `ray.dir` (which need not be unit length). Callers pass a
+///   small positive `t_min` for rays that start on a surface; a shape whose own numerics are
+///   coarser than that near `t = 0` must widen the guard itself so a ray never re-hits its origin.
+/// - `normal` is the unit normal at a world point on (or within rounding of) the surface,
+///   facing the shape's outside (for a plane or polygon: the side its normal was given on),
+///   whatever side the ray came from. It is never NaN.
+/// - `bounds` is a world box containing the whole surface (possibly infinite).
+pub trait Shape: Send + Sync + std::fmt::Debug {
+    /// Smallest ray parameter in `(t_min, t_max)` at which the ray meets the surface.
+    fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64>;
+    /// Unit outward normal at the world point `p` on the surface.
+    fn normal(&self, p: DVec3) -> DVec3;
+    /// World-space box containing the surface.
+    fn bounds(&self) -> Aabb;
+}
+
+/// Parses a finite-check helper used by constructors: true when all vectors are finite.
+pub(crate) fn all_finite(vs: &[DVec3]) -> bool {
+    vs.iter().all(|v| v.is_finite())
+}
