@@ -1,7 +1,7 @@
 //! Implicit polynomial surfaces typed as equations (`IMPLICIT "x^2 + y^2 + z^2 = 1" …`) or
 //! named presets (`IMPLICIT torus 1 0.3 …`), placed like the heart by a position and basis.
 
-use super::{Shape, ShapeError};
+use super::Shape;
 use crate::geometry::{Aabb, DVec3, Frame, Ray};
 use crate::roots::Solver;
 
@@ -74,9 +74,6 @@ impl Shape for Implicit {
     }
 
     fn bounds(&self) -> Aabb {
-        Aabb::EVERYTHING // TODO: implicit work
+        self.frame.bounds_to_world(&Aabb::EVERYTHING) // TODO: implicit work
     }
 }
-
-#[allow(dead_code)]
-fn _unused(_: ShapeError) {}
