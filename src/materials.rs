@@ -10,6 +10,9 @@ pub struct Material {
     /// Optional 3-D checker pattern: the second colour and the cell size (world units, > 0);
     /// cells alternate between `diffuse` and this colour.
     pub checker: Option<(DVec3, f64)>,
+    /// Optional diffuse colour for the back side of a surface (seen where a clipped implicit
+    /// surface is cut open); `None` shades both sides alike.
+    pub inside: Option<DVec3>,
     /// Specular highlight weight `ks ≥ 0` (white highlight of weight ks).
     pub specular: f64,
     /// Specular exponent (Blinn–Phong), ≥ 1.
@@ -29,6 +32,7 @@ impl Default for Material {
         Self {
             diffuse: DVec3::splat(0.8),
             checker: None,
+            inside: None,
             specular: 0.0,
             shininess: 32.0,
             reflect: 0.0,

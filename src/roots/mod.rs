@@ -23,11 +23,38 @@ pub enum Solver {
 }
 
 impl Solver {
+    /// Every strategy with its command-line name, default first.
+    pub const ALL: &'static [(Solver, &'static str)] = &[(Solver::Sturm, "sturm")];
+
+    /// The command-line name of this strategy.
+    pub fn name(self) -> &'static str {
+        Self::ALL
+            .iter()
+            .find(|(s, _)| *s == self)
+            .map_or("?", |(_, n)| n)
+    }
+
     /// The smallest real root in `(lo, hi]` by this strategy.
     #[inline]
     pub fn first_root(self, coeffs: &[f64], lo: f64, hi: f64) -> Option<f64> {
         match self {
             Solver::Sturm => first_root(coeffs, lo, hi),
         }
+    }
+}
+
+impl std::str::FromStr for Solver {
+    type Err = String;
+
+    /// Parses a strategy's command-line name (see [`Solver::ALL`]).
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .iter()
+            .find(|(_, n)| n.eq_ignore_ascii_case(s))
+            .map(|(solver, _)| *solver)
+            .ok_or_else(|| {
+                let names: Vec<_> = Self::ALL.iter().map(|(_, n)| *n).collect();
+                format!("unknown solver '{s}': expected one of {}", names.join(", "))
+            })
     }
 }

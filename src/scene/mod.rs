@@ -39,6 +39,25 @@ pub struct Object {
     pub bounds: Aabb,
 }
 
+impl Object {
+    /// An object; its bounds are computed once here.
+    pub fn new(
+        shape: Box<dyn Shape>,
+        material: Material,
+        keyword: &'static str,
+        line: usize,
+    ) -> Self {
+        let bounds = shape.bounds();
+        Self {
+            shape,
+            material,
+            keyword,
+            line,
+            bounds,
+        }
+    }
+}
+
 /// The nearest surface a ray meets.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SceneHit {
