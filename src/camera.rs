@@ -35,6 +35,8 @@ pub struct Camera {
     forward: DVec3,
     right: DVec3,
     true_up: DVec3,
+    /// `tan(fov / 2)`, the image plane's half width at unit distance.
+    half_width: f64,
 }
 
 impl Camera {
@@ -69,14 +71,20 @@ impl Camera {
             forward,
             right,
             true_up,
+            half_width: (fov_degrees.to_radians() * 0.5).tan(),
         })
+    }
+
+    /// Unit vector from the eye toward `look_at`.
+    pub fn forward(&self) -> DVec3 {
+        self.forward
     }
 
     /// The primary ray through image-plane point `(x, y)` (pixels; `(0,0)` the top-left corner
     /// of the image, `(x + 0.5, y + 0.5)` the centre of pixel `(x, y)`) of a `width × height`
     /// image. The direction is unit length.
     pub fn ray(&self, x: f64, y: f64, width: u32, height: u32) -> Ray {
-        let half_w = (self.fov_degrees.to_radians() * 0.5).tan();
+        let half_w = self.half_width;
         let half_h = half_w * height as f64 / width as f64;
         let sx = (2.0 * x / width as f64 - 1.0) * half_w;
         let sy = (1.0 - 2.0 * y / height as f64) * half_h;

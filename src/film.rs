@@ -1,7 +1,15 @@
 //! The film (a linear-RGB pixel buffer) and writing it to PNG or OpenEXR.
+//!
+//! Writing is atomic: the image goes to a temporary file in the target's directory, is
+//! flushed to disk, and is then renamed over the target. A failed write removes the temporary
+//! file and leaves any existing target untouched; [`install_interrupt_cleanup`] extends that
+//! promise to Ctrl-C.
 
 use crate::geometry::DVec3;
-use std::path::Path;
+use std::fs::{File, OpenOptions};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 /// A rendered image: `width × height` linear-RGB pixels, row-major, top row first.
 #[derive(Debug, Clone, PartialEq)]
@@ -14,8 +22,85 @@ pub struct Image {
     pub pixels: Vec<DVec3>,
 }
 
+impl Image {
+    /// A black image of the given size.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            pixels: vec![DVec3::ZERO; width as usize * height as usize],
+        }
+    }
+
+    /// The pixel at column `x`, row `y` (row 0 at the top). Panics outside the image.
+    pub fn get(&self, x: u32, y: u32) -> DVec3 {
+        assert!(x < self.width && y < self.height, "pixel out of range");
+        self.pixels[y as usize * self.width as usize + x as usize]
+    }
+
+    /// The image as 8-bit sRGB bytes (`R, G, B` per pixel, row-major), each linear channel
+    /// clamped to `[0, 1]`, sRGB-encoded and rounded to the nearest step. NaN becomes 0.
+    pub fn to_srgb8(&self) -> Vec<u8> {
+        self.pixels
+            .iter()
+            .flat_map(|p| [p.x, p.y, p.z])
+            .map(linear_to_srgb8)
+            .collect()
+    }
+}
+
+/// One linear channel value as an 8-bit sRGB code: clamped to `[0, 1]` (NaN → 0), encoded
+/// with the sRGB transfer curve, rounded to nearest.
+pub fn linear_to_srgb8(v: f64) -> u8 {
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    let s = if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
+}
+
+/// An 8-bit sRGB code back to a linear value in `[0, 1]` (the inverse of
+/// [`linear_to_srgb8`] up to rounding).
+pub fn srgb8_to_linear(c: u8) -> f64 {
+    let s = c as f64 / 255.0;
+    if s <= 0.040_45 {
+        s / 12.92
+    } else {
+        ((s + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// The file formats an image can be written in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// 8-bit RGB PNG, sRGB-encoded (`.png`).
+    Png,
+    /// OpenEXR RGB, linear, 32-bit float channels (`.exr`, the default for EXR).
+    ExrFloat,
+    /// OpenEXR RGB, linear, 16-bit half-float channels.
+    ExrHalf,
+}
+
+impl ImageFormat {
+    /// The format an output path asks for by its extension (case-insensitive): `.png` →
+    /// [`ImageFormat::Png`], `.exr` → [`ImageFormat::ExrFloat`]; anything else is an error.
+    pub fn from_path(path: &Path) -> Result<Self, OutputError> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("png") => Ok(ImageFormat::Png),
+            Some("exr") => Ok(ImageFormat::ExrFloat),
+            _ => Err(OutputError::UnknownFormat(path.display().to_string())),
+        }
+    }
+}
+
 /// Why an image could not be written.
-#[derive(Debug, thiserror::Error)]
+#[derive(Debug, thiserror::Error, miette::Diagnostic)]
 pub enum OutputError {
     /// The extension is not .png or .exr.
     #[error("cannot tell the image format of {0}: use a .png or .exr file name")]
@@ -23,6 +108,9 @@ pub enum OutputError {
     /// The directory to write into does not exist or is not a directory.
     #[error("the output directory {0} does not exist")]
     NoDirectory(String),
+    /// The output path names an existing directory.
+    #[error("the output {0} is a directory, not a file name")]
+    IsDirectory(String),
     /// Writing failed.
     #[error("cannot write {path}: {reason}")]
     Write {
@@ -33,16 +121,266 @@ pub enum OutputError {
     },
 }
 
-/// Checks, before any rendering, that `path` can be written: known extension, existing
-/// directory.
-pub fn check_output_path(path: &Path) -> Result<(), OutputError> {
-    let _ = path;
-    Ok(()) // TODO: renderer work
+/// The directory a file path will be written into (`.` for a bare file name).
+fn parent_dir(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
 }
 
-/// Writes the image atomically (temporary file beside the target, then rename): PNG as 8-bit
-/// sRGB, EXR as linear float, chosen by extension.
+/// Checks, before any rendering, that `path` can be written: known extension (`.png` or
+/// `.exr`), an existing directory to write into, and not itself a directory. Returns the
+/// format the extension selects.
+pub fn check_output_path(path: &Path) -> Result<ImageFormat, OutputError> {
+    let format = ImageFormat::from_path(path)?;
+    let dir = parent_dir(path);
+    if !dir.is_dir() {
+        return Err(OutputError::NoDirectory(dir.display().to_string()));
+    }
+    if path.is_dir() {
+        return Err(OutputError::IsDirectory(path.display().to_string()));
+    }
+    Ok(format)
+}
+
+/// Writes the image atomically (temporary file beside the target, then rename) in the format
+/// its extension selects: PNG as 8-bit sRGB, EXR as linear 32-bit float.
 pub fn write_image(image: &Image, path: &Path) -> Result<(), OutputError> {
-    let _ = (image, path);
-    todo!("renderer work")
+    let format = check_output_path(path)?;
+    write_image_as(image, path, format)
+}
+
+/// Writes the image atomically in the given format, whatever the extension. On success the
+/// target holds the complete image; on failure the target is as it was before and no
+/// temporary file is left.
+pub fn write_image_as(image: &Image, path: &Path, format: ImageFormat) -> Result<(), OutputError> {
+    let err = |reason: String| OutputError::Write {
+        path: path.display().to_string(),
+        reason,
+    };
+    if path.is_dir() {
+        return Err(OutputError::IsDirectory(path.display().to_string()));
+    }
+    let (tmp_path, file) = create_temp_beside(path).map_err(|e| err(e.to_string()))?;
+    register_temp(Some(tmp_path.clone()));
+    let result = encode(image, format, file);
+    let result = result.and_then(|()| {
+        // Rename while holding the registry lock, so an interrupt either sees the temporary
+        // file (and removes it) or sees nothing (the rename is done).
+        let mut guard = TEMP_FILE.lock().unwrap_or_else(|p| p.into_inner());
+        let renamed = std::fs::rename(&tmp_path, path).map_err(|e| e.to_string());
+        *guard = None;
+        renamed
+    });
+    if let Err(reason) = result {
+        let _ = std::fs::remove_file(&tmp_path);
+        register_temp(None);
+        return Err(err(reason));
+    }
+    // Make the rename itself durable where the platform allows opening a directory.
+    if let Ok(dir) = File::open(parent_dir(path)) {
+        let _ = dir.sync_all();
+    }
+    Ok(())
+}
+
+/// Encodes the image into the (temporary) file and flushes it to disk.
+fn encode(image: &Image, format: ImageFormat, file: File) -> Result<(), String> {
+    let (w, h) = (image.width as usize, image.height as usize);
+    if w == 0 || h == 0 || image.pixels.len() != w * h {
+        return Err(format!(
+            "the image is {}×{} but holds {} pixels",
+            image.width,
+            image.height,
+            image.pixels.len()
+        ));
+    }
+    let mut out = BufWriter::new(file);
+    match format {
+        ImageFormat::Png => {
+            use image::ImageEncoder;
+            let bytes = image.to_srgb8();
+            image::codecs::png::PngEncoder::new(&mut out)
+                .write_image(
+                    &bytes,
+                    image.width,
+                    image.height,
+                    image::ExtendedColorType::Rgb8,
+                )
+                .map_err(|e| e.to_string())?;
+        }
+        ImageFormat::ExrFloat => {
+            use exr::prelude::*;
+            let px = |v: Vec2<usize>| {
+                let p = image.pixels[v.y() * w + v.x()];
+                (p.x as f32, p.y as f32, p.z as f32)
+            };
+            Image::from_channels((w, h), SpecificChannels::rgb(px))
+                .write()
+                .to_buffered(&mut out)
+                .map_err(|e| e.to_string())?;
+        }
+        ImageFormat::ExrHalf => {
+            use exr::prelude::*;
+            let px = |v: Vec2<usize>| {
+                let p = image.pixels[v.y() * w + v.x()];
+                (
+                    f16::from_f64(p.x),
+                    f16::from_f64(p.y),
+                    f16::from_f64(p.z),
+                )
+            };
+            Image::from_channels((w, h), SpecificChannels::rgb(px))
+                .write()
+                .to_buffered(&mut out)
+                .map_err(|e| e.to_string())?;
+        }
+    }
+    out.flush().map_err(|e| e.to_string())?;
+    let file = out.into_inner().map_err(|e| e.error().to_string())?;
+    file.sync_all().map_err(|e| e.to_string())
+}
+
+/// Creates a fresh temporary file in the target's directory, named after the target
+/// (`.NAME.PID-N.tmp`), never overwriting anything.
+fn create_temp_beside(path: &Path) -> std::io::Result<(PathBuf, File)> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let dir = parent_dir(path);
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "image".into());
+    loop {
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let tmp = dir.join(format!(".{name}.{}-{n}.tmp", std::process::id()));
+        match OpenOptions::new().write(true).create_new(true).open(&tmp) {
+            Ok(f) => return Ok((tmp, f)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+/// The temporary file being written right now, if any, for the interrupt handler.
+static TEMP_FILE: Mutex<Option<PathBuf>> = Mutex::new(None);
+
+fn register_temp(path: Option<PathBuf>) {
+    *TEMP_FILE.lock().unwrap_or_else(|p| p.into_inner()) = path;
+}
+
+/// Installs (once per process) a Ctrl-C / SIGTERM handler that removes the temporary file of
+/// an image being written, if any, and exits with code 130. Call it from a binary before
+/// rendering; without it an interrupt may leave a temporary file (never a truncated target).
+/// Returns an error message when the handler could not be installed.
+pub fn install_interrupt_cleanup() -> Result<(), String> {
+    static INSTALLED: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
+    INSTALLED
+        .get_or_init(|| {
+            ctrlc::set_handler(|| {
+                let guard = TEMP_FILE.lock().unwrap_or_else(|p| p.into_inner());
+                if let Some(tmp) = guard.as_ref() {
+                    let _ = std::fs::remove_file(tmp);
+                }
+                // Exit while holding the lock: no rename can start after the removal.
+                std::process::exit(130);
+            })
+            .map_err(|e| e.to_string())
+        })
+        .clone()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_round_trips_every_code() {
+        for c in 0..=255u8 {
+            assert_eq!(linear_to_srgb8(srgb8_to_linear(c)), c);
+        }
+        assert_eq!(linear_to_srgb8(-1.0), 0);
+        assert_eq!(linear_to_srgb8(f64::NAN), 0);
+        assert_eq!(linear_to_srgb8(7.0), 255);
+        assert_eq!(linear_to_srgb8(0.5), 188);
+    }
+
+    #[test]
+    fn format_from_extension() {
+        assert_eq!(
+            ImageFormat::from_path(Path::new("a/b.PNG")).unwrap(),
+            ImageFormat::Png
+        );
+        assert_eq!(
+            ImageFormat::from_path(Path::new("x.exr")).unwrap(),
+            ImageFormat::ExrFloat
+        );
+        assert!(ImageFormat::from_path(Path::new("x.jpg")).is_err());
+        assert!(ImageFormat::from_path(Path::new("png")).is_err());
+    }
+
+    #[test]
+    fn check_rejects_missing_directory_and_directories() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("nope").join("a.png");
+        assert!(matches!(
+            check_output_path(&missing),
+            Err(OutputError::NoDirectory(_))
+        ));
+        let sub = dir.path().join("d.png");
+        std::fs::create_dir(&sub).unwrap();
+        assert!(matches!(
+            check_output_path(&sub),
+            Err(OutputError::IsDirectory(_))
+        ));
+        assert!(check_output_path(&dir.path().join("ok.exr")).is_ok());
+        assert!(check_output_path(Path::new("bare.png")).is_ok());
+    }
+
+    #[test]
+    fn writes_png_and_exr_and_leaves_no_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut img = Image::new(3, 2);
+        img.pixels[1] = DVec3::new(1.0, 0.5, 0.0);
+        img.pixels[5] = DVec3::new(2.0, 0.25, 0.125);
+        let png = dir.path().join("a.png");
+        write_image(&img, &png).unwrap();
+        let decoded = image::open(&png).unwrap().to_rgb8();
+        assert_eq!(decoded.dimensions(), (3, 2));
+        assert_eq!(decoded.get_pixel(1, 0).0, [255, 188, 0]);
+        let exr_path = dir.path().join("a.exr");
+        write_image(&img, &exr_path).unwrap();
+        let half = dir.path().join("h.exr");
+        write_image_as(&img, &half, ImageFormat::ExrHalf).unwrap();
+        for p in [&exr_path, &half] {
+            let read = exr::prelude::read_first_rgba_layer_from_file(
+                p,
+                |res, _| vec![(0.0f32, 0.0f32, 0.0f32); res.width() * res.height()],
+                |v, pos, (r, g, b, _a): (f32, f32, f32, f32)| v[pos.y() * 3 + pos.x()] = (r, g, b),
+            )
+            .unwrap();
+            assert_eq!(read.layer_data.channel_data.pixels[5], (2.0, 0.25, 0.125));
+        }
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names.len(), 3, "{names:?}");
+    }
+
+    #[test]
+    fn failed_write_keeps_existing_target() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("keep.png");
+        std::fs::write(&target, b"old").unwrap();
+        let bad = Image {
+            width: 2,
+            height: 2,
+            pixels: vec![DVec3::ZERO; 3],
+        };
+        assert!(write_image(&bad, &target).is_err());
+        assert_eq!(std::fs::read(&target).unwrap(), b"old");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
 }

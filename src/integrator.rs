@@ -1,17 +1,68 @@
 //! The Whitted integrator: shading, shadows, reflection, refraction, supersampling, tiles.
+//!
+//! # Shading model
+//! At a hit point with material `m`, unit normal `n` turned toward the incoming ray
+//! (surfaces are two-sided) and diffuse colour `c` (`m.diffuse_at(p)`, or `m.inside` on the
+//! back side when set), the colour is
+//!
+//! ```text
+//! ambient·c + Σ_lights colour·V·(c·max(0, n·l) + ks·max(0, n·h)^shininess)
+//!           + kr'·trace(reflected) + kt'·trace(refracted)
+//! ```
+//!
+//! with `h` the Blinn half vector and `V` the light's visibility along a shadow ray:
+//! 1 when unobstructed, 0 behind an opaque object, and behind transmissive objects the
+//! product of `kt` for every surface crossed and of `exp(−attenuation·length)` for every
+//! stretch travelled inside (so glass tints and dims shadows instead of blocking them).
+//! Shadow rays go straight (no refraction).
+//!
+//! `kr' = kr + kt·F` and `kt' = kt·(1 − F)`, where `F` is the exact unpolarised Fresnel
+//! reflectance of the interface (0 when `ior = 1`); under total internal reflection
+//! `kr' = kr + kt` and `kt' = 0`. So `kt` is the weight of the dielectric interface as a
+//! whole and `kr` an extra mirror weight. Whether a ray enters or leaves an object is decided
+//! by the geometric normal: a hit on the back side is a ray leaving the object, and the whole
+//! colour found there is dimmed by Beer–Lambert absorption `exp(−attenuation·d)` over the
+//! distance `d` travelled inside. Recursion stops at [`RenderSettings::max_depth`].
+//!
+//! A spherical light is sampled on the disc through its centre facing the shaded point;
+//! the pixel's samples take the disc's strata in a per-pixel rotated order, so soft shadows
+//! smooth out as `spp` grows and stay deterministic for a seed.
+//!
+//! # Self-intersection
+//! A secondary ray starts on a surface; it ignores hits closer than [`SELF_HIT_EPS`] times
+//! the scale of the numbers that located its origin (the largest coordinate of the hit point
+//! and of the incoming ray's origin, and the incoming segment's length). The guard thus
+//! follows the scene's scale: a heart 10⁻³ across and one 10³ across are treated alike.
 
 use crate::film::Image;
+use crate::geometry::{DVec3, Ray};
+use crate::lights::Light;
 use crate::scene::Scene;
+use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
+use std::time::{Duration, Instant};
+
+/// Relative self-intersection guard for secondary and shadow rays (see the module docs).
+pub const SELF_HIT_EPS: f64 = 1e-9;
+
+/// Side of the square image tiles rendered in parallel, in pixels.
+pub const TILE_SIZE: u32 = 16;
+
+/// Most surfaces a shadow ray passes through before the light counts as blocked.
+pub const MAX_SHADOW_CROSSINGS: u32 = 64;
 
 /// How to render: everything not in the scene text.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RenderSettings {
-    /// Samples per pixel (≥ 1), stratified and jittered.
+    /// Samples per pixel (≥ 1; 0 is treated as 1), stratified and jittered.
     pub spp: u32,
     /// Maximum recursion depth for reflection and refraction (0 = primary hits only).
     pub max_depth: u32,
-    /// Seed for the jitter; the same seed gives the same image.
+    /// Seed for the jitter and light sampling; the same seed gives the same image, whatever
+    /// the thread count.
     pub seed: u64,
+    /// Worker threads; 0 means one per available core.
+    pub threads: usize,
 }
 
 impl Default for RenderSettings {
@@ -20,12 +71,499 @@ impl Default for RenderSettings {
             spp: 4,
             max_depth: 8,
             seed: 0x6b61_7264_6961,
+            threads: 0,
+        }
+    }
+}
+
+/// What a render cost.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RenderStats {
+    /// Rays traced: primary, reflected, refracted and shadow rays (each shadow-ray segment
+    /// between transmissive surfaces counts as one).
+    pub rays: u64,
+    /// Wall-clock time of the render (not counting image writing).
+    pub elapsed: Duration,
+    /// Worker threads used.
+    pub threads: usize,
+}
+
+impl RenderStats {
+    /// Rays per second of wall-clock time (0 for an instantaneous render).
+    pub fn rays_per_second(&self) -> f64 {
+        let s = self.elapsed.as_secs_f64();
+        if s > 0.0 {
+            self.rays as f64 / s
+        } else {
+            0.0
         }
     }
 }
 
 /// Renders the scene to a linear-RGB image.
 pub fn render(scene: &Scene, settings: &RenderSettings) -> Image {
-    let _ = (scene, settings);
-    todo!("renderer work")
+    render_with_progress(scene, settings, &|_| {}).0
+}
+
+/// Renders the scene, calling `progress(n)` from worker threads each time `n` more pixels
+/// are finished (once per tile); returns the image and what it cost.
+pub fn render_with_progress(
+    scene: &Scene,
+    settings: &RenderSettings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (Image, RenderStats) {
+    let start = Instant::now();
+    let (width, height) = (scene.width.max(1), scene.height.max(1));
+    let tracer = Tracer::new(scene, settings);
+    let tiles: Vec<Tile> = tiles(width, height).collect();
+    let work = || {
+        tiles
+            .par_iter()
+            .map(|tile| {
+                let out = tracer.render_tile(tile, width, height);
+                progress(out.pixels.len() as u64);
+                out
+            })
+            .collect::<Vec<TileOutput>>()
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(settings.threads)
+        .build();
+    let (outputs, threads) = match pool {
+        Ok(pool) => (pool.install(work), pool.current_num_threads()),
+        Err(_) => (work(), rayon::current_num_threads()),
+    };
+    let mut image = Image::new(width, height);
+    let mut rays = 0;
+    for (tile, out) in tiles.iter().zip(outputs) {
+        rays += out.rays;
+        let tw = (tile.x1 - tile.x0) as usize;
+        for (row, chunk) in out.pixels.chunks_exact(tw).enumerate() {
+            let start = (tile.y0 as usize + row) * width as usize + tile.x0 as usize;
+            image.pixels[start..start + tw].copy_from_slice(chunk);
+        }
+    }
+    let stats = RenderStats {
+        rays,
+        elapsed: start.elapsed(),
+        threads,
+    };
+    (image, stats)
+}
+
+/// The colour seen along one world ray (which starts off any surface), shaded as in a
+/// render with these settings; a spherical light is sampled once, at a point drawn from the
+/// seed. Meant for tests and probes.
+pub fn trace_ray(scene: &Scene, settings: &RenderSettings, ray: &Ray) -> DVec3 {
+    let tracer = Tracer::new(scene, settings);
+    let mut state = SampleState::new(settings.seed, 0, 1);
+    tracer.radiance(ray, 0.0, 0, &mut state)
+}
+
+/// The strata grid `(columns, rows)` used for `spp` samples: `columns·rows = spp` with
+/// `columns ≤ rows` as close as possible (a prime `spp` gives one column of `spp` strips).
+pub fn strata(spp: u32) -> (u32, u32) {
+    let n = spp.max(1);
+    let mut cols = (n as f64).sqrt() as u32;
+    while cols > 1 && n % cols != 0 {
+        cols -= 1;
+    }
+    let cols = cols.max(1);
+    (cols, n / cols)
+}
+
+/// The position of sample `i` of `spp` inside a unit pixel, given two uniform numbers in
+/// `[0, 1)`: a jittered point of stratum `i` of the [`strata`] grid (row-major).
+pub fn stratified_point(i: u32, spp: u32, u: f64, v: f64) -> (f64, f64) {
+    let (cols, rows) = strata(spp);
+    let i = i % (cols * rows);
+    (
+        ((i % cols) as f64 + u) / cols as f64,
+        ((i / cols) as f64 + v) / rows as f64,
+    )
+}
+
+/// A rectangle of pixels `[x0, x1) × [y0, y1)`.
+#[derive(Debug, Clone, Copy)]
+struct Tile {
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+}
+
+fn tiles(width: u32, height: u32) -> impl Iterator<Item = Tile> {
+    (0..height.div_ceil(TILE_SIZE)).flat_map(move |ty| {
+        (0..width.div_ceil(TILE_SIZE)).map(move |tx| Tile {
+            x0: tx * TILE_SIZE,
+            y0: ty * TILE_SIZE,
+            x1: ((tx + 1) * TILE_SIZE).min(width),
+            y1: ((ty + 1) * TILE_SIZE).min(height),
+        })
+    })
+}
+
+/// A finished tile: its pixels row-major, and the rays it took.
+struct TileOutput {
+    pixels: Vec<DVec3>,
+    rays: u64,
+}
+
+/// splitmix64: a strong 64-bit mixer used to derive per-pixel seeds.
+fn mix(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// Per-sample state threaded through the recursion: random numbers, the sample's stratum
+/// for light sampling, and the ray counter (a plain integer: one per tile, no atomics).
+struct SampleState {
+    rng: rand_pcg::Pcg64Mcg,
+    /// Key of the pixel, to derive each light's stratum rotation.
+    key: u64,
+    /// Index of the current sample within the pixel.
+    index: u32,
+    /// Samples per pixel.
+    count: u32,
+    rays: u64,
+}
+
+impl SampleState {
+    fn new(key: u64, index: u32, count: u32) -> Self {
+        Self {
+            rng: rand_pcg::Pcg64Mcg::seed_from_u64(key),
+            key,
+            index,
+            count: count.max(1),
+            rays: 0,
+        }
+    }
+
+    fn uniform(&mut self) -> f64 {
+        self.rng.random::<f64>()
+    }
+
+    /// A jittered point of this sample's stratum of the unit square for light `light`.
+    fn light_point(&mut self, light: usize) -> (f64, f64) {
+        let rotation = mix(self.key ^ (light as u64).wrapping_mul(0xa076_1d64_78bd_642f));
+        let stratum = ((self.index as u64 + rotation) % self.count as u64) as u32;
+        let (u, v) = (self.uniform(), self.uniform());
+        stratified_point(stratum, self.count, u, v)
+    }
+}
+
+/// Maps the unit square onto the unit disc keeping strata compact (Shirley–Chiu).
+fn concentric_disc(u: f64, v: f64) -> (f64, f64) {
+    let (a, b) = (2.0 * u - 1.0, 2.0 * v - 1.0);
+    if a == 0.0 && b == 0.0 {
+        return (0.0, 0.0);
+    }
+    let quarter = std::f64::consts::FRAC_PI_4;
+    let (r, phi) = if a.abs() > b.abs() {
+        (a, quarter * (b / a))
+    } else {
+        (b, 2.0 * quarter - quarter * (a / b))
+    };
+    (r * phi.cos(), r * phi.sin())
+}
+
+/// Two unit vectors completing the unit `w` to an orthonormal basis (Duff et al. 2017).
+fn basis(w: DVec3) -> (DVec3, DVec3) {
+    let sign = 1.0f64.copysign(w.z);
+    let a = -1.0 / (sign + w.z);
+    let b = w.x * w.y * a;
+    (
+        DVec3::new(1.0 + sign * w.x * w.x * a, sign * b, -sign * w.x),
+        DVec3::new(b, sign + w.y * w.y * a, -w.y),
+    )
+}
+
+/// `SELF_HIT_EPS` scaled to the numbers that produced a point (see the module docs).
+#[inline]
+fn guard(point: DVec3, origin: DVec3, travelled: f64) -> f64 {
+    let scale = point
+        .abs()
+        .max_element()
+        .max(origin.abs().max_element())
+        .max(travelled);
+    (SELF_HIT_EPS * scale).max(f64::MIN_POSITIVE)
+}
+
+/// Direction of the ray through an interface by Snell's law, `d` unit and `n` the unit
+/// normal on the incoming side (`d·n < 0`), `eta = n_incoming / n_outgoing`; `None` under
+/// total internal reflection.
+fn refract(d: DVec3, n: DVec3, eta: f64) -> Option<(DVec3, f64)> {
+    let cos_i = -d.dot(n);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some(((eta * d + (eta * cos_i - cos_t) * n).normalize(), cos_t))
+}
+
+/// Exact unpolarised Fresnel reflectance of a dielectric interface for the given cosines
+/// and `eta = n_incoming / n_outgoing`.
+fn fresnel(cos_i: f64, cos_t: f64, eta: f64) -> f64 {
+    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    (0.5 * (rs * rs + rp * rp)).clamp(0.0, 1.0)
+}
+
+/// `exp(−a·d)` per channel; exactly 1 when there is no absorption.
+#[inline]
+fn beer_lambert(attenuation: DVec3, distance: f64) -> DVec3 {
+    if attenuation == DVec3::ZERO {
+        DVec3::ONE
+    } else {
+        (-attenuation * distance).exp()
+    }
+}
+
+/// Everything fixed for one render.
+struct Tracer<'a> {
+    scene: &'a Scene,
+    spp: u32,
+    max_depth: u32,
+    seed: u64,
+}
+
+impl<'a> Tracer<'a> {
+    fn new(scene: &'a Scene, settings: &RenderSettings) -> Self {
+        Self {
+            scene,
+            spp: settings.spp.max(1),
+            max_depth: settings.max_depth,
+            seed: mix(settings.seed),
+        }
+    }
+
+    fn render_tile(&self, tile: &Tile, width: u32, height: u32) -> TileOutput {
+        let mut pixels =
+            Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
+        let mut rays = 0;
+        let inv = 1.0 / self.spp as f64;
+        for y in tile.y0..tile.y1 {
+            for x in tile.x0..tile.x1 {
+                let key = mix(self.seed ^ mix((y as u64) << 32 | x as u64));
+                let mut state = SampleState::new(key, 0, self.spp);
+                let mut sum = DVec3::ZERO;
+                for i in 0..self.spp {
+                    state.index = i;
+                    let (u, v) = (state.uniform(), state.uniform());
+                    let (dx, dy) = stratified_point(i, self.spp, u, v);
+                    let ray =
+                        self.scene
+                            .camera
+                            .ray(x as f64 + dx, y as f64 + dy, width, height);
+                    sum += self.radiance(&ray, 0.0, 0, &mut state);
+                }
+                rays += state.rays;
+                pixels.push(sum * inv);
+            }
+        }
+        TileOutput { pixels, rays }
+    }
+
+    /// The colour arriving along `ray` from its first hit beyond `t_min`.
+    fn radiance(&self, ray: &Ray, t_min: f64, depth: u32, s: &mut SampleState) -> DVec3 {
+        s.rays += 1;
+        let scene = self.scene;
+        let Some(hit) = scene.intersect(ray, t_min, f64::INFINITY) else {
+            return scene.background;
+        };
+        let m = &scene.objects[hit.object].material;
+        let dir_len = ray.dir.length();
+        let d = ray.dir / dir_len;
+        let travelled = hit.t * dir_len;
+        let p = hit.point;
+        let front = hit.normal.dot(d) < 0.0;
+        let n = if front { hit.normal } else { -hit.normal };
+        let eps = guard(p, ray.origin, travelled);
+
+        let base = match (front, m.inside) {
+            (false, Some(inside)) => inside,
+            _ => m.diffuse_at(p),
+        };
+        let mut colour = scene.ambient * base;
+        for (index, light) in scene.lights.iter().enumerate() {
+            let target = self.light_sample(light, index, p, s);
+            let to_light = target - p;
+            let dist = to_light.length();
+            if dist <= eps {
+                continue;
+            }
+            let l = to_light / dist;
+            let n_dot_l = n.dot(l);
+            if n_dot_l <= 0.0 {
+                continue;
+            }
+            let visibility = self.transmittance(p, l, eps, dist, s);
+            if visibility == DVec3::ZERO {
+                continue;
+            }
+            let mut f = base * n_dot_l;
+            if m.specular > 0.0 {
+                let h = (l - d).normalize_or_zero();
+                f += DVec3::splat(m.specular * n.dot(h).max(0.0).powf(m.shininess));
+            }
+            colour += light.colour * visibility * f;
+        }
+
+        if depth < self.max_depth {
+            let mut kr = m.reflect;
+            let mut kt = 0.0;
+            let mut refracted = None;
+            if m.transmit > 0.0 {
+                let eta = if front { 1.0 / m.ior } else { m.ior };
+                match refract(d, n, eta) {
+                    Some((t_dir, cos_t)) => {
+                        let f = fresnel(-d.dot(n), cos_t, eta);
+                        kr += m.transmit * f;
+                        kt = m.transmit * (1.0 - f);
+                        refracted = Some(t_dir);
+                    }
+                    None => kr += m.transmit,
+                }
+            }
+            if kr > 0.0 {
+                let r = d - 2.0 * d.dot(n) * n;
+                colour += kr * self.radiance(&Ray::new(p, r), eps, depth + 1, s);
+            }
+            if let (Some(t_dir), true) = (refracted, kt > 0.0) {
+                colour += kt * self.radiance(&Ray::new(p, t_dir), eps, depth + 1, s);
+            }
+        }
+
+        if !front {
+            // The ray travelled inside this object to reach its back side.
+            colour *= beer_lambert(m.attenuation, travelled);
+        }
+        colour
+    }
+
+    /// The point of `light` a shadow ray from `p` aims at: the centre of a point light, a
+    /// stratified point of the disc facing `p` for a spherical one.
+    fn light_sample(&self, light: &Light, index: usize, p: DVec3, s: &mut SampleState) -> DVec3 {
+        if light.radius <= 0.0 {
+            return light.position;
+        }
+        let w = (light.position - p).normalize_or_zero();
+        if w == DVec3::ZERO {
+            return light.position;
+        }
+        let (u, v) = s.light_point(index);
+        let (a, b) = concentric_disc(u, v);
+        let (e1, e2) = basis(w);
+        light.position + light.radius * (a * e1 + b * e2)
+    }
+
+    /// The fraction of light (per channel) that reaches `p` along the unit direction `l`
+    /// from `dist` away, through any transmissive surfaces on the way.
+    fn transmittance(
+        &self,
+        p: DVec3,
+        l: DVec3,
+        eps: f64,
+        dist: f64,
+        s: &mut SampleState,
+    ) -> DVec3 {
+        let scene = self.scene;
+        let mut through = DVec3::ONE;
+        let mut origin = p;
+        let mut t_min = eps;
+        let mut remaining = dist;
+        for _ in 0..MAX_SHADOW_CROSSINGS {
+            s.rays += 1;
+            let ray = Ray::new(origin, l);
+            let Some(hit) = scene.intersect(&ray, t_min, remaining) else {
+                return through;
+            };
+            let m = &scene.objects[hit.object].material;
+            if m.transmit <= 0.0 {
+                return DVec3::ZERO;
+            }
+            through *= m.transmit;
+            if hit.normal.dot(l) > 0.0 {
+                // Leaving the object: absorbed along the stretch inside.
+                through *= beer_lambert(m.attenuation, hit.t);
+            }
+            if through.max_element() <= 0.0 {
+                return DVec3::ZERO;
+            }
+            t_min = guard(hit.point, origin, hit.t);
+            origin = hit.point;
+            remaining -= hit.t;
+        }
+        DVec3::ZERO
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strata_factor_spp() {
+        assert_eq!(strata(1), (1, 1));
+        assert_eq!(strata(4), (2, 2));
+        assert_eq!(strata(8), (2, 4));
+        assert_eq!(strata(9), (3, 3));
+        assert_eq!(strata(7), (1, 7));
+        assert_eq!(strata(0), (1, 1));
+    }
+
+    #[test]
+    fn stratified_points_fill_each_stratum_once() {
+        for spp in [1, 2, 4, 6, 9, 16] {
+            let (c, r) = strata(spp);
+            let mut seen = vec![false; spp as usize];
+            for i in 0..spp {
+                let (x, y) = stratified_point(i, spp, 0.5, 0.5);
+                let cell = (y * r as f64) as u32 * c + (x * c as f64) as u32;
+                assert!(!seen[cell as usize]);
+                seen[cell as usize] = true;
+            }
+        }
+    }
+
+    #[test]
+    fn disc_and_basis() {
+        for (u, v) in [(0.0, 0.0), (0.99, 0.5), (0.3, 0.8), (0.5, 0.5)] {
+            let (a, b) = concentric_disc(u, v);
+            assert!(a * a + b * b <= 1.0 + 1e-12);
+        }
+        for w in [DVec3::Z, -DVec3::Z, DVec3::new(1.0, 2.0, -3.0).normalize()] {
+            let (e1, e2) = basis(w);
+            assert!(e1.dot(w).abs() < 1e-12 && e2.dot(w).abs() < 1e-12);
+            assert!(e1.dot(e2).abs() < 1e-12);
+            assert!((e1.length() - 1.0).abs() < 1e-12 && (e2.length() - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn snell_and_fresnel() {
+        let n = DVec3::Z;
+        let d = DVec3::new(1.0, 0.0, -1.0).normalize();
+        let (t, cos_t) = refract(d, n, 1.0 / 1.5).unwrap();
+        let sin_i = d.x;
+        let sin_t = t.x;
+        assert!((sin_i - 1.5 * sin_t).abs() < 1e-12);
+        assert!((cos_t + t.z).abs() < 1e-12);
+        // Leaving glass at 45° exceeds the critical angle (41.8°).
+        assert!(refract(d, n, 1.5).is_none());
+        // Normal incidence: ((n1 − n2)/(n1 + n2))².
+        assert!((fresnel(1.0, 1.0, 1.0 / 1.5) - 0.04).abs() < 1e-12);
+        assert_eq!(fresnel(0.3, 0.3, 1.0), 0.0);
+    }
+
+    #[test]
+    fn guard_scales_with_the_scene() {
+        let small = guard(DVec3::splat(1e-3), DVec3::splat(2e-3), 1e-3);
+        let big = guard(DVec3::splat(1e3), DVec3::splat(2e3), 1e3);
+        assert!((big / small - 1e6).abs() < 1e-3);
+        assert!(guard(DVec3::ZERO, DVec3::ZERO, 0.0) > 0.0);
+    }
 }

@@ -1,0 +1,78 @@
+//! Scene-building helpers shared by the render tests (scenes are built in code so these
+//! tests do not depend on the parser).
+#![allow(dead_code)]
+
+use kardia::camera::Camera;
+use kardia::geometry::DVec3;
+use kardia::lights::Light;
+use kardia::materials::Material;
+use kardia::scene::{Object, Scene};
+use kardia::shapes::{Plane, Sphere};
+
+/// An empty scene: `w × h`, camera at `eye` looking at `at` with +Z up unless the view is
+/// vertical, black background, no ambient light.
+pub fn scene(w: u32, h: u32, eye: DVec3, at: DVec3, fov: f64) -> Scene {
+    let forward = (at - eye).normalize();
+    let up = if forward.cross(DVec3::Z).length() > 1e-6 {
+        DVec3::Z
+    } else {
+        DVec3::Y
+    };
+    Scene {
+        width: w,
+        height: h,
+        camera: Camera::new(eye, at, up, fov).unwrap(),
+        background: DVec3::ZERO,
+        ambient: DVec3::ZERO,
+        lights: Vec::new(),
+        objects: Vec::new(),
+    }
+}
+
+/// Adds a sphere.
+pub fn sphere(s: &mut Scene, centre: DVec3, radius: f64, m: Material) {
+    let line = s.objects.len() + 1;
+    s.objects.push(Object::new(
+        Box::new(Sphere::new(centre, radius).unwrap()),
+        m,
+        "SPHERE",
+        line,
+    ));
+}
+
+/// Adds a plane.
+pub fn plane(s: &mut Scene, point: DVec3, normal: DVec3, m: Material) {
+    let line = s.objects.len() + 1;
+    s.objects.push(Object::new(
+        Box::new(Plane::new(point, normal).unwrap()),
+        m,
+        "PLANE",
+        line,
+    ));
+}
+
+/// Adds a light (`radius` 0 for a point light).
+pub fn light(s: &mut Scene, position: DVec3, colour: DVec3, radius: f64) {
+    s.lights.push(Light {
+        position,
+        colour,
+        radius,
+    });
+}
+
+/// First `t > 1e-9` where the ray `o + t·d` meets the sphere, computed independently of
+/// the library.
+pub fn hit_sphere(o: DVec3, d: DVec3, c: DVec3, r: f64) -> Option<f64> {
+    let oc = o - c;
+    let a = d.dot(d);
+    let b = oc.dot(d);
+    let cc = oc.dot(oc) - r * r;
+    let disc = b * b - a * cc;
+    if disc < 0.0 {
+        return None;
+    }
+    let sq = disc.sqrt();
+    [(-b - sq) / a, (-b + sq) / a]
+        .into_iter()
+        .find(|&t| t > 1e-9)
+}
