@@ -225,11 +225,7 @@ fn encode(image: &Image, format: ImageFormat, file: File) -> Result<(), String> 
             use exr::prelude::*;
             let px = |v: Vec2<usize>| {
                 let p = image.pixels[v.y() * w + v.x()];
-                (
-                    f16::from_f64(p.x),
-                    f16::from_f64(p.y),
-                    f16::from_f64(p.z),
-                )
+                (f16::from_f64(p.x), f16::from_f64(p.y), f16::from_f64(p.z))
             };
             Image::from_channels((w, h), SpecificChannels::rgb(px))
                 .write()

@@ -341,8 +341,7 @@ impl<'a> Tracer<'a> {
     }
 
     fn render_tile(&self, tile: &Tile, width: u32, height: u32) -> TileOutput {
-        let mut pixels =
-            Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
+        let mut pixels = Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
         let mut rays = 0;
         let inv = 1.0 / self.spp as f64;
         for y in tile.y0..tile.y1 {
@@ -354,10 +353,10 @@ impl<'a> Tracer<'a> {
                     state.index = i;
                     let (u, v) = (state.uniform(), state.uniform());
                     let (dx, dy) = stratified_point(i, self.spp, u, v);
-                    let ray =
-                        self.scene
-                            .camera
-                            .ray(x as f64 + dx, y as f64 + dy, width, height);
+                    let ray = self
+                        .scene
+                        .camera
+                        .ray(x as f64 + dx, y as f64 + dy, width, height);
                     sum += self.radiance(&ray, 0.0, 0, &mut state);
                 }
                 rays += state.rays;
@@ -462,14 +461,7 @@ impl<'a> Tracer<'a> {
 
     /// The fraction of light (per channel) that reaches `p` along the unit direction `l`
     /// from `dist` away, through any transmissive surfaces on the way.
-    fn transmittance(
-        &self,
-        p: DVec3,
-        l: DVec3,
-        eps: f64,
-        dist: f64,
-        s: &mut SampleState,
-    ) -> DVec3 {
+    fn transmittance(&self, p: DVec3, l: DVec3, eps: f64, dist: f64, s: &mut SampleState) -> DVec3 {
         let scene = self.scene;
         let mut through = DVec3::ONE;
         let mut origin = p;

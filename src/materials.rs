@@ -52,12 +52,17 @@ impl Material {
         }
     }
 
-    /// The diffuse colour at world point `p` (the checker pattern applied, if any).
+    /// Shift of the checker lattice, in cells: keeps a surface that lies exactly on a cell
+    /// boundary (a floor at `z = 0`) from flickering between two cells with rounding noise.
+    pub const CHECKER_OFFSET: f64 = 1e-6;
+
+    /// The diffuse colour at world point `p` (the checker pattern applied, if any). Cells
+    /// are `[k·size, (k+1)·size)` per axis, shifted by [`Material::CHECKER_OFFSET`] cells.
     pub fn diffuse_at(&self, p: DVec3) -> DVec3 {
         match self.checker {
             None => self.diffuse,
             Some((other, size)) => {
-                let c = (p / size).floor();
+                let c = (p / size + Self::CHECKER_OFFSET).floor();
                 let parity = (c.x as i64 + c.y as i64 + c.z as i64).rem_euclid(2);
                 if parity == 0 {
                     self.diffuse

@@ -189,7 +189,12 @@ fn refraction_follows_snells_law() {
     assert!(d2.z < -0.1, "the ball bends the ray toward the axis: {d2}");
 
     let target = p2 + 3.0 * d2;
-    sphere(&mut s, target, 0.05, Material::diffuse(DVec3::new(1.0, 0.0, 0.0)));
+    sphere(
+        &mut s,
+        target,
+        0.05,
+        Material::diffuse(DVec3::new(1.0, 0.0, 0.0)),
+    );
     let got = trace_ray(&s, &settings(1), &Ray::new(o, d));
     let expected = (1.0 - f1) * (1.0 - f2);
     assert!(
@@ -242,7 +247,11 @@ fn beer_lambert_inside_a_transmissive_ball() {
         ..Material::default()
     };
     sphere(&mut s, DVec3::ZERO, 0.75, glass);
-    let got = trace_ray(&s, &settings(1), &Ray::new(DVec3::new(0.0, -5.0, 0.0), DVec3::Y));
+    let got = trace_ray(
+        &s,
+        &settings(1),
+        &Ray::new(DVec3::new(0.0, -5.0, 0.0), DVec3::Y),
+    );
     let e = (-a * 1.5).exp();
     assert!(close(got, e, 1e-12), "{got} vs {e}");
 }
@@ -365,18 +374,28 @@ fn scale_invariant_rendering() {
     let build = |k: f64| {
         let mut s = scene(24, 24, DVec3::new(3.0, -4.0, 2.5) * k, DVec3::ZERO, 40.0);
         s.ambient = DVec3::splat(0.05);
-        plane(&mut s, DVec3::new(0.0, 0.0, -k), DVec3::Z, Material {
-            reflect: 0.3,
-            ..Material::diffuse(DVec3::splat(0.5))
-        });
-        sphere(&mut s, DVec3::ZERO, k, Material {
-            transmit: 0.8,
-            ior: 1.4,
-            attenuation: DVec3::new(0.2, 0.4, 0.8) / k,
-            diffuse: DVec3::splat(0.1),
-            specular: 0.5,
-            ..Material::default()
-        });
+        plane(
+            &mut s,
+            DVec3::new(0.0, 0.0, -k),
+            DVec3::Z,
+            Material {
+                reflect: 0.3,
+                ..Material::diffuse(DVec3::splat(0.5))
+            },
+        );
+        sphere(
+            &mut s,
+            DVec3::ZERO,
+            k,
+            Material {
+                transmit: 0.8,
+                ior: 1.4,
+                attenuation: DVec3::new(0.2, 0.4, 0.8) / k,
+                diffuse: DVec3::splat(0.1),
+                specular: 0.5,
+                ..Material::default()
+            },
+        );
         light(&mut s, DVec3::new(2.0, -3.0, 5.0) * k, DVec3::ONE, 0.3 * k);
         s
     };
@@ -384,7 +403,16 @@ fn scale_invariant_rendering() {
     let small = render(&build(1e-3), &st);
     let big = render(&build(1e3), &st);
     let unit = render(&build(1.0), &st);
-    for (i, ((a, b), c)) in small.pixels.iter().zip(&big.pixels).zip(&unit.pixels).enumerate() {
-        assert!(close(*a, *c, 1e-6) && close(*b, *c, 1e-6), "pixel {i}: {a} {b} {c}");
+    for (i, ((a, b), c)) in small
+        .pixels
+        .iter()
+        .zip(&big.pixels)
+        .zip(&unit.pixels)
+        .enumerate()
+    {
+        assert!(
+            close(*a, *c, 1e-6) && close(*b, *c, 1e-6),
+            "pixel {i}: {a} {b} {c}"
+        );
     }
 }

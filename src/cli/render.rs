@@ -167,13 +167,14 @@ pub fn run(args: RenderArgs) -> i32 {
     }
     if !args.quiet {
         eprintln!(
-            "kardia: {}×{}, {} spp, {} thread{}, {:.2} s, {} → {}",
+            "kardia: {}×{}, {} spp, {} thread{}, {:.2} s, {} rays, {} → {}",
             scene.width,
             scene.height,
             settings.spp,
             stats.threads,
             if stats.threads == 1 { "" } else { "s" },
             stats.elapsed.as_secs_f64(),
+            stats.rays,
             rate(stats.rays_per_second()),
             args.output.display()
         );
@@ -225,7 +226,10 @@ mod tests {
         .unwrap()
         .args;
         assert_eq!(a.scene, Some(PathBuf::from("s.scene")));
-        assert_eq!((a.width, a.height, a.spp, a.threads), (Some(64), Some(32), 9, Some(2)));
+        assert_eq!(
+            (a.width, a.height, a.spp, a.threads),
+            (Some(64), Some(32), 9, Some(2))
+        );
         assert_eq!((a.max_depth, a.seed, a.half, a.quiet), (3, 7, true, true));
         assert!(Wrapper::try_parse_from(["render", "--spp", "0"]).is_err());
         assert!(Wrapper::try_parse_from(["render", "--solver", "nonsense"]).is_err());
