@@ -165,7 +165,7 @@ pub fn trace_ray(scene: &Scene, settings: &RenderSettings, ray: &Ray) -> DVec3 {
 pub fn strata(spp: u32) -> (u32, u32) {
     let n = spp.max(1);
     let mut cols = (n as f64).sqrt() as u32;
-    while cols > 1 && n % cols != 0 {
+    while cols > 1 && !n.is_multiple_of(cols) {
         cols -= 1;
     }
     let cols = cols.max(1);

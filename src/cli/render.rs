@@ -107,6 +107,10 @@ fn rate(per_second: f64) -> String {
 
 /// Runs `kardia render`; returns the exit code (0 success, 1 any error).
 pub fn run(args: RenderArgs) -> i32 {
+    // From here on an interrupt exits with code 130 and removes a half-written image.
+    if let Err(e) = film::install_interrupt_cleanup() {
+        eprintln!("kardia: warning: Ctrl-C will not clean up: {e}");
+    }
     // Everything that can fail before rendering is checked first.
     let mut format = match film::check_output_path(&args.output) {
         Ok(f) => f,
@@ -133,9 +137,6 @@ pub fn run(args: RenderArgs) -> i32 {
         }
     };
     override_size(&mut scene, args.width, args.height);
-    if let Err(e) = film::install_interrupt_cleanup() {
-        eprintln!("kardia: warning: Ctrl-C will not clean up: {e}");
-    }
 
     let settings = RenderSettings {
         spp: args.spp,

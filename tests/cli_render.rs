@@ -1,0 +1,255 @@
+//! End-to-end tests of `kardia render`: the built binary on tiny images.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+const SCENE: &str = "\
+SIZE 40 30
+CAMERA (0, -5, 1) (0, 0, 0) (0, 0, 1) 40
+BACKGROUND (0.1, 0.1, 0.2)
+AMBIENT (0.1, 0.1, 0.1)
+LIGHT (3, -3, 5) (1, 1, 1) 0.5
+SPHERE (0, 0, 0) 1 (0.8, 0.2, 0.2) SPECULAR 0.5 40
+PLANE (0, 0, -1) (0, 0, 1) (0.5, 0.5, 0.5) REFLECT 0.2
+";
+
+/// A scene whose third line has an error (a sphere radius that is not a number).
+const BAD_SCENE: &str = "\
+SIZE 40 30
+CAMERA (0, -5, 1) (0, 0, 0) (0, 0, 1) 40
+SPHERE (0, 0, 0) oops (0.8, 0.2, 0.2)
+";
+
+fn kardia(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_kardia"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("the kardia binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// The names in a directory, sorted.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+fn setup(scene: &str) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("s.scene"), scene).unwrap();
+    dir
+}
+
+#[test]
+fn writes_png_quietly() {
+    let dir = setup(SCENE);
+    let o = kardia(
+        dir.path(),
+        &[
+            "render", "s.scene", "-o", "out.png", "--spp", "2", "--quiet",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(stderr(&o), "", "--quiet prints nothing");
+    let img = image::open(dir.path().join("out.png")).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (40, 30));
+    // The sphere is in the middle of the picture and reddish.
+    let [r, g, b] = img.get_pixel(20, 15).0;
+    assert!(r > g && r > b, "centre pixel {r} {g} {b}");
+    assert_eq!(listing(dir.path()), ["out.png", "s.scene"]);
+}
+
+#[test]
+fn writes_exr_float_and_half_with_size_overrides() {
+    let dir = setup(SCENE);
+    for (name, extra) in [("f.exr", None), ("h.exr", Some("--half"))] {
+        let mut args = vec![
+            "render",
+            "s.scene",
+            "-o",
+            name,
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "--spp",
+            "1",
+            "--threads",
+            "1",
+            "--quiet",
+        ];
+        args.extend(extra);
+        let o = kardia(dir.path(), &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let read = exr::prelude::read_first_rgba_layer_from_file(
+            dir.path().join(name),
+            |res, _| (res.width(), res.height()),
+            |_, _, _: (f32, f32, f32, f32)| {},
+        )
+        .unwrap();
+        assert_eq!(read.layer_data.channel_data.pixels, (24, 16));
+    }
+    assert_eq!(listing(dir.path()), ["f.exr", "h.exr", "s.scene"]);
+}
+
+#[test]
+fn prints_a_summary_line() {
+    let dir = setup(SCENE);
+    let o = kardia(
+        dir.path(),
+        &[
+            "render",
+            "s.scene",
+            "-o",
+            "a.png",
+            "--spp",
+            "4",
+            "--threads",
+            "2",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "{err}");
+    let line = lines[0];
+    assert!(
+        line.starts_with("kardia: 40×30, 4 spp, 2 threads, ") && line.ends_with(" → a.png"),
+        "{line}"
+    );
+    assert!(
+        line.contains(" rays, ") && line.contains("rays/s"),
+        "{line}"
+    );
+}
+
+#[test]
+fn same_seed_same_image_different_seed_different_image() {
+    let dir = setup(SCENE);
+    let run = |out: &str, seed: &str| {
+        let o = kardia(
+            dir.path(),
+            &["render", "s.scene", "-o", out, "--seed", seed, "--quiet"],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read(dir.path().join(out)).unwrap()
+    };
+    let a = run("a.png", "5");
+    let b = run("b.png", "5");
+    let c = run("c.png", "6");
+    assert_eq!(a, b);
+    assert_ne!(a, c);
+}
+
+#[test]
+fn missing_output_directory_is_refused_before_rendering() {
+    let dir = setup(SCENE);
+    let o = kardia(dir.path(), &["render", "s.scene", "-o", "nowhere/out.png"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(
+        err.contains("nowhere") && err.contains("does not exist"),
+        "{err}"
+    );
+    assert!(!err.contains("rays/s"), "nothing was rendered: {err}");
+    assert_eq!(listing(dir.path()), ["s.scene"]);
+}
+
+#[test]
+fn unknown_extension_is_refused() {
+    let dir = setup(SCENE);
+    let o = kardia(dir.path(), &["render", "s.scene", "-o", "out.jpg"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains(".png or .exr"), "{}", stderr(&o));
+    assert_eq!(listing(dir.path()), ["s.scene"]);
+}
+
+#[test]
+fn unreadable_scene_is_an_error() {
+    let dir = setup(SCENE);
+    let o = kardia(dir.path(), &["render", "missing.scene", "-o", "out.png"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(err.contains("missing.scene"), "{err}");
+    assert_eq!(listing(dir.path()), ["s.scene"]);
+}
+
+#[test]
+fn bad_scene_leaves_existing_output_untouched() {
+    let dir = setup(BAD_SCENE);
+    std::fs::write(dir.path().join("out.png"), b"previous image").unwrap();
+    let o = kardia(dir.path(), &["render", "s.scene", "-o", "out.png"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(err.contains("s.scene:3:"), "names file:line:column: {err}");
+    assert!(err.contains("oops"), "shows the line: {err}");
+    assert!(o.stdout.is_empty());
+    assert_eq!(
+        std::fs::read(dir.path().join("out.png")).unwrap(),
+        b"previous image"
+    );
+    assert_eq!(listing(dir.path()), ["out.png", "s.scene"]);
+}
+
+#[test]
+fn renders_the_built_in_heart_to_heart_png() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = kardia(
+        dir.path(),
+        &[
+            "render", "--width", "32", "--height", "32", "--spp", "1", "--quiet",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = image::open(dir.path().join("heart.png")).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (32, 32));
+    // The heart is red and in the middle of the default view.
+    let [r, g, b] = img.get_pixel(16, 14).0;
+    assert!(r > 2 * g && r > 2 * b, "centre pixel {r} {g} {b}");
+    assert_eq!(listing(dir.path()), ["heart.png"]);
+}
+
+#[test]
+fn bad_arguments_exit_with_an_error() {
+    let dir = setup(SCENE);
+    for args in [
+        &["render", "--spp", "0"][..],
+        &["render", "--solver", "nonsense"],
+        &["render", "--width", "0"],
+    ] {
+        let o = kardia(dir.path(), args);
+        assert_ne!(o.status.code(), Some(0), "{args:?}");
+        assert_eq!(listing(dir.path()), ["s.scene"]);
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn interrupt_exits_130_and_writes_nothing() {
+    let dir = setup(SCENE);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_kardia"))
+        .args([
+            "render", "s.scene", "-o", "out.png", "--width", "2000", "--height", "2000", "--spp",
+            "64", "--quiet",
+        ])
+        .current_dir(dir.path())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{status:?}");
+    assert_eq!(listing(dir.path()), ["s.scene"]);
+}
