@@ -1,6 +1,6 @@
 //! A parallelepiped: a corner and three edge vectors.
 
-use super::sphere::BOUNDS_PAD;
+use super::sphere::{BOUNDS_PAD, SURFACE_SNAP};
 use super::{Shape, ShapeError};
 use crate::geometry::{Aabb, DVec3, Frame, FrameError, Ray};
 
@@ -61,8 +61,7 @@ impl Shape for Parallelepiped {
         // Bound on the rounding of the object-space origin: a face within it of the origin is
         // treated as passing exactly through it (t = 0), so rays leaving the surface, even at
         // grazing angles, never re-hit the face they start on.
-        let tol = 16.0
-            * f64::EPSILON
+        let tol = SURFACE_SNAP
             * (1.0
                 + self.inv_norm
                     * (ray.origin.abs().max_element() + self.frame.position.abs().max_element()));

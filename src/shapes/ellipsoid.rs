@@ -1,6 +1,6 @@
 //! An ellipsoid: the unit sphere placed by a centre and three axis vectors.
 
-use super::sphere::{first_root_in, sphere_roots, BOUNDS_PAD};
+use super::sphere::{first_root_in, sphere_roots, BOUNDS_PAD, SURFACE_SNAP};
 use super::{Shape, ShapeError};
 use crate::geometry::{Aabb, DVec3, Frame, FrameError, Ray};
 
@@ -38,9 +38,9 @@ impl Ellipsoid {
 impl Shape for Ellipsoid {
     fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
         let o = self.frame.ray_to_object(ray);
-        // Bound on the rounding of the object-space origin (subtraction, then M⁻¹).
-        let origin_err = 4.0
-            * f64::EPSILON
+        // Bound on the rounding of the object-space origin (the world origin, the subtraction,
+        // then M⁻¹); see SURFACE_SNAP.
+        let origin_err = SURFACE_SNAP
             * self.inv_norm
             * (ray.origin.abs().max_element() + self.frame.position.abs().max_element());
         let roots = sphere_roots(o.origin, o.dir, 1.0, origin_err)?;

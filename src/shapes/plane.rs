@@ -1,14 +1,15 @@
 //! An infinite plane through a point with a given normal.
 
+use super::sphere::SURFACE_SNAP;
 use super::{all_finite, Shape, ShapeError};
 use crate::geometry::{Aabb, DVec3, Ray};
 
 /// The signed distance `n·(point − origin)` (for a unit `n`) from a ray origin to a plane, set
-/// to exactly `0` when it is within the rounding of its own computation, so that a ray starting
-/// on the plane gets `t = 0` (rejected by any `t_min ≥ 0`) even when it grazes the plane.
+/// to exactly `0` when it is within rounding (see `SURFACE_SNAP`), so that a ray starting on the
+/// plane gets `t = 0` (rejected by any `t_min ≥ 0`) even when it grazes the plane.
 pub(crate) fn plane_gap(n: DVec3, point: DVec3, origin: DVec3) -> f64 {
     let gap = n.dot(point - origin);
-    let err = 8.0 * f64::EPSILON * (point.abs().max_element() + origin.abs().max_element());
+    let err = SURFACE_SNAP * (point.abs().max_element() + origin.abs().max_element());
     if gap.abs() <= err {
         0.0
     } else {

@@ -4,6 +4,12 @@
 use super::{all_finite, Shape, ShapeError};
 use crate::geometry::{Aabb, DVec3, Ray};
 
+/// How close, relative to the magnitude of the coordinates involved, a ray origin must be to a
+/// surface to count as lying on it (its root is then reported as exactly `t = 0`). Covers the
+/// rounding of hit points computed by `origin + t·dir` from origins up to ~50× farther away
+/// than the hit; only origins within ~1.4e-14 × |coordinates| of the surface are affected.
+pub(crate) const SURFACE_SNAP: f64 = 64.0 * f64::EPSILON;
+
 /// Relative padding of the bounding boxes of the bounded primitives (see [`Aabb::padded`]).
 pub(crate) const BOUNDS_PAD: f64 = 1e-9;
 
@@ -26,7 +32,7 @@ pub(crate) fn sphere_roots(o: DVec3, d: DVec3, r: f64, origin_err: f64) -> Optio
     // b²/4 − a·c = a·(r² − |perpendicular part of o|²): exact-ish even when |o| ≫ r.
     let perp = o - (half_b / a) * d;
     let disc = a * (r2 - perp.length_squared());
-    if !(disc >= 0.0) {
+    if disc.is_nan() || disc < 0.0 {
         return None;
     }
     let q = -(half_b + disc.sqrt().copysign(half_b));
@@ -89,9 +95,9 @@ impl Sphere {
 impl Shape for Sphere {
     fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
         let oc = ray.origin - self.centre;
-        // Rounding in the subtraction above.
+        // Rounding in the subtraction above and in the origin itself (see SURFACE_SNAP).
         let origin_err =
-            f64::EPSILON * (ray.origin.abs().max_element() + self.centre.abs().max_element());
+            SURFACE_SNAP * (ray.origin.abs().max_element() + self.centre.abs().max_element());
         let roots = sphere_roots(oc, ray.dir, self.radius, origin_err)?;
         first_root_in(roots, t_min, t_max)
     }
