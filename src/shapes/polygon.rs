@@ -173,7 +173,7 @@ fn non_planar(vs: &[DVec3], size: f64, tol: f64) -> ShapeError {
     if let Some((i, d)) = culprit {
         return ShapeError(format!(
             "the polygon's vertices are not in one plane: vertex {} is {} units off the plane \
-             of the others (at most {} is allowed: {} × the polygon's size)",
+             of the others (at most {} is allowed: {:e} × the polygon's size)",
             i + 1,
             short(d),
             short(tol),
@@ -192,7 +192,7 @@ fn non_planar(vs: &[DVec3], size: f64, tol: f64) -> ShapeError {
             );
     ShapeError(format!(
         "the polygon's vertices are not in one plane: vertex {} is {} units off the plane that \
-         best fits them all, and more than one vertex is off (at most {} is allowed: {} × the \
+         best fits them all, and more than one vertex is off (at most {} is allowed: {:e} × the \
          polygon's size)",
         i + 1,
         short(d),
@@ -443,6 +443,24 @@ mod tests {
             assert!(ok(1e-7), "{scale}");
             assert!(!ok(1e-5), "{scale}");
         }
+    }
+
+    #[test]
+    fn repeated_vertices_are_harmless() {
+        let sq = Polygon::new(vec![
+            v(0.0, 0.0, 0.0),
+            v(1.0, 0.0, 0.0),
+            v(1.0, 0.0, 0.0),
+            v(1.0, 1.0, 0.0),
+            v(0.0, 1.0, 0.0),
+            v(0.0, 0.0, 0.0),
+        ])
+        .unwrap();
+        assert_eq!(sq.unit_normal(), DVec3::Z);
+        let r = |x, y| Ray::new(v(x, y, 1.0), DVec3::NEG_Z);
+        assert_eq!(sq.intersect(&r(0.5, 0.5), 0.0, 9.0), Some(1.0));
+        assert_eq!(sq.intersect(&r(0.5, 1.5), 0.0, 9.0), None);
+        assert_eq!(sq.intersect(&r(1.5, 0.0), 0.0, 9.0), None);
     }
 
     #[test]
