@@ -7,7 +7,9 @@ use crate::geometry::{Aabb, DVec3, Frame, FrameError, Ray};
 /// The solid `corner + a·e1 + b·e2 + c·e3`, `a, b, c ∈ [0, 1]` (the edges need not be
 /// orthogonal); its surface is the six faces, normals face outward.
 ///
-/// Intersected in object space, where it is the unit cube `[0, 1]³`.
+/// Intersected in object space, where it is the unit cube `[0, 1]³`; a ray starting inside gets
+/// its exit point. At edges and corners the normal is that of the face nearest (in world
+/// distance) to the point.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Parallelepiped {
     frame: Frame,

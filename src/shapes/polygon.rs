@@ -306,6 +306,41 @@ mod tests {
     }
 
     #[test]
+    fn rays_level_with_vertices_are_classified_correctly() {
+        // The 2-D test's horizontal line may pass exactly through vertices: the half-open rule
+        // must count each crossing once, whichever in-plane axes were chosen.
+        let p = ell();
+        for (x, y) in [
+            (0.5, 1.0),
+            (1.0, 0.5),
+            (0.25, 1.0),
+            (1.0, 0.25),
+            (0.999, 1.0),
+        ] {
+            assert_eq!(
+                p.intersect(&down_at(x, y), 0.0, 99.0),
+                Some(10.0),
+                "({x},{y})"
+            );
+        }
+        for (x, y) in [
+            (2.5, 1.0),
+            (-0.5, 1.0),
+            (1.0, 2.5),
+            (1.0, -0.5),
+            (1.5, 1.001),
+        ] {
+            assert_eq!(p.intersect(&down_at(x, y), 0.0, 99.0), None, "({x},{y})");
+        }
+        // Exactly at a vertex or on an edge: either answer, but no panic and a sane t.
+        for (x, y) in [(0.0, 0.0), (1.0, 1.0), (2.0, 0.5), (1.5, 1.0)] {
+            if let Some(t) = p.intersect(&down_at(x, y), 0.0, 99.0) {
+                assert!((t - 10.0).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
     fn star_polygon_with_reflex_vertices() {
         // Five-pointed star (10 vertices), counter-clockwise seen from +z: normal +z.
         let pts: Vec<DVec3> = (0..10)
