@@ -239,6 +239,16 @@ mod tests {
     }
 
     #[test]
+    fn padding_grows_finite_boxes_only() {
+        let b = Aabb::new(DVec3::new(1.0, 2.0, 3.0), DVec3::new(2.0, 2.0, 5.0)).padded(1e-3);
+        let m = 1e-3 * (2.0 + 5.0);
+        assert!((b.min - DVec3::new(1.0 - m, 2.0 - m, 3.0 - m)).length() < 1e-15);
+        assert!((b.max - DVec3::new(2.0 + m, 2.0 + m, 5.0 + m)).length() < 1e-15);
+        assert_eq!(Aabb::EMPTY.padded(1e-3), Aabb::EMPTY);
+        assert_eq!(Aabb::EVERYTHING.padded(1e-3), Aabb::EVERYTHING);
+    }
+
+    #[test]
     fn bounds_contain_the_sphere() {
         let s = Sphere::new(DVec3::new(1.0, -2.0, 3.0), 0.5).unwrap();
         let b = s.bounds();
