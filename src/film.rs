@@ -266,7 +266,7 @@ fn register_temp(path: Option<PathBuf>) {
     *TEMP_FILE.lock().unwrap_or_else(|p| p.into_inner()) = path;
 }
 
-/// Installs (once per process) a Ctrl-C / SIGTERM handler that removes the temporary file of
+/// Installs (once per process) a Ctrl-C (SIGINT; also SIGTERM, SIGHUP) handler that removes the temporary file of
 /// an image being written, if any, and exits with code 130. Call it from a binary before
 /// rendering; without it an interrupt may leave a temporary file (never a truncated target).
 /// Returns an error message when the handler could not be installed.
