@@ -266,9 +266,10 @@ fn register_temp(path: Option<PathBuf>) {
     *TEMP_FILE.lock().unwrap_or_else(|p| p.into_inner()) = path;
 }
 
-/// Installs (once per process) a Ctrl-C (SIGINT; also SIGTERM, SIGHUP) handler that removes the temporary file of
-/// an image being written, if any, and exits with code 130. Call it from a binary before
-/// rendering; without it an interrupt may leave a temporary file (never a truncated target).
+/// Installs (once per process) a handler for Ctrl-C (SIGINT; also SIGTERM and SIGHUP) that
+/// removes the temporary file of an image being written, if any, and exits with code 130.
+/// Call it from a binary before rendering; without it an interrupt may leave a temporary file
+/// (never a truncated target).
 /// Returns an error message when the handler could not be installed.
 pub fn install_interrupt_cleanup() -> Result<(), String> {
     static INSTALLED: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
