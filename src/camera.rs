@@ -92,3 +92,43 @@ impl Camera {
         Ray::new(self.eye, dir)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn centre_ray_looks_forward_and_edges_span_the_fov() {
+        let eye = DVec3::new(1.0, 2.0, 3.0);
+        let cam = Camera::new(eye, DVec3::new(1.0, 12.0, 3.0), DVec3::Z, 90.0).unwrap();
+        let centre = cam.ray(50.0, 25.0, 100, 50);
+        assert_eq!(centre.origin, eye);
+        assert!((centre.dir - DVec3::Y).length() < 1e-12);
+        // The left and right edges are 45° off axis (full horizontal fov 90°); +x is right
+        // when looking along +y with +z up.
+        let left = cam.ray(0.0, 25.0, 100, 50).dir;
+        let right = cam.ray(100.0, 25.0, 100, 50).dir;
+        assert!((left - DVec3::new(-1.0, 1.0, 0.0).normalize()).length() < 1e-12);
+        assert!((right - DVec3::new(1.0, 1.0, 0.0).normalize()).length() < 1e-12);
+        // The top edge follows the aspect ratio: tan = 0.5 above the axis.
+        let top = cam.ray(50.0, 0.0, 100, 50).dir;
+        assert!((top - DVec3::new(0.0, 1.0, 0.5).normalize()).length() < 1e-12);
+    }
+
+    #[test]
+    fn rejects_degenerate_cameras() {
+        let e = DVec3::ZERO;
+        assert_eq!(
+            Camera::new(e, e, DVec3::Z, 40.0),
+            Err(CameraError::NoViewDirection)
+        );
+        assert_eq!(
+            Camera::new(e, DVec3::Z, DVec3::Z, 40.0),
+            Err(CameraError::BadUp)
+        );
+        assert_eq!(
+            Camera::new(e, DVec3::X, DVec3::Z, 180.0),
+            Err(CameraError::BadFov(180.0))
+        );
+    }
+}
