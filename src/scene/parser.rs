@@ -1,18 +1,1233 @@
-//! The scene-file parser.
+//! The scene-file parser: one statement per line (see docs/scene-format.md). Every error
+//! points at the part of the line that is wrong and says what was expected there.
 
-use super::{LoadOptions, Scene, SceneError};
+use std::collections::HashMap;
+use std::ops::Range;
+
+use super::error::{ceil_boundary, floor_boundary};
+use super::lexer::{lex_line, Token, TokenKind};
+use super::{LoadOptions, Object, Scene, SceneError};
+use crate::camera::{Camera, CameraError};
+use crate::geometry::{DVec3, Frame, FrameError};
+use crate::lights::Light;
+use crate::materials::Material;
+use crate::shapes::implicit::{preset_equation, EquationError, Implicit, PRESETS};
+use crate::shapes::{Ellipsoid, Heart, Parallelepiped, Plane, Polygon, Shape, ShapeError, Sphere};
+
+type Span = Range<usize>;
+type Result<T> = std::result::Result<T, SceneError>;
+
+/// Image size used when a scene has no `SIZE` statement.
+pub const DEFAULT_SIZE: (u32, u32) = (800, 600);
+
+/// Every statement keyword with its usage line (shown as help under errors).
+pub(crate) const STATEMENTS: &[(&str, &str)] = &[
+    ("SIZE", "SIZE width height"),
+    ("CAMERA", "CAMERA (eye) (look_at) (up) fov"),
+    ("BACKGROUND", "BACKGROUND (r, g, b)"),
+    ("AMBIENT", "AMBIENT (r, g, b)"),
+    ("LIGHT", "LIGHT (position) (r, g, b) [radius]"),
+    ("MATERIAL", "MATERIAL name <surface>"),
+    ("SPHERE", "SPHERE (centre) radius <surface>"),
+    ("PLANE", "PLANE (point) (normal) <surface>"),
+    ("BOX", "BOX (corner) (edge1) (edge2) (edge3) <surface>"),
+    ("POLYGON", "POLYGON n (v1) (v2) … (vn) <surface>"),
+    ("ELLIPSOID", "ELLIPSOID (centre) (u) (v) (w) <surface>"),
+    ("HEART", "HEART (position) (u) (v) (w) <surface>"),
+    (
+        "IMPLICIT",
+        "IMPLICIT \"equation\" (position) (u) (v) (w) <surface> [BOUND r]  or  \
+         IMPLICIT preset [params…] (position) (u) (v) (w) <surface> [BOUND r]",
+    ),
+];
+
+/// Every surface-property keyword with its usage.
+pub(crate) const PROPERTIES: &[(&str, &str)] = &[
+    ("SPECULAR", "SPECULAR ks exponent"),
+    ("REFLECT", "REFLECT kr"),
+    ("TRANSMIT", "TRANSMIT kt"),
+    ("IOR", "IOR n"),
+    ("ATTENUATION", "ATTENUATION (r, g, b)"),
+    ("CHECKER", "CHECKER (r, g, b) size"),
+    ("INSIDE", "INSIDE (r, g, b)"),
+];
+
+/// What `<surface>` stands for in the usage lines.
+const SURFACE_USAGE: &str = "<surface> is a diffuse colour (r, g, b) or the name of a MATERIAL \
+     defined earlier, then optionally SPECULAR ks exponent, REFLECT kr, TRANSMIT kt, IOR n, \
+     ATTENUATION (r, g, b), CHECKER (r, g, b) size, INSIDE (r, g, b)";
+
+/// Relative tolerance for polygon planarity: a vertex may lie this fraction of the polygon's
+/// size off the plane of the others.
+pub(crate) const PLANARITY_TOLERANCE: f64 = 1e-4;
 
 /// Parses scene text; `name` is used in error messages (usually the file path).
-pub fn parse(text: &str, name: &str, options: &LoadOptions) -> Result<Scene, SceneError> {
-    let _ = (text, name, options);
-    todo!("scene parser")
+pub fn parse(text: &str, name: &str, options: &LoadOptions) -> Result<Scene> {
+    let src = Source { text, name };
+    let mut builder = Builder::default();
+    let mut offset = 0;
+    for (i, raw) in text.split('\n').enumerate() {
+        let start = offset;
+        offset += raw.len() + 1;
+        let tokens = lex_line(text, start, start + raw.len())
+            .map_err(|e| src.error(e.span, e.message, e.label, None))?;
+        if tokens.is_empty() {
+            continue;
+        }
+        let mut cur = Cursor {
+            src,
+            tokens,
+            pos: 0,
+            line: i + 1,
+            next_line: offset.min(text.len()),
+            usage: "",
+        };
+        builder.statement(&mut cur, options)?;
+    }
+    builder.finish(src)
 }
 
 /// Reads and parses a scene file.
-pub fn parse_file(path: &std::path::Path, options: &LoadOptions) -> Result<Scene, SceneError> {
+pub fn parse_file(path: &std::path::Path, options: &LoadOptions) -> Result<Scene> {
     let text = std::fs::read_to_string(path).map_err(|e| SceneError::Unreadable {
         path: path.display().to_string(),
         reason: e.to_string(),
     })?;
     parse(&text, &path.display().to_string(), options)
+}
+
+/// The scene text and its name, for building errors.
+#[derive(Clone, Copy)]
+struct Source<'a> {
+    text: &'a str,
+    name: &'a str,
+}
+
+impl Source<'_> {
+    fn error(
+        &self,
+        span: Span,
+        message: impl Into<String>,
+        label: impl Into<String>,
+        help: Option<String>,
+    ) -> SceneError {
+        SceneError::at(self.text, self.name, span, message, label, help)
+    }
+}
+
+/// A vector argument as written: its value, the span of `( … )` and of each component.
+#[derive(Debug, Clone)]
+struct VecArg {
+    v: DVec3,
+    span: Span,
+    parts: [Span; 3],
+}
+
+/// Why a word is not a usable number.
+#[derive(Debug, PartialEq)]
+enum NumberError {
+    /// Not a number at all.
+    NotANumber,
+    /// NaN or infinite (written so, or too large for an f64); the reason in words.
+    NotFinite(&'static str),
+}
+
+/// A finite f64 written in any notation Rust's `f64::from_str` accepts, other than NaN and
+/// infinities (which are rejected with a reason).
+fn parse_number(s: &str) -> std::result::Result<f64, NumberError> {
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        Ok(x) if x.is_nan() => Err(NumberError::NotFinite("is not a number (NaN)")),
+        Ok(_) if s.to_ascii_lowercase().contains("inf") => {
+            Err(NumberError::NotFinite("is infinite"))
+        }
+        Ok(_) => Err(NumberError::NotFinite(
+            "is too large: it overflows a 64-bit float to infinity",
+        )),
+        Err(_) => Err(NumberError::NotANumber),
+    }
+}
+
+/// The first `max` characters of `s`, with `…` when cut.
+fn shorten(s: &str, max: usize) -> String {
+    match s.char_indices().nth(max) {
+        Some((i, _)) => format!("{}…", &s[..i]),
+        None => s.to_string(),
+    }
+}
+
+/// Levenshtein distance between two short ASCII-case-folded strings.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.to_lowercase().chars().collect();
+    let b: Vec<char> = b.to_lowercase().chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.iter().enumerate() {
+        let mut cur = vec![i + 1; b.len() + 1];
+        for (j, cb) in b.iter().enumerate() {
+            let sub = prev[j] + usize::from(ca != cb);
+            cur[j + 1] = sub.min(prev[j + 1] + 1).min(cur[j] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+/// The candidate closest to `word`, if it is close enough to be a likely typo.
+fn suggest<'k>(word: &str, candidates: impl IntoIterator<Item = &'k str>) -> Option<&'k str> {
+    if word.chars().count() > 40 {
+        return None;
+    }
+    candidates
+        .into_iter()
+        .map(|c| (edit_distance(word, c), c))
+        .filter(|&(d, c)| d <= 2 && d < c.len().max(2))
+        .min_by_key(|&(d, _)| d)
+        .map(|(_, c)| c)
+}
+
+/// Maps an [`EquationError`] (byte offsets within the equation text) to a span of the scene
+/// text, given `inner`, the byte range of the equation between its quotes. The span always
+/// lies within `inner` and on character boundaries; an error at the very end of the equation
+/// (or in an empty one) becomes an empty span just before the closing quote.
+pub(crate) fn equation_span(text: &str, inner: Span, e: &EquationError) -> Span {
+    let inner_len = inner.end - inner.start;
+    let start = inner.start + e.offset.min(inner_len);
+    let end = inner.start + e.offset.saturating_add(e.len).min(inner_len);
+    let start = floor_boundary(text, start).max(inner.start);
+    let end = ceil_boundary(text, end.max(start)).min(inner.end);
+    start..end.max(start)
+}
+
+/// One line being parsed.
+struct Cursor<'a> {
+    src: Source<'a>,
+    tokens: Vec<Token>,
+    pos: usize,
+    /// 1-based line number.
+    line: usize,
+    /// Byte offset where the next line starts.
+    next_line: usize,
+    /// Usage of the statement being parsed, shown as help.
+    usage: &'static str,
+}
+
+impl<'a> Cursor<'a> {
+    fn text(&self, t: &Token) -> &'a str {
+        &self.src.text[t.span.clone()]
+    }
+
+    fn peek(&self) -> Option<Token> {
+        self.tokens.get(self.pos).cloned()
+    }
+
+    fn peek_kind(&self) -> Option<TokenKind> {
+        self.tokens.get(self.pos).map(|t| t.kind)
+    }
+
+    /// The next token's text if it is a word.
+    fn peek_word(&self) -> Option<&'a str> {
+        match self.tokens.get(self.pos) {
+            Some(t) if t.kind == TokenKind::Word => Some(self.text(t)),
+            _ => None,
+        }
+    }
+
+    /// The span of the next token, or an empty span at the end of the line's last token.
+    fn here(&self) -> Span {
+        match self.tokens.get(self.pos) {
+            Some(t) => t.span.clone(),
+            None => {
+                let end = self.tokens.last().map_or(0, |t| t.span.end);
+                end..end
+            }
+        }
+    }
+
+    /// From the start of `a` to the end of `b`.
+    fn join(a: &Span, b: &Span) -> Span {
+        a.start..b.end
+    }
+
+    /// The whole statement written so far (keyword to last token).
+    fn statement_span(&self) -> Span {
+        let first = self.tokens.first().map_or(0, |t| t.span.start);
+        let last = self.tokens.last().map_or(first, |t| t.span.end);
+        first..last
+    }
+
+    fn describe(&self, t: Option<&Token>) -> String {
+        match t {
+            None => "end of line".into(),
+            Some(t) => match t.kind {
+                TokenKind::Open => "`(`".into(),
+                TokenKind::Close => "`)`".into(),
+                TokenKind::Comma => "`,`".into(),
+                TokenKind::Str => format!("the string {}", shorten(self.text(t), 30)),
+                TokenKind::Word => {
+                    let s = self.text(t);
+                    if parse_number(s) == Err(NumberError::NotANumber) {
+                        format!("`{}`", shorten(s, 30))
+                    } else {
+                        format!("the number `{}`", shorten(s, 30))
+                    }
+                }
+            },
+        }
+    }
+
+    fn usage_help(&self) -> Option<String> {
+        (!self.usage.is_empty()).then(|| {
+            if self.usage.contains("<surface>") {
+                format!("usage: {}\n{SURFACE_USAGE}", self.usage)
+            } else {
+                format!("usage: {}", self.usage)
+            }
+        })
+    }
+
+    /// An error at `span` with the statement's usage as help.
+    fn fail(&self, span: Span, message: impl Into<String>, label: impl Into<String>) -> SceneError {
+        self.src.error(span, message, label, self.usage_help())
+    }
+
+    /// An error at `span` with the given help.
+    fn fail_help(
+        &self,
+        span: Span,
+        message: impl Into<String>,
+        label: impl Into<String>,
+        help: impl Into<String>,
+    ) -> SceneError {
+        self.src.error(span, message, label, Some(help.into()))
+    }
+
+    /// "expected …, found …" at the next token.
+    fn unexpected(&self, expected: &str) -> SceneError {
+        let found = self.describe(self.peek().as_ref());
+        self.fail(
+            self.here(),
+            format!("expected {expected}, found {found}"),
+            format!("expected {expected}"),
+        )
+    }
+
+    /// A finite number.
+    fn number(&mut self, what: &str) -> Result<(f64, Span)> {
+        let Some(t) = self.peek().filter(|t| t.kind == TokenKind::Word) else {
+            return Err(self.unexpected(&format!("{what} (a number)")));
+        };
+        let s = self.text(&t);
+        match parse_number(s) {
+            Ok(x) => {
+                self.pos += 1;
+                Ok((x, t.span))
+            }
+            Err(NumberError::NotANumber) => Err(self.unexpected(&format!("{what} (a number)"))),
+            Err(NumberError::NotFinite(reason)) => Err(self.fail(
+                t.span,
+                format!(
+                    "{what} must be a finite number, but `{}` {reason}",
+                    shorten(s, 30)
+                ),
+                "not a finite number",
+            )),
+        }
+    }
+
+    /// A number `> 0`.
+    fn positive(&mut self, what: &str) -> Result<(f64, Span)> {
+        let (x, span) = self.number(what)?;
+        if x > 0.0 {
+            Ok((x, span))
+        } else {
+            Err(self.fail(
+                span,
+                format!("{what} must be greater than 0, not {x}"),
+                "must be > 0",
+            ))
+        }
+    }
+
+    /// A number in `[lo, hi]`.
+    fn in_range(&mut self, what: &str, lo: f64, hi: f64) -> Result<(f64, Span)> {
+        let (x, span) = self.number(what)?;
+        if (lo..=hi).contains(&x) {
+            Ok((x, span))
+        } else if hi == f64::MAX {
+            Err(self.fail(
+                span,
+                format!("{what} must be at least {lo}, not {x}"),
+                format!("must be ≥ {lo}"),
+            ))
+        } else {
+            Err(self.fail(
+                span,
+                format!("{what} must be between {lo} and {hi}, not {x}"),
+                format!("must be in [{lo}, {hi}]"),
+            ))
+        }
+    }
+
+    /// A whole number in `[lo, hi]`.
+    fn whole(&mut self, what: &str, lo: u32, hi: u32) -> Result<(u32, Span)> {
+        let (x, span) = self.number(what)?;
+        if x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 {
+            Ok((x as u32, span))
+        } else {
+            Err(self.fail(
+                span,
+                format!("{what} must be a whole number from {lo} to {hi}, not {x}"),
+                format!("must be a whole number in {lo}..={hi}"),
+            ))
+        }
+    }
+
+    /// A vector `(a, b, c)`; commas are optional. `names` name the components in messages.
+    fn vector(&mut self, what: &str, names: [&str; 3]) -> Result<VecArg> {
+        let open = match self.peek() {
+            Some(t) if t.kind == TokenKind::Open => t.span,
+            _ => {
+                return Err(self.unexpected(&format!(
+                    "{what}, a vector ({}, {}, {})",
+                    names[0], names[1], names[2]
+                )))
+            }
+        };
+        self.pos += 1;
+        let mut v = [0.0; 3];
+        let mut parts = [0..0, 0..0, 0..0];
+        for i in 0..3 {
+            if i > 0 && self.peek_kind() == Some(TokenKind::Comma) {
+                self.pos += 1;
+            }
+            if self.peek_kind() == Some(TokenKind::Close) {
+                return Err(self.fail(
+                    self.here(),
+                    format!(
+                        "{what} has only {i} number{}: a vector needs 3, written ({}, {}, {})",
+                        if i == 1 { "" } else { "s" },
+                        names[0],
+                        names[1],
+                        names[2]
+                    ),
+                    format!("expected the {} component", names[i]),
+                ));
+            }
+            let (x, span) = self.number(&format!("the {} component of {what}", names[i]))?;
+            v[i] = x;
+            parts[i] = span;
+        }
+        if let Some(t) = self.peek().filter(|t| t.kind == TokenKind::Close) {
+            self.pos += 1;
+            return Ok(VecArg {
+                v: DVec3::from_array(v),
+                span: open.start..t.span.end,
+                parts,
+            });
+        }
+        // Too many components?
+        let mut k = self.pos;
+        if self.tokens.get(k).map(|t| t.kind) == Some(TokenKind::Comma) {
+            k += 1;
+        }
+        if let Some(t) = self.tokens.get(k) {
+            if t.kind == TokenKind::Word && parse_number(self.text(t)).is_ok() {
+                return Err(self.fail(
+                    t.span.clone(),
+                    format!("too many numbers in {what}: a vector has exactly 3 components"),
+                    "extra number",
+                ));
+            }
+        }
+        Err(self.unexpected(&format!("`)` to close {what}")))
+    }
+
+    /// A point.
+    fn point(&mut self, what: &str) -> Result<VecArg> {
+        self.vector(what, ["x", "y", "z"])
+    }
+
+    /// A non-zero vector.
+    fn direction(&mut self, what: &str) -> Result<VecArg> {
+        let a = self.vector(what, ["x", "y", "z"])?;
+        if a.v == DVec3::ZERO {
+            return Err(self.fail(
+                a.span,
+                format!("{what} is the zero vector, but it must give a direction"),
+                "zero-length vector",
+            ));
+        }
+        Ok(a)
+    }
+
+    /// A colour with non-negative components.
+    fn colour(&mut self, what: &str) -> Result<VecArg> {
+        let a = self.vector(what, ["r", "g", "b"])?;
+        for (i, name) in ["red", "green", "blue"].iter().enumerate() {
+            if a.v[i] < 0.0 {
+                return Err(self.fail(
+                    a.parts[i].clone(),
+                    format!(
+                        "the {name} component of {what} must not be negative, not {}",
+                        a.v[i]
+                    ),
+                    "negative colour component",
+                ));
+            }
+        }
+        Ok(a)
+    }
+
+    /// The end of the statement.
+    fn end(&self) -> Result<()> {
+        match self.peek() {
+            None => Ok(()),
+            Some(_) => Err(self.unexpected("end of line")),
+        }
+    }
+
+    /// The end of a statement whose last part was a surface: explains stray words.
+    fn end_after_surface(&self) -> Result<()> {
+        let Some(t) = self.peek() else {
+            return Ok(());
+        };
+        if let Some(word) = self.peek_word() {
+            if word.eq_ignore_ascii_case("BOUND") {
+                return Err(self.fail(
+                    t.span,
+                    "BOUND applies only to IMPLICIT surfaces",
+                    "not allowed here",
+                ));
+            }
+            if parse_number(word) == Err(NumberError::NotANumber) {
+                let found = self.describe(Some(&t));
+                let message = format!("expected a surface property or end of line, found {found}");
+                if let Some(s) = suggest(word, PROPERTIES.iter().map(|p| p.0)) {
+                    return Err(self.fail_help(
+                        t.span,
+                        message,
+                        "unknown surface property",
+                        format!("did you mean {s}?\n{SURFACE_USAGE}"),
+                    ));
+                }
+                return Err(self.fail(t.span, message, "unknown surface property"));
+            }
+        }
+        if t.kind == TokenKind::Open && self.usage.starts_with("POLYGON") {
+            return Err(self.fail(
+                t.span,
+                "expected a surface property or end of line, found `(`: is there one vertex \
+                 more than the polygon's vertex count n?",
+                "unexpected vector",
+            ));
+        }
+        Err(self.unexpected("a surface property or end of line"))
+    }
+}
+
+/// A material defined by `MATERIAL`, with its line.
+type Materials = HashMap<String, (Material, usize)>;
+
+/// The scene being assembled, statement by statement.
+#[derive(Default)]
+struct Builder {
+    size: Option<((u32, u32), usize)>,
+    camera: Option<(Camera, usize)>,
+    background: Option<(DVec3, usize)>,
+    ambient: Option<(DVec3, usize)>,
+    lights: Vec<Light>,
+    objects: Vec<Object>,
+    materials: Materials,
+}
+
+impl Builder {
+    fn statement(&mut self, cur: &mut Cursor, options: &LoadOptions) -> Result<()> {
+        let first = cur.peek().expect("lines without tokens are skipped");
+        let word = match first.kind {
+            TokenKind::Word => cur.text(&first),
+            _ => return Err(cur.unexpected("a keyword at the start of the statement")),
+        };
+        let upper = word.to_ascii_uppercase();
+        let Some(&(keyword, usage)) = STATEMENTS.iter().find(|(k, _)| *k == upper) else {
+            return Err(unknown_keyword(cur, &first, word));
+        };
+        cur.usage = usage;
+        cur.pos = 1;
+        let kw = first.span.clone();
+        match keyword {
+            "SIZE" => {
+                let (w, _) = cur.whole("the image width", 1, Scene::MAX_SIDE)?;
+                let (h, _) = cur.whole("the image height", 1, Scene::MAX_SIDE)?;
+                cur.end()?;
+                once(cur, &kw, "SIZE", &self.size)?;
+                self.size = Some(((w, h), cur.line));
+            }
+            "CAMERA" => {
+                let eye = cur.point("the eye position")?;
+                let look = cur.point("the look-at point")?;
+                let up = cur.direction("the up vector")?;
+                let (fov, fov_span) = cur.number("the field of view in degrees")?;
+                cur.end()?;
+                let camera = Camera::new(eye.v, look.v, up.v, fov).map_err(|e| {
+                    let (span, label) = match e {
+                        CameraError::NotFinite => (cur.statement_span(), "not finite"),
+                        CameraError::NoViewDirection => (
+                            Cursor::join(&eye.span, &look.span),
+                            "eye and look-at are the same point",
+                        ),
+                        CameraError::BadUp => (up.span.clone(), "parallel to the view direction"),
+                        CameraError::BadFov(_) => (fov_span.clone(), "must be in (0, 180)"),
+                    };
+                    cur.fail(span, format!("degenerate camera: {e}"), label)
+                })?;
+                once(cur, &kw, "CAMERA", &self.camera)?;
+                self.camera = Some((camera, cur.line));
+            }
+            "BACKGROUND" | "AMBIENT" => {
+                let c = cur.colour(if keyword == "AMBIENT" {
+                    "the ambient light"
+                } else {
+                    "the background colour"
+                })?;
+                cur.end()?;
+                let slot = if keyword == "AMBIENT" {
+                    &mut self.ambient
+                } else {
+                    &mut self.background
+                };
+                once(cur, &kw, keyword, slot)?;
+                *slot = Some((c.v, cur.line));
+            }
+            "LIGHT" => {
+                let position = cur.point("the light's position")?;
+                let colour = cur.colour("the light's colour")?;
+                let radius = if cur.peek().is_some() {
+                    cur.in_range("the light's radius", 0.0, f64::MAX)?.0
+                } else {
+                    0.0
+                };
+                cur.end()?;
+                self.lights.push(Light {
+                    position: position.v,
+                    colour: colour.v,
+                    radius,
+                });
+            }
+            "MATERIAL" => self.material(cur)?,
+            _ => self.object(cur, keyword, &kw, options)?,
+        }
+        Ok(())
+    }
+
+    fn material(&mut self, cur: &mut Cursor) -> Result<()> {
+        let Some(t) = cur.peek().filter(|t| t.kind == TokenKind::Word) else {
+            return Err(cur.unexpected("the material's name"));
+        };
+        let name = cur.text(&t);
+        let valid = name
+            .chars()
+            .next()
+            .is_some_and(|c| c.is_alphabetic() || c == '_')
+            && name
+                .chars()
+                .all(|c| c.is_alphanumeric() || c == '_' || c == '-');
+        if !valid {
+            return Err(cur.fail(
+                t.span,
+                format!(
+                    "`{}` is not a valid material name: names start with a letter or `_` and \
+                     contain only letters, digits, `_` and `-`",
+                    shorten(name, 30)
+                ),
+                "invalid name",
+            ));
+        }
+        let upper = name.to_ascii_uppercase();
+        if upper == "BOUND" || PROPERTIES.iter().any(|p| p.0 == upper) {
+            return Err(cur.fail(
+                t.span,
+                format!("`{name}` is a surface-property keyword and cannot name a material"),
+                "reserved word",
+            ));
+        }
+        if let Some((_, line)) = self.materials.get(name) {
+            return Err(cur.fail(
+                t.span,
+                format!("material `{name}` is already defined on line {line}"),
+                "defined twice",
+            ));
+        }
+        cur.pos += 1;
+        let m = surface(cur, &self.materials)?;
+        cur.end_after_surface()?;
+        self.materials.insert(name.to_string(), (m, cur.line));
+        Ok(())
+    }
+
+    fn object(
+        &mut self,
+        cur: &mut Cursor,
+        keyword: &'static str,
+        kw: &Span,
+        options: &LoadOptions,
+    ) -> Result<()> {
+        let shape_error = |cur: &Cursor, span: Span, e: ShapeError| {
+            cur.fail(
+                span,
+                format!("invalid {}: {e}", keyword.to_ascii_lowercase()),
+                "invalid shape",
+            )
+        };
+        let (shape, material): (Box<dyn Shape>, Material) = match keyword {
+            "SPHERE" => {
+                let c = cur.point("the sphere's centre")?;
+                let (r, _) = cur.positive("the sphere's radius")?;
+                let m = surface(cur, &self.materials)?;
+                cur.end_after_surface()?;
+                let s = Sphere::new(c.v, r).map_err(|e| shape_error(cur, kw.clone(), e))?;
+                (Box::new(s), m)
+            }
+            "PLANE" => {
+                let p = cur.point("a point on the plane")?;
+                let n = cur.direction("the plane's normal")?;
+                let m = surface(cur, &self.materials)?;
+                cur.end_after_surface()?;
+                let s = Plane::new(p.v, n.v).map_err(|e| shape_error(cur, n.span.clone(), e))?;
+                (Box::new(s), m)
+            }
+            "POLYGON" => {
+                let (count, count_span) = cur.number("the number of vertices")?;
+                if !(count.fract() == 0.0 && count >= 3.0) {
+                    return Err(cur.fail(
+                        count_span,
+                        format!(
+                            "a polygon needs a whole number of at least 3 vertices, not {count}"
+                        ),
+                        "must be a whole number ≥ 3",
+                    ));
+                }
+                let n = count.min(u32::MAX as f64) as u32;
+                let mut verts = Vec::new();
+                for k in 1..=n {
+                    let what = format!("vertex {k} of {n}");
+                    if cur.peek_kind() != Some(TokenKind::Open) {
+                        return Err(cur.fail(
+                            cur.here(),
+                            format!(
+                                "expected {what}, a vector (x, y, z), found {}: the polygon \
+                                 was declared with {n} vertices",
+                                cur.describe(cur.peek().as_ref())
+                            ),
+                            format!("expected {what}"),
+                        ));
+                    }
+                    verts.push(cur.point(&what)?);
+                }
+                let m = surface(cur, &self.materials)?;
+                cur.end_after_surface()?;
+                check_polygon(cur, &verts)?;
+                let all = Cursor::join(&verts[0].span, &verts[verts.len() - 1].span);
+                let s = Polygon::new(verts.iter().map(|a| a.v).collect())
+                    .map_err(|e| shape_error(cur, all, e))?;
+                (Box::new(s), m)
+            }
+            "BOX" | "ELLIPSOID" | "HEART" => {
+                let (origin, names) = match keyword {
+                    "BOX" => ("the box's corner", ["edge1", "edge2", "edge3"]),
+                    "ELLIPSOID" => ("the ellipsoid's centre", ["u", "v", "w"]),
+                    _ => ("the heart's position", ["u", "v", "w"]),
+                };
+                let p = cur.point(origin)?;
+                let (u, v, w) = basis(cur, names)?;
+                let m = surface(cur, &self.materials)?;
+                cur.end_after_surface()?;
+                check_frame(cur, &p, [&u, &v, &w], names)?;
+                let span = Cursor::join(&u.span, &w.span);
+                let s: Box<dyn Shape> = match keyword {
+                    "BOX" => Box::new(
+                        Parallelepiped::new(p.v, u.v, v.v, w.v)
+                            .map_err(|e| shape_error(cur, span, e))?,
+                    ),
+                    "ELLIPSOID" => Box::new(
+                        Ellipsoid::new(p.v, u.v, v.v, w.v)
+                            .map_err(|e| shape_error(cur, span, e))?,
+                    ),
+                    _ => Box::new(
+                        Heart::new(p.v, u.v, v.v, w.v)
+                            .map_err(|e| shape_error(cur, span, e))?
+                            .with_solver(options.solver),
+                    ),
+                };
+                (s, m)
+            }
+            "IMPLICIT" => self.implicit(cur, options)?,
+            _ => unreachable!("every statement keyword is handled"),
+        };
+        self.objects
+            .push(Object::new(shape, material, keyword, cur.line));
+        Ok(())
+    }
+
+    fn implicit(
+        &mut self,
+        cur: &mut Cursor,
+        options: &LoadOptions,
+    ) -> Result<(Box<dyn Shape>, Material)> {
+        enum Source {
+            Quoted(Span),
+            Preset(Span),
+        }
+        let Some(t) = cur.peek() else {
+            return Err(cur.unexpected("an equation in quotes or a preset name"));
+        };
+        let (equation, source) = match t.kind {
+            TokenKind::Str => {
+                cur.pos += 1;
+                let inner = t.inner();
+                (
+                    cur.src.text[inner.clone()].to_string(),
+                    Source::Quoted(inner),
+                )
+            }
+            TokenKind::Word if parse_number(cur.text(&t)) == Err(NumberError::NotANumber) => {
+                let word = cur.text(&t);
+                let lower = word.to_ascii_lowercase();
+                let Some(&(name, count)) = PRESETS.iter().find(|p| p.0 == lower) else {
+                    let names: Vec<&str> = PRESETS.iter().map(|p| p.0).collect();
+                    let help = match suggest(word, names.iter().copied()) {
+                        Some(s) => format!("did you mean `{s}`? presets: {}", names.join(", ")),
+                        None => format!(
+                            "presets: {}; or write an equation in quotes",
+                            names.join(", ")
+                        ),
+                    };
+                    return Err(cur.fail_help(
+                        t.span,
+                        format!("unknown implicit-surface preset `{}`", shorten(word, 30)),
+                        "unknown preset",
+                        help,
+                    ));
+                };
+                cur.pos += 1;
+                let mut params = Vec::new();
+                let mut last = t.span.clone();
+                while cur.peek_kind() == Some(TokenKind::Word) {
+                    let (x, span) =
+                        cur.number(&format!("parameter {} of {name}", params.len() + 1))?;
+                    if params.len() == count {
+                        return Err(cur.fail(
+                            span,
+                            format!(
+                                "too many parameters: the preset {name} takes {count}, not {}",
+                                params.len() + 1
+                            ),
+                            "extra parameter",
+                        ));
+                    }
+                    params.push(x);
+                    last = span;
+                }
+                if params.len() < count {
+                    return Err(cur.fail(
+                        cur.here(),
+                        format!(
+                            "expected parameter {} of {name}, found {}: the preset {name} takes {count}",
+                            params.len() + 1,
+                            cur.describe(cur.peek().as_ref())
+                        ),
+                        "missing parameter",
+                    ));
+                }
+                let span = t.span.start..last.end;
+                let eq = preset_equation(name, &params).map_err(|m| {
+                    cur.fail(
+                        span.clone(),
+                        format!("preset {name}: {m}"),
+                        "invalid preset",
+                    )
+                })?;
+                (eq, Source::Preset(span))
+            }
+            _ => return Err(cur.unexpected("an equation in quotes or a preset name")),
+        };
+        let p = cur.point("the surface's position")?;
+        let names = ["u", "v", "w"];
+        let (u, v, w) = basis(cur, names)?;
+        let m = surface(cur, &self.materials)?;
+        let mut bound = None;
+        if cur
+            .peek_word()
+            .is_some_and(|w| w.eq_ignore_ascii_case("BOUND"))
+        {
+            cur.pos += 1;
+            bound = Some(cur.positive("the bounding radius")?.0);
+            cur.end()?;
+        } else {
+            cur.end_after_surface()?;
+        }
+        let frame = check_frame(cur, &p, [&u, &v, &w], names)?;
+        let shape = Implicit::new(&equation, frame, bound).map_err(|e| match &source {
+            Source::Quoted(inner) => cur.fail(
+                equation_span(cur.src.text, inner.clone(), &e),
+                format!("invalid equation: {e}"),
+                shorten(&e.message, 60),
+            ),
+            Source::Preset(span) => cur.fail(
+                span.clone(),
+                format!("internal error: the preset's equation is invalid: {e}"),
+                "invalid preset",
+            ),
+        })?;
+        Ok((Box::new(shape.with_solver(options.solver)), m))
+    }
+
+    fn finish(self, src: Source) -> Result<Scene> {
+        let Some((camera, _)) = self.camera else {
+            let end = src.text.trim_end().len();
+            return Err(src.error(
+                end..end,
+                "the scene has no CAMERA",
+                "expected a CAMERA statement somewhere in the scene",
+                Some("add a line such as `CAMERA (6, 0, 0) (0, 0, 0) (0, 0, 1) 40`".into()),
+            ));
+        };
+        let (width, height) = self.size.map_or(DEFAULT_SIZE, |s| s.0);
+        Ok(Scene {
+            width,
+            height,
+            camera,
+            background: self.background.map_or(DVec3::ZERO, |b| b.0),
+            ambient: self.ambient.map_or(DVec3::ZERO, |a| a.0),
+            lights: self.lights,
+            objects: self.objects,
+        })
+    }
+}
+
+/// Fails when a once-only statement was already given.
+fn once<T>(cur: &Cursor, kw: &Span, keyword: &str, slot: &Option<(T, usize)>) -> Result<()> {
+    match slot {
+        None => Ok(()),
+        Some((_, line)) => Err(cur.fail_help(
+            kw.clone(),
+            format!("{keyword} is given twice (first on line {line})"),
+            "repeated statement",
+            format!("a scene has at most one {keyword}; remove one of them"),
+        )),
+    }
+}
+
+/// The three non-zero basis vectors of a placed shape.
+fn basis(cur: &mut Cursor, names: [&str; 3]) -> Result<(VecArg, VecArg, VecArg)> {
+    let u = cur.direction(&format!("the basis vector {}", names[0]))?;
+    let v = cur.direction(&format!("the basis vector {}", names[1]))?;
+    let w = cur.direction(&format!("the basis vector {}", names[2]))?;
+    Ok((u, v, w))
+}
+
+/// The frame of a placed shape, or an error spanning the basis vectors.
+fn check_frame(cur: &Cursor, p: &VecArg, b: [&VecArg; 3], names: [&str; 3]) -> Result<Frame> {
+    Frame::new(p.v, b[0].v, b[1].v, b[2].v).map_err(|e| {
+        let span = Cursor::join(&b[0].span, &b[2].span);
+        match e {
+            FrameError::Singular => cur.fail(
+                span,
+                format!(
+                    "{}, {} and {} are linearly dependent (or nearly so), so the shape would be flat",
+                    names[0], names[1], names[2]
+                ),
+                "linearly dependent",
+            ),
+            FrameError::NotFinite => cur.fail(span, e.to_string(), "not finite"),
+        }
+    })
+}
+
+/// Checks that a polygon's vertices span a plane and lie in it; points at the first vertex
+/// off the plane.
+fn check_polygon(cur: &Cursor, verts: &[VecArg]) -> Result<()> {
+    let all = Cursor::join(&verts[0].span, &verts[verts.len() - 1].span);
+    let v0 = verts[0].v;
+    let (a, size) = verts
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (i, (p.v - v0).length()))
+        .fold((0, 0.0), |best, x| if x.1 > best.1 { x } else { best });
+    if !size.is_finite() {
+        return Ok(()); // Too large to check here; the shape decides.
+    }
+    let ea = verts[a].v - v0;
+    let (b, area) = verts
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (i, ea.cross(p.v - v0).length()))
+        .fold((0, 0.0), |best, x| if x.1 > best.1 { x } else { best });
+    if !(area > 1e-9 * size * size) {
+        return Err(cur.fail(
+            all,
+            "the polygon's vertices are all on one line (or one point): it has no area",
+            "collinear vertices",
+        ));
+    }
+    let n = ea.cross(verts[b].v - v0) / area;
+    for (k, p) in verts.iter().enumerate() {
+        let d = (p.v - v0).dot(n);
+        if d.abs() > PLANARITY_TOLERANCE * size {
+            return Err(cur.fail(
+                p.span.clone(),
+                format!(
+                    "the polygon is not planar: vertex {} lies {:.3e} off the plane through \
+                     vertices 1, {} and {}",
+                    k + 1,
+                    d.abs(),
+                    a.min(b) + 1,
+                    a.max(b) + 1,
+                ),
+                "off the plane",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `<surface>`: a colour or a material name, then optional properties.
+fn surface(cur: &mut Cursor, materials: &Materials) -> Result<Material> {
+    const EXPECTED: &str = "a diffuse colour (r, g, b) or a material name";
+    let Some(t) = cur.peek() else {
+        return Err(cur.unexpected(EXPECTED));
+    };
+    let mut m = match t.kind {
+        TokenKind::Open => Material::diffuse(cur.colour("the diffuse colour")?.v),
+        TokenKind::Word => {
+            let word = cur.text(&t);
+            if parse_number(word) != Err(NumberError::NotANumber) {
+                return Err(cur.unexpected(EXPECTED));
+            }
+            let upper = word.to_ascii_uppercase();
+            if PROPERTIES.iter().any(|p| p.0 == upper) {
+                return Err(cur.fail(
+                    t.span,
+                    format!("expected {EXPECTED} before {upper}, found {upper}"),
+                    "surface properties follow the colour",
+                ));
+            }
+            match materials.get(word) {
+                Some((m, _)) => {
+                    cur.pos += 1;
+                    m.clone()
+                }
+                None => return Err(unknown_material(cur, &t, word, materials)),
+            }
+        }
+        _ => return Err(cur.unexpected(EXPECTED)),
+    };
+    let mut seen: Vec<&str> = Vec::new();
+    while let Some(word) = cur.peek_word() {
+        let upper = word.to_ascii_uppercase();
+        let Some(&(prop, _)) = PROPERTIES.iter().find(|p| p.0 == upper) else {
+            break;
+        };
+        let span = cur.here();
+        if seen.contains(&prop) {
+            return Err(cur.fail(
+                span,
+                format!("{prop} is given twice for this surface"),
+                "repeated property",
+            ));
+        }
+        seen.push(prop);
+        cur.pos += 1;
+        match prop {
+            "SPECULAR" => {
+                m.specular = cur.in_range("the specular weight ks", 0.0, f64::MAX)?.0;
+                m.shininess = cur.in_range("the specular exponent", 1.0, f64::MAX)?.0;
+            }
+            "REFLECT" => m.reflect = cur.in_range("the reflection weight kr", 0.0, 1.0)?.0,
+            "TRANSMIT" => m.transmit = cur.in_range("the transmission weight kt", 0.0, 1.0)?.0,
+            "IOR" => m.ior = cur.positive("the index of refraction")?.0,
+            "ATTENUATION" => m.attenuation = cur.colour("the attenuation")?.v,
+            "CHECKER" => {
+                let c = cur.colour("the checker's second colour")?;
+                let (size, _) = cur.positive("the checker's cell size")?;
+                m.checker = Some((c.v, size));
+            }
+            "INSIDE" => m.inside = Some(cur.colour("the inside colour")?.v),
+            _ => unreachable!("every property is handled"),
+        }
+    }
+    Ok(m)
+}
+
+/// The error for a surface naming a material that is not (yet) defined.
+fn unknown_material(cur: &Cursor, t: &Token, word: &str, materials: &Materials) -> SceneError {
+    let message = format!("unknown material `{}`", shorten(word, 30));
+    let help = if let Some(line) = defined_later(cur, word) {
+        format!(
+            "`{word}` is defined on line {line}, after this use: a MATERIAL must come before the \
+             objects that use it"
+        )
+    } else if let Some(name) = materials.keys().find(|k| k.eq_ignore_ascii_case(word)) {
+        format!("did you mean `{name}`? (material names are case-sensitive)")
+    } else if materials.is_empty() {
+        "no MATERIAL is defined before this line; write a colour (r, g, b) or define one with \
+         `MATERIAL name <surface>`"
+            .into()
+    } else {
+        let mut names: Vec<&str> = materials.keys().map(String::as_str).collect();
+        names.sort_unstable();
+        match suggest(word, names.iter().copied()) {
+            Some(s) => format!("did you mean `{s}`?"),
+            None => format!("materials defined so far: {}", names.join(", ")),
+        }
+    };
+    cur.fail_help(
+        t.span.clone(),
+        message,
+        "not defined before this line",
+        help,
+    )
+}
+
+/// The line of a later `MATERIAL name …` statement, if any.
+fn defined_later(cur: &Cursor, name: &str) -> Option<usize> {
+    let text = cur.src.text;
+    let mut offset = cur.next_line;
+    let mut line = cur.line + 1;
+    while offset < text.len() {
+        let end = text[offset..].find('\n').map_or(text.len(), |i| offset + i);
+        if let Ok(toks) = lex_line(text, offset, end) {
+            if toks.len() >= 2
+                && text[toks[0].span.clone()].eq_ignore_ascii_case("MATERIAL")
+                && &text[toks[1].span.clone()] == name
+            {
+                return Some(line);
+            }
+        }
+        offset = end + 1;
+        line += 1;
+    }
+    None
+}
+
+/// The error for a statement starting with an unknown word.
+fn unknown_keyword(cur: &Cursor, t: &Token, word: &str) -> SceneError {
+    let upper = word.to_ascii_uppercase();
+    let span = t.span.clone();
+    if let Some(&(p, _)) = PROPERTIES.iter().find(|p| p.0 == upper) {
+        return cur.fail_help(
+            span,
+            format!("{p} is a surface property, not a statement"),
+            "not a statement",
+            "surface properties follow an object's colour on the same line, e.g. \
+             `SPHERE (0, 0, 0) 1 (0.8, 0.1, 0.1) SPECULAR 0.5 40`",
+        );
+    }
+    let names = STATEMENTS.iter().map(|s| s.0);
+    let help = match suggest(word, names.clone()) {
+        Some(s) => format!("did you mean {s}?"),
+        None => format!("keywords: {}", names.collect::<Vec<_>>().join(", ")),
+    };
+    if parse_number(word) != Err(NumberError::NotANumber) {
+        return cur.fail_help(
+            span,
+            format!(
+                "expected a keyword at the start of the statement, found the number `{}`",
+                shorten(word, 30)
+            ),
+            "expected a keyword",
+            help,
+        );
+    }
+    cur.fail_help(
+        span,
+        format!("unknown keyword `{}`", shorten(word, 30)),
+        "unknown keyword",
+        help,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_in_any_notation_but_finite() {
+        for (s, x) in [
+            ("1", 1.0),
+            ("-2.5", -2.5),
+            ("+.5", 0.5),
+            ("1e3", 1e3),
+            ("2.E-2", 0.02),
+        ] {
+            assert_eq!(parse_number(s), Ok(x), "{s}");
+        }
+        for s in ["nan", "NaN", "inf", "-Infinity", "1e999", "-1e400"] {
+            assert!(
+                matches!(parse_number(s), Err(NumberError::NotFinite(_))),
+                "{s}"
+            );
+        }
+        for s in ["abc", "1.2.3", "0x10", "", "1e"] {
+            assert_eq!(parse_number(s), Err(NumberError::NotANumber), "{s}");
+        }
+    }
+
+    #[test]
+    fn suggestions_catch_typos_only() {
+        assert_eq!(suggest("SPHER", ["SPHERE", "PLANE"]), Some("SPHERE"));
+        assert_eq!(suggest("elipsoid", ["ELLIPSOID", "BOX"]), Some("ELLIPSOID"));
+        assert_eq!(suggest("TEAPOT", ["SPHERE", "PLANE"]), None);
+    }
+
+    fn eq_error(offset: usize, len: usize) -> EquationError {
+        EquationError {
+            offset,
+            len,
+            message: "bad".into(),
+        }
+    }
+
+    #[test]
+    fn equation_errors_map_inside_the_quotes() {
+        let text = "IMPLICIT \"x^2 + y^2 = 1\" (0,0,0)";
+        let inner = 10..23;
+        assert_eq!(&text[inner.clone()], "x^2 + y^2 = 1");
+        // `+` at offset 4.
+        assert_eq!(equation_span(text, inner.clone(), &eq_error(4, 1)), 14..15);
+        assert_eq!(&text[14..15], "+");
+        // Past the end: clamped to an empty span before the closing quote.
+        assert_eq!(equation_span(text, inner.clone(), &eq_error(13, 0)), 23..23);
+        assert_eq!(equation_span(text, inner.clone(), &eq_error(99, 5)), 23..23);
+        // A length running past the end is cut at the closing quote.
+        assert_eq!(
+            equation_span(text, inner.clone(), &eq_error(10, 50)),
+            20..23
+        );
+        assert_eq!(
+            equation_span(text, inner, &eq_error(usize::MAX, usize::MAX)),
+            23..23
+        );
+    }
+
+    #[test]
+    fn equation_error_spans_respect_character_boundaries() {
+        let text = "IMPLICIT \"xé+y\"";
+        let inner = 10..15;
+        assert_eq!(&text[inner.clone()], "xé+y");
+        // Offset 2 is inside `é` (bytes 1..3): widened to the whole character.
+        let s = equation_span(text, inner.clone(), &eq_error(2, 1));
+        assert_eq!(&text[s], "é");
+        let s = equation_span(text, inner, &eq_error(1, 1));
+        assert_eq!(&text[s], "é");
+    }
+
+    #[test]
+    fn full_scene_error_points_inside_the_equation() {
+        // Unit-tests the mapping through a SceneError as the parser builds it.
+        let text = "IMPLICIT \"x^2 + y^2 = 1\" (0,0,0)";
+        let src = Source { text, name: "t" };
+        let span = equation_span(text, 10..23, &eq_error(4, 1));
+        let e = src.error(span, "invalid equation: bad", "here", None);
+        assert_eq!(e.location(), Some((1, 15)));
+    }
 }
