@@ -36,8 +36,8 @@ pub(crate) const STATEMENTS: &[(&str, &str)] = &[
     ("HEART", "HEART (position) (u) (v) (w) <surface>"),
     (
         "IMPLICIT",
-        "IMPLICIT \"equation\" (position) (u) (v) (w) <surface> [BOUND r]  or  \
-         IMPLICIT preset [params…] (position) (u) (v) (w) <surface> [BOUND r]",
+        "IMPLICIT \"equation\" (position) (u) (v) (w) <surface> [BOUND r]\n   \
+         or: IMPLICIT preset [params…] (position) (u) (v) (w) <surface> [BOUND r]",
     ),
 ];
 
@@ -66,14 +66,16 @@ pub fn parse(text: &str, name: &str, options: &LoadOptions) -> Result<Scene> {
     let src = Source { text, name };
     let mut builder = Builder::default();
     let mut offset = 0;
+    let mut last_token_end = 0;
     for (i, raw) in text.split('\n').enumerate() {
         let start = offset;
         offset += raw.len() + 1;
         let tokens = lex_line(text, start, start + raw.len())
             .map_err(|e| src.error(e.span, e.message, e.label, None))?;
-        if tokens.is_empty() {
+        let Some(last) = tokens.last() else {
             continue;
-        }
+        };
+        last_token_end = last.span.end;
         let mut cur = Cursor {
             src,
             tokens,
@@ -81,10 +83,11 @@ pub fn parse(text: &str, name: &str, options: &LoadOptions) -> Result<Scene> {
             line: i + 1,
             next_line: offset.min(text.len()),
             usage: "",
+            in_surface: false,
         };
         builder.statement(&mut cur, options)?;
     }
-    builder.finish(src)
+    builder.finish(src, last_token_end)
 }
 
 /// Reads and parses a scene file.
@@ -209,6 +212,8 @@ struct Cursor<'a> {
     next_line: usize,
     /// Usage of the statement being parsed, shown as help.
     usage: &'static str,
+    /// True while a `<surface>` is parsed: its usage is added to the help.
+    in_surface: bool,
 }
 
 impl<'a> Cursor<'a> {
@@ -277,7 +282,7 @@ impl<'a> Cursor<'a> {
 
     fn usage_help(&self) -> Option<String> {
         (!self.usage.is_empty()).then(|| {
-            if self.usage.contains("<surface>") {
+            if self.in_surface {
                 format!("usage: {}\n{SURFACE_USAGE}", self.usage)
             } else {
                 format!("usage: {}", self.usage)
@@ -487,7 +492,14 @@ impl<'a> Cursor<'a> {
     }
 
     /// The end of a statement whose last part was a surface: explains stray words.
-    fn end_after_surface(&self) -> Result<()> {
+    fn end_after_surface(&mut self) -> Result<()> {
+        self.in_surface = true;
+        let r = self.end_after_surface_inner();
+        self.in_surface = false;
+        r
+    }
+
+    fn end_after_surface_inner(&self) -> Result<()> {
         let Some(t) = self.peek() else {
             return Ok(());
         };
@@ -881,9 +893,9 @@ impl Builder {
         Ok((Box::new(shape.with_solver(options.solver)), m))
     }
 
-    fn finish(self, src: Source) -> Result<Scene> {
+    /// The scene; `end` is where the last statement ends (for a missing-camera error).
+    fn finish(self, src: Source, end: usize) -> Result<Scene> {
         let Some((camera, _)) = self.camera else {
-            let end = src.text.trim_end().len();
             return Err(src.error(
                 end..end,
                 "the scene has no CAMERA",
@@ -943,33 +955,47 @@ fn check_frame(cur: &Cursor, p: &VecArg, b: [&VecArg; 3], names: [&str; 3]) -> R
     })
 }
 
-/// Checks that a polygon's vertices span a plane and lie in it; points at the first vertex
-/// off the plane.
+/// Checks that a polygon's vertices span a plane and lie in it. The plane is the one through
+/// the first vertex and the first two after it that clearly make a triangle, so the error
+/// points at the first vertex off the plane of the ones before it.
 fn check_polygon(cur: &Cursor, verts: &[VecArg]) -> Result<()> {
     let all = Cursor::join(&verts[0].span, &verts[verts.len() - 1].span);
     let v0 = verts[0].v;
-    let (a, size) = verts
+    let size = verts
         .iter()
-        .enumerate()
-        .map(|(i, p)| (i, (p.v - v0).length()))
-        .fold((0, 0.0), |best, x| if x.1 > best.1 { x } else { best });
+        .map(|p| (p.v - v0).length())
+        .fold(0.0, f64::max);
     if !size.is_finite() {
         return Ok(()); // Too large to check here; the shape decides.
     }
-    let ea = verts[a].v - v0;
-    let (b, area) = verts
-        .iter()
-        .enumerate()
-        .map(|(i, p)| (i, ea.cross(p.v - v0).length()))
-        .fold((0, 0.0), |best, x| if x.1 > best.1 { x } else { best });
-    if !(area > 1e-9 * size * size) {
-        return Err(cur.fail(
-            all,
+    let collinear = || {
+        cur.fail(
+            all.clone(),
             "the polygon's vertices are all on one line (or one point): it has no area",
             "collinear vertices",
-        ));
-    }
-    let n = ea.cross(verts[b].v - v0) / area;
+        )
+    };
+    let Some(a) = (1..verts.len()).find(|&i| (verts[i].v - v0).length() > 1e-6 * size) else {
+        return Err(collinear());
+    };
+    let ea = verts[a].v - v0;
+    let sine = |i: usize| {
+        let e = verts[i].v - v0;
+        ea.cross(e).length() / (ea.length() * e.length()).max(f64::MIN_POSITIVE)
+    };
+    let b = match (a + 1..verts.len()).find(|&i| sine(i) > 1e-3) {
+        Some(b) => b,
+        None => {
+            let (b, area) = (1..verts.len())
+                .map(|i| (i, ea.cross(verts[i].v - v0).length()))
+                .fold((0, 0.0), |best, x| if x.1 > best.1 { x } else { best });
+            if !(area > 1e-9 * size * size) {
+                return Err(collinear());
+            }
+            b
+        }
+    };
+    let n = ea.cross(verts[b].v - v0).normalize();
     for (k, p) in verts.iter().enumerate() {
         let d = (p.v - v0).dot(n);
         if d.abs() > PLANARITY_TOLERANCE * size {
@@ -992,6 +1018,13 @@ fn check_polygon(cur: &Cursor, verts: &[VecArg]) -> Result<()> {
 
 /// `<surface>`: a colour or a material name, then optional properties.
 fn surface(cur: &mut Cursor, materials: &Materials) -> Result<Material> {
+    cur.in_surface = true;
+    let m = surface_inner(cur, materials);
+    cur.in_surface = false;
+    m
+}
+
+fn surface_inner(cur: &mut Cursor, materials: &Materials) -> Result<Material> {
     const EXPECTED: &str = "a diffuse colour (r, g, b) or a material name";
     let Some(t) = cur.peek() else {
         return Err(cur.unexpected(EXPECTED));
