@@ -989,7 +989,7 @@ fn check_polygon(cur: &Cursor, verts: &[VecArg]) -> Result<()> {
             let (b, area) = (1..verts.len())
                 .map(|i| (i, ea.cross(verts[i].v - v0).length()))
                 .fold((0, 0.0), |best, x| if x.1 > best.1 { x } else { best });
-            if !(area > 1e-9 * size * size) {
+            if area.is_nan() || area <= 1e-9 * size * size {
                 return Err(collinear());
             }
             b
