@@ -16,7 +16,9 @@ fn parse_never_panics(text: &str) {
             let (line, column) = e.location().expect("parse errors have a location");
             assert!(line >= 1 && column >= 1);
             assert!(line <= text.split('\n').count());
-            assert!(e.to_string().starts_with(&format!("fuzz.scene:{line}:{column}: ")));
+            assert!(e
+                .to_string()
+                .starts_with(&format!("fuzz.scene:{line}:{column}: ")));
             if let SceneError::Invalid(b) = &e {
                 let end = b.span.offset() + b.span.len();
                 assert!(end <= text.len());
@@ -46,18 +48,75 @@ fn scenes() -> &'static [String] {
 
 /// Pieces that are likely to reach deep into the parser.
 const VOCABULARY: &[&str] = &[
-    "SIZE", "CAMERA", "BACKGROUND", "AMBIENT", "LIGHT", "MATERIAL", "SPHERE", "PLANE", "BOX",
-    "POLYGON", "ELLIPSOID", "HEART", "IMPLICIT", "SPECULAR", "REFLECT", "TRANSMIT", "IOR",
-    "ATTENUATION", "CHECKER", "INSIDE", "BOUND", "torus", "kummer", "heart", "glass", "(", ")",
-    ",", "\"", "\"x^2 + y^2 = 1\"", "\"\"", "#", "\n", "\r\n", " ", "\t", "0", "1", "-1", "3",
-    "0.5", "2", "180", "1e999", "-1e999", "nan", "inf", "1e-320", "32768", "32769", "1e308",
-    "-1e308", "4294967296", "(0,0,0)", "(1,0,0)", "(0,1,0)", "(0,0,1)", "(1,1,1)", "(1e300,1,1)",
-    "é", "\u{feff}",
+    "SIZE",
+    "CAMERA",
+    "BACKGROUND",
+    "AMBIENT",
+    "LIGHT",
+    "MATERIAL",
+    "SPHERE",
+    "PLANE",
+    "BOX",
+    "POLYGON",
+    "ELLIPSOID",
+    "HEART",
+    "IMPLICIT",
+    "SPECULAR",
+    "REFLECT",
+    "TRANSMIT",
+    "IOR",
+    "ATTENUATION",
+    "CHECKER",
+    "INSIDE",
+    "BOUND",
+    "torus",
+    "kummer",
+    "heart",
+    "glass",
+    "(",
+    ")",
+    ",",
+    "\"",
+    "\"x^2 + y^2 = 1\"",
+    "\"\"",
+    "#",
+    "\n",
+    "\r\n",
+    " ",
+    "\t",
+    "0",
+    "1",
+    "-1",
+    "3",
+    "0.5",
+    "2",
+    "180",
+    "1e999",
+    "-1e999",
+    "nan",
+    "inf",
+    "1e-320",
+    "32768",
+    "32769",
+    "1e308",
+    "-1e308",
+    "4294967296",
+    "(0,0,0)",
+    "(1,0,0)",
+    "(0,1,0)",
+    "(0,0,1)",
+    "(1,1,1)",
+    "(1e300,1,1)",
+    "é",
+    "\u{feff}",
 ];
 
 fn soup() -> impl Strategy<Value = String> {
     proptest::collection::vec(
-        (0..VOCABULARY.len(), prop_oneof![Just(" "), Just(""), Just("\n")]),
+        (
+            0..VOCABULARY.len(),
+            prop_oneof![Just(" "), Just(""), Just("\n")],
+        ),
         0..80,
     )
     .prop_map(|parts| {

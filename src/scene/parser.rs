@@ -151,6 +151,16 @@ fn parse_number(s: &str) -> std::result::Result<f64, NumberError> {
     }
 }
 
+/// A distance for messages: four significant digits, without a long tail.
+fn short_float(x: f64) -> String {
+    if (1e-3..1e6).contains(&x) {
+        let s = format!("{x:.4}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
 /// The first `max` characters of `s`, with `…` when cut.
 fn shorten(s: &str, max: usize) -> String {
     match s.char_indices().nth(max) {
@@ -1002,10 +1012,10 @@ fn check_polygon(cur: &Cursor, verts: &[VecArg]) -> Result<()> {
             return Err(cur.fail(
                 p.span.clone(),
                 format!(
-                    "the polygon is not planar: vertex {} lies {:.3e} off the plane through \
+                    "the polygon is not planar: vertex {} lies {} off the plane through \
                      vertices 1, {} and {}",
                     k + 1,
-                    d.abs(),
+                    short_float(d.abs()),
                     a.min(b) + 1,
                     a.max(b) + 1,
                 ),
@@ -1203,6 +1213,14 @@ mod tests {
         for s in ["abc", "1.2.3", "0x10", "", "1e"] {
             assert_eq!(parse_number(s), Err(NumberError::NotANumber), "{s}");
         }
+    }
+
+    #[test]
+    fn short_floats() {
+        assert_eq!(short_float(0.5), "0.5");
+        assert_eq!(short_float(2.0), "2");
+        assert_eq!(short_float(0.012345), "0.0123");
+        assert_eq!(short_float(1.5e-7), "1.500e-7");
     }
 
     #[test]
