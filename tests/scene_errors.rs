@@ -462,6 +462,11 @@ fn polygons() {
         "red",
         "expected vertex 4 of 4, a vector (x, y, z), found `red`",
     );
+    check(
+        "POLYGON 4 (0,0,0) (1,0,0) (0,1,0) (1,1,1)",
+        "",
+        "are there fewer vertices than the polygon's vertex count n",
+    );
     let e = check(
         "POLYGON 3 (0,0,0) (1,0,0) (0,1,0) (1,1,0) (1,1,1)",
         "(1,1,1)",

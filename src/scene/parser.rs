@@ -1037,6 +1037,16 @@ fn surface(cur: &mut Cursor, materials: &Materials) -> Result<Material> {
 fn surface_inner(cur: &mut Cursor, materials: &Materials) -> Result<Material> {
     const EXPECTED: &str = "a diffuse colour (r, g, b) or a material name";
     let Some(t) = cur.peek() else {
+        if cur.usage.starts_with("POLYGON") {
+            return Err(cur.fail(
+                cur.here(),
+                format!(
+                    "expected {EXPECTED}, found end of line: are there fewer vertices than the \
+                     polygon's vertex count n (so that the colour was read as the last vertex)?"
+                ),
+                format!("expected {EXPECTED}"),
+            ));
+        }
         return Err(cur.unexpected(EXPECTED));
     };
     let mut m = match t.kind {
