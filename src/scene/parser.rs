@@ -795,7 +795,7 @@ impl Builder {
         cur: &mut Cursor,
         options: &LoadOptions,
     ) -> Result<(Box<dyn Shape>, Material)> {
-        enum Source {
+        enum EquationSource {
             Quoted(Span),
             Preset(Span),
         }
@@ -808,7 +808,7 @@ impl Builder {
                 let inner = t.inner();
                 (
                     cur.src.text[inner.clone()].to_string(),
-                    Source::Quoted(inner),
+                    EquationSource::Quoted(inner),
                 )
             }
             TokenKind::Word if parse_number(cur.text(&t)) == Err(NumberError::NotANumber) => {
@@ -868,7 +868,7 @@ impl Builder {
                         "invalid preset",
                     )
                 })?;
-                (eq, Source::Preset(span))
+                (eq, EquationSource::Preset(span))
             }
             _ => return Err(cur.unexpected("an equation in quotes or a preset name")),
         };
@@ -889,12 +889,12 @@ impl Builder {
         }
         let frame = check_frame(cur, &p, [&u, &v, &w], names)?;
         let shape = Implicit::new(&equation, frame, bound).map_err(|e| match &source {
-            Source::Quoted(inner) => cur.fail(
+            EquationSource::Quoted(inner) => cur.fail(
                 equation_span(cur.src.text, inner.clone(), &e),
                 format!("invalid equation: {e}"),
                 shorten(&e.message, 60),
             ),
-            Source::Preset(span) => cur.fail(
+            EquationSource::Preset(span) => cur.fail(
                 span.clone(),
                 format!("internal error: the preset's equation is invalid: {e}"),
                 "invalid preset",
