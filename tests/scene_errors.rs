@@ -660,6 +660,12 @@ fn unreadable_file() {
     let dir = tempfile::tempdir().unwrap();
     let e = parse_file(dir.path(), &LoadOptions::default()).unwrap_err();
     assert!(e.to_string().starts_with("cannot read scene file"), "{e}");
+    // Not UTF-8.
+    let latin1 = dir.path().join("latin1.scene");
+    std::fs::write(&latin1, b"# c\xe6ur\nCAMERA (6,0,0) (0,0,0) (0,0,1) 40\n").unwrap();
+    let e = parse_file(&latin1, &LoadOptions::default()).unwrap_err();
+    assert!(matches!(e, SceneError::Unreadable { .. }), "{e}");
+    assert!(e.to_string().contains("UTF-8"), "{e}");
 }
 
 #[test]

@@ -61,7 +61,9 @@ const SURFACE_USAGE: &str = "<surface> is a diffuse colour (r, g, b) or the name
 /// size off the plane of the others.
 pub(crate) const PLANARITY_TOLERANCE: f64 = 1e-4;
 
-/// Parses scene text; `name` is used in error messages (usually the file path).
+/// Parses scene text (the format is described in docs/scene-format.md); `name` is used in
+/// error messages (usually the file path). The first mistake is returned as a
+/// [`SceneError`] that points at the offending part of its line.
 pub fn parse(text: &str, name: &str, options: &LoadOptions) -> Result<Scene> {
     let src = Source { text, name };
     let mut builder = Builder::default();
@@ -90,7 +92,8 @@ pub fn parse(text: &str, name: &str, options: &LoadOptions) -> Result<Scene> {
     builder.finish(src, last_token_end)
 }
 
-/// Reads and parses a scene file.
+/// Reads and parses a scene file (UTF-8); a file that cannot be read is
+/// [`SceneError::Unreadable`].
 pub fn parse_file(path: &std::path::Path, options: &LoadOptions) -> Result<Scene> {
     let text = std::fs::read_to_string(path).map_err(|e| SceneError::Unreadable {
         path: path.display().to_string(),
