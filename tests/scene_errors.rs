@@ -447,15 +447,27 @@ fn polygons() {
         "(",
         "expected the number of vertices (a number), found `(`",
     );
+    // A pentagon with its fourth vertex lifted out of the plane z = 0.
+    check(
+        "POLYGON 5 (0,0,0) (2,0,0) (2,1,0) (1,2,0.5) (0,1,0) (1,1,1)",
+        "(1,2,0.5)",
+        "invalid polygon: the polygon's vertices are not in one plane: vertex 4",
+    );
+    // A skew quadrilateral.
     check(
         "POLYGON 4 (0,0,0) (1,0,0) (1,1,0) (0,1,0.5) (1,1,1)",
         "(0,1,0.5)",
-        "the polygon is not planar: vertex 4 lies",
+        "not in one plane: vertex 4 is 0.5 units off the plane of the others",
     );
     check(
         "POLYGON 3 (0,0,0) (1,1,1) (2,2,2) (1,1,1)",
         "(0,0,0)",
-        "the polygon's vertices are all on one line",
+        "invalid polygon: the polygon has no area: all its vertices lie on one line",
+    );
+    check(
+        "POLYGON 3 (1,1,1) (1,1,1) (1,1,1) (1,1,1)",
+        "(1,1,1)",
+        "are the same point",
     );
     check(
         "POLYGON 4 (0,0,0) (1,0,0) (0,1,0) red",

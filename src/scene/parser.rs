@@ -57,10 +57,6 @@ const SURFACE_USAGE: &str = "<surface> is a diffuse colour (r, g, b) or the name
      defined earlier, then optionally SPECULAR ks exponent, REFLECT kr, TRANSMIT kt, IOR n, \
      ATTENUATION (r, g, b), CHECKER (r, g, b) size, INSIDE (r, g, b)";
 
-/// Relative tolerance for polygon planarity: a vertex may lie this fraction of the polygon's
-/// size off the plane of the others.
-pub(crate) const PLANARITY_TOLERANCE: f64 = 1e-4;
-
 /// Parses scene text (the format is described in docs/scene-format.md); `name` is used in
 /// error messages (usually the file path). The first mistake is returned as a
 /// [`SceneError`] that points at the offending part of its line.
@@ -151,16 +147,6 @@ fn parse_number(s: &str) -> std::result::Result<f64, NumberError> {
             "is too large: it overflows a 64-bit float to infinity",
         )),
         Err(_) => Err(NumberError::NotANumber),
-    }
-}
-
-/// A distance for messages: four significant digits, without a long tail.
-fn short_float(x: f64) -> String {
-    if (1e-3..1e6).contains(&x) {
-        let s = format!("{x:.4}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        format!("{x:.3e}")
     }
 }
 
@@ -750,10 +736,14 @@ impl Builder {
                 }
                 let m = surface(cur, &self.materials)?;
                 cur.end_after_surface()?;
-                check_polygon(cur, &verts)?;
-                let all = Cursor::join(&verts[0].span, &verts[verts.len() - 1].span);
-                let s = Polygon::new(verts.iter().map(|a| a.v).collect())
-                    .map_err(|e| shape_error(cur, all, e))?;
+                let s = Polygon::new(verts.iter().map(|a| a.v).collect()).map_err(|e| {
+                    // Point at the vertex the message names, else at all of them.
+                    let span = match vertex_named_in(&e.0, verts.len()) {
+                        Some(k) => verts[k - 1].span.clone(),
+                        None => Cursor::join(&verts[0].span, &verts[verts.len() - 1].span),
+                    };
+                    shape_error(cur, span, e)
+                })?;
                 (Box::new(s), m)
             }
             "BOX" | "ELLIPSOID" | "HEART" => {
@@ -968,65 +958,12 @@ fn check_frame(cur: &Cursor, p: &VecArg, b: [&VecArg; 3], names: [&str; 3]) -> R
     })
 }
 
-/// Checks that a polygon's vertices span a plane and lie in it. The plane is the one through
-/// the first vertex and the first two after it that clearly make a triangle, so the error
-/// points at the first vertex off the plane of the ones before it.
-fn check_polygon(cur: &Cursor, verts: &[VecArg]) -> Result<()> {
-    let all = Cursor::join(&verts[0].span, &verts[verts.len() - 1].span);
-    let v0 = verts[0].v;
-    let size = verts
-        .iter()
-        .map(|p| (p.v - v0).length())
-        .fold(0.0, f64::max);
-    if !size.is_finite() {
-        return Ok(()); // Too large to check here; the shape decides.
-    }
-    let collinear = || {
-        cur.fail(
-            all.clone(),
-            "the polygon's vertices are all on one line (or one point): it has no area",
-            "collinear vertices",
-        )
-    };
-    let Some(a) = (1..verts.len()).find(|&i| (verts[i].v - v0).length() > 1e-6 * size) else {
-        return Err(collinear());
-    };
-    let ea = verts[a].v - v0;
-    let sine = |i: usize| {
-        let e = verts[i].v - v0;
-        ea.cross(e).length() / (ea.length() * e.length()).max(f64::MIN_POSITIVE)
-    };
-    let b = match (a + 1..verts.len()).find(|&i| sine(i) > 1e-3) {
-        Some(b) => b,
-        None => {
-            let (b, area) = (1..verts.len())
-                .map(|i| (i, ea.cross(verts[i].v - v0).length()))
-                .fold((0, 0.0), |best, x| if x.1 > best.1 { x } else { best });
-            if area.is_nan() || area <= 1e-9 * size * size {
-                return Err(collinear());
-            }
-            b
-        }
-    };
-    let n = ea.cross(verts[b].v - v0).normalize();
-    for (k, p) in verts.iter().enumerate() {
-        let d = (p.v - v0).dot(n);
-        if d.abs() > PLANARITY_TOLERANCE * size {
-            return Err(cur.fail(
-                p.span.clone(),
-                format!(
-                    "the polygon is not planar: vertex {} lies {} off the plane through \
-                     vertices 1, {} and {}",
-                    k + 1,
-                    short_float(d.abs()),
-                    a.min(b) + 1,
-                    a.max(b) + 1,
-                ),
-                "off the plane",
-            ));
-        }
-    }
-    Ok(())
+/// The 1-based vertex number a polygon error message names (`"… vertex 4 …"`), if it is one
+/// of the `count` vertices.
+fn vertex_named_in(message: &str, count: usize) -> Option<usize> {
+    let rest = &message[message.find("vertex ")? + "vertex ".len()..];
+    let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
+    digits.parse().ok().filter(|&k| (1..=count).contains(&k))
 }
 
 /// `<surface>`: a colour or a material name, then optional properties.
@@ -1229,11 +1166,15 @@ mod tests {
     }
 
     #[test]
-    fn short_floats() {
-        assert_eq!(short_float(0.5), "0.5");
-        assert_eq!(short_float(2.0), "2");
-        assert_eq!(short_float(0.012345), "0.0123");
-        assert_eq!(short_float(1.5e-7), "1.500e-7");
+    fn vertex_numbers_in_polygon_messages() {
+        assert_eq!(vertex_named_in("vertex 4 is 0.5 units off", 5), Some(4));
+        assert_eq!(
+            vertex_named_in("the polygon's vertex 12 is bad", 12),
+            Some(12)
+        );
+        assert_eq!(vertex_named_in("vertex 6 is bad", 5), None);
+        assert_eq!(vertex_named_in("no area", 5), None);
+        assert_eq!(vertex_named_in("vertex x", 5), None);
     }
 
     #[test]
