@@ -628,6 +628,11 @@ fn implicit_surfaces() {
         "",
         "expected the bounding radius (a number), found end of line",
     );
+    check(
+        "IMPLICIT \"x^2+y^2+z^2-1\" (0,0,0) (1,0,0) (0,1,0) (0,0,1) BOUND 2 (1,0,0)",
+        "BOUND",
+        "expected a diffuse colour (r, g, b) or a material name before BOUND",
+    );
 }
 
 #[test]

@@ -997,7 +997,7 @@ fn surface_inner(cur: &mut Cursor, materials: &Materials) -> Result<Material> {
                 return Err(cur.unexpected(EXPECTED));
             }
             let upper = word.to_ascii_uppercase();
-            if PROPERTIES.iter().any(|p| p.0 == upper) {
+            if upper == "BOUND" || PROPERTIES.iter().any(|p| p.0 == upper) {
                 return Err(cur.fail(
                     t.span,
                     format!("expected {EXPECTED} before {upper}, found {upper}"),
