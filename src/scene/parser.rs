@@ -885,7 +885,7 @@ impl Builder {
             EquationSource::Quoted(inner) => cur.fail(
                 equation_span(cur.src.text, inner.clone(), &e),
                 format!("invalid equation: {e}"),
-                shorten(&e.message, 60),
+                "here",
             ),
             EquationSource::Preset(span) => cur.fail(
                 span.clone(),
