@@ -889,7 +889,7 @@ impl Builder {
             ),
             EquationSource::Preset(span) => cur.fail(
                 span.clone(),
-                format!("internal error: the preset's equation is invalid: {e}"),
+                format!("this preset gives no usable surface with these parameters: {e}"),
                 "invalid preset",
             ),
         })?;
