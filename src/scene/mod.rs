@@ -1,6 +1,7 @@
 //! The scene: objects with materials, lights, camera, image settings; and its text format
 //! (see docs/scene-format.md), read by [`parse`].
 
+mod cursor;
 mod error;
 mod lexer;
 mod parser;
