@@ -151,7 +151,7 @@ pub fn run(args: RenderArgs) -> i32 {
             indicatif::ProgressDrawTarget::stderr(),
         );
         if let Ok(style) = indicatif::ProgressStyle::with_template(
-            "kardia: rendering {bar:40} {percent:>3}%  {elapsed} elapsed, ~{eta} left",
+            "kardia: rendering {wide_bar} {percent:>3}% {elapsed}, eta {eta}",
         ) {
             bar.set_style(style);
         }
