@@ -130,8 +130,9 @@ fn parent_dir(path: &Path) -> &Path {
 }
 
 /// Checks, before any rendering, that `path` can be written: known extension (`.png` or
-/// `.exr`), an existing directory to write into, and not itself a directory. Returns the
-/// format the extension selects.
+/// `.exr`), an existing directory to write into in which a file can be created (tried with a
+/// temporary file, removed at once), and not itself a directory. Returns the format the
+/// extension selects.
 pub fn check_output_path(path: &Path) -> Result<ImageFormat, OutputError> {
     let format = ImageFormat::from_path(path)?;
     let dir = parent_dir(path);
@@ -141,6 +142,13 @@ pub fn check_output_path(path: &Path) -> Result<ImageFormat, OutputError> {
     if path.is_dir() {
         return Err(OutputError::IsDirectory(path.display().to_string()));
     }
+    // Prove the directory is writable with the same kind of temporary file the write uses.
+    let (tmp, file) = create_temp_beside(path).map_err(|e| OutputError::Write {
+        path: path.display().to_string(),
+        reason: e.to_string(),
+    })?;
+    drop(file);
+    let _ = std::fs::remove_file(tmp);
     Ok(format)
 }
 
