@@ -70,7 +70,7 @@ impl Default for RenderSettings {
         Self {
             spp: 4,
             max_depth: 8,
-            seed: 0x6b61_7264_6961,
+            seed: 0,
             threads: 0,
         }
     }
