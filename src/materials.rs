@@ -17,9 +17,12 @@ pub struct Material {
     pub specular: f64,
     /// Specular exponent (Blinn–Phong), ≥ 1.
     pub shininess: f64,
-    /// Mirror reflection weight `kr` in `[0, 1]`.
+    /// Mirror reflection weight `kr` in `[0, 1]`, added to whatever the Fresnel term of a
+    /// transmissive surface reflects (see [`crate::integrator`]).
     pub reflect: f64,
-    /// Transmission weight `kt` in `[0, 1]`.
+    /// Transmission weight `kt` in `[0, 1]`: the weight of the dielectric interface, split
+    /// by the Fresnel reflectance between refraction and reflection (all reflected under
+    /// total internal reflection). Shadow rays lose a factor `kt` per surface crossed.
     pub transmit: f64,
     /// Index of refraction of the inside (> 0; 1 = no bending).
     pub ior: f64,
