@@ -22,7 +22,10 @@ use super::prep::{horner, max_abs, Prepared};
 
 /// Relative size (against `1 + Σ|quotient|`, the members being scaled to a largest
 /// coefficient of 1) below which a remainder coefficient is cancellation noise.
-const GCD_TOL: f64 = 1e-10;
+const GCD_SAFETY: f64 = 4.0;
+
+/// Relative error assumed in each input coefficient (a few rounding units).
+const INPUT_ERR: f64 = 4.0 * f64::EPSILON;
 
 /// Tolerance, relative to `Σ|cⱼ||x|ʲ`, under which a value at a critical point is zero.
 pub(crate) const CRIT_TOL: f64 = 64.0 * f64::EPSILON;
@@ -39,7 +42,7 @@ struct Chain<const M: usize> {
 
 impl<const M: usize> Chain<M> {
     /// The sequence of `c` (degree `n < M`), ended at the numerical gcd.
-    fn build(c: &[f64], n: usize) -> Self {
+    fn build(c: &[f64], n: usize, input_err: f64) -> Self {
         let mut ch = Chain {
             p: [[0.0; M]; M],
             deg: [0; M],
@@ -62,6 +65,9 @@ impl<const M: usize> Chain<M> {
         }
         ch.deg[1] = n - 1;
         ch.len = 2;
+        // Running bounds on the absolute coefficient error of the last two members.
+        let mut ea = input_err * s;
+        let mut eb = ea * n as f64 * inv / s;
         while ch.deg[ch.len - 1] > 0 {
             let k = ch.len;
             let (da, db) = (ch.deg[k - 2], ch.deg[k - 1]);
@@ -77,7 +83,15 @@ impl<const M: usize> Chain<M> {
                     r[i + j] -= q * b[j];
                 }
             }
-            let err = GCD_TOL * (1.0 + qsum);
+            let rounding = 4.0 * f64::EPSILON * (db + 2) as f64 * (1.0 + qsum);
+            let mut err = GCD_SAFETY * (ea + qsum * eb) + rounding;
+            if max_abs(&r[..db]) <= err
+                && !(divides(&ch.p[0][..=n], &b[..=db], input_err * s)
+                    && divides(&ch.p[1][..n], &b[..=db], input_err * s * n as f64))
+            {
+                // Small, but `b` is no factor of `P`: the remainder is real; keep it.
+                err = rounding;
+            }
             let mut dr = db - 1;
             loop {
                 if r[dr].abs() > err {
@@ -96,6 +110,8 @@ impl<const M: usize> Chain<M> {
             }
             ch.deg[k] = dr;
             ch.len = k + 1;
+            ea = eb;
+            eb = err / mr;
         }
         ch
     }
@@ -118,37 +134,45 @@ impl<const M: usize> Chain<M> {
     }
 }
 
-/// Largest relative remainder of `P / gcd` for the division to be trusted.
-const DIVIDE_TOL: f64 = 1e-6;
+/// Largest remainder of `P / g`, in units of the error in `P`'s coefficients, for `g` to count
+/// as a factor.
+const DIVIDE_TOL: f64 = 1e3;
+
+/// `P / g` by long division (`p` of degree ≥ that of `g`, `g` non-constant): the quotient and
+/// the largest remainder coefficient.
+fn divide<const M: usize>(p: &[f64], g: &[f64]) -> ([f64; M], f64) {
+    let (n, dg) = (p.len() - 1, g.len() - 1);
+    let mut r = [0.0; M];
+    r[..=n].copy_from_slice(p);
+    let mut q = [0.0; M];
+    for i in (0..=n - dg).rev() {
+        let qi = r[i + dg] / g[dg];
+        q[i] = qi;
+        r[i + dg] = 0.0;
+        for j in 0..dg {
+            r[i + j] -= qi * g[j];
+        }
+    }
+    (q, max_abs(&r[..dg]))
+}
+
+/// True when `g` divides `p` (scaled to a largest coefficient of 1) up to a remainder of
+/// `DIVIDE_TOL` times the error `err` already in `p`'s coefficients.
+fn divides(p: &[f64], g: &[f64], err: f64) -> bool {
+    g.len() < 2 || divide::<17>(p, g).1 <= DIVIDE_TOL * (err + f64::EPSILON)
+}
 
 /// The Sturm sequence to count with: that of the square-free part `P / gcd(P, P')` when the
-/// numerical gcd is not a constant and really divides `P` (remainder within `DIVIDE_TOL`);
-/// otherwise the sequence of `P` itself, ended at the gcd (the sign-change count is the same,
-/// the common factor being the same in every member).
-fn counting_chain<const M: usize>(c: &[f64], n: usize) -> Chain<M> {
-    let ch = Chain::<M>::build(c, n);
+/// numerical gcd is not a constant (it has then been checked to divide `P`), else that of `P`.
+fn counting_chain<const M: usize>(c: &[f64], n: usize, input_err: f64) -> Chain<M> {
+    let ch = Chain::<M>::build(c, n, input_err);
     let g = ch.len - 1;
     let dg = ch.deg[g];
     if dg == 0 {
         return ch;
     }
-    let scale = max_abs(&c[..=n]);
-    let mut r = [0.0; M];
-    r[..=n].copy_from_slice(&c[..=n]);
-    let mut q = [0.0; M];
-    let b = &ch.p[g];
-    for i in (0..=n - dg).rev() {
-        let qi = r[i + dg] / b[dg];
-        q[i] = qi;
-        r[i + dg] = 0.0;
-        for j in 0..dg {
-            r[i + j] -= qi * b[j];
-        }
-    }
-    if max_abs(&r[..dg]) > DIVIDE_TOL * scale {
-        return ch;
-    }
-    Chain::<M>::build(&q, n - dg)
+    let (q, _) = divide::<M>(&ch.p[0][..=n], &ch.p[g][..=dg]);
+    Chain::<M>::build(&q, n - dg, (input_err / max_abs(&c[..=n]) + f64::EPSILON) * DIVIDE_TOL * max_abs(&q[..=n - dg]))
 }
 
 /// True when `[a, b]` can no longer shrink usefully: no double strictly between the ends, or
@@ -157,6 +181,14 @@ fn counting_chain<const M: usize>(c: &[f64], n: usize) -> Chain<M> {
 fn converged(a: f64, b: f64) -> bool {
     let mid = 0.5 * (a + b);
     mid <= a || mid >= b || b - a <= 4.0 * f64::EPSILON * a.abs().max(b.abs())
+}
+
+/// The isolation split point of `(a, b)`: slightly off the middle, so that the dyadic points
+/// where exactly representable roots tend to sit (and where every sequence member may vanish at
+/// a multiple root) are not hit exactly.
+#[inline]
+fn split(a: f64, b: f64) -> f64 {
+    a + (b - a) * 0.496_858_407_346_410_2
 }
 
 /// Anderson–Björck false position for the root of `q` in `[a, b]`, where `fa`, `fb` have
@@ -210,17 +242,20 @@ fn false_position(q: &[f64], mut a: f64, mut b: f64, mut fa: f64, mut fb: f64) -
     }
 }
 
-/// Refines the single distinct root of the chain's first member in `(a, b]`, where the
-/// member's sign change count at `a` is `va`.
-fn refine<const M: usize>(ch: &Chain<M>, mut a: f64, mut b: f64, mut va: i32) -> f64 {
-    let q = &ch.p[0][..=ch.deg[0]];
-    let fa = horner(q, a);
-    let fb = horner(q, b);
-    if fb == 0.0 {
-        return b;
-    }
-    if fa != 0.0 && (fa < 0.0) != (fb < 0.0) {
-        return false_position(q, a, b, fa, fb);
+/// Refines the single distinct root of `p` in `(a, b]` isolated by its counting chain `ch`
+/// (whose count at `a` is `va`): by false position on `p`, else on the chain's first member
+/// (the square-free part), else (an even root) by bisection on the count.
+fn refine<const M: usize>(ch: &Chain<M>, p: &[f64], mut a: f64, mut b: f64, mut va: i32) -> f64 {
+    // `p` itself first: where it changes sign there is certainly a root of it.
+    for q in [p, &ch.p[0][..=ch.deg[0]]] {
+        let fa = horner(q, a);
+        let fb = horner(q, b);
+        if fb == 0.0 {
+            return b;
+        }
+        if fa != 0.0 && (fa < 0.0) != (fb < 0.0) {
+            return false_position(q, a, b, fa, fb);
+        }
     }
     // No usable sign change (rounding has made the root look even): bisect on the count.
     for _ in 0..MAX_ITER {
@@ -246,6 +281,8 @@ struct Shifted<const M: usize> {
     q: [f64; M],
     mid: f64,
     half: f64,
+    /// Bound on the absolute error of `q`'s coefficients inherited from `P`'s rounding.
+    err: f64,
 }
 
 impl<const M: usize> Shifted<M> {
@@ -266,7 +303,15 @@ impl<const M: usize> Shifted<M> {
             *c *= w;
             w *= half;
         }
-        Shifted { q, mid, half }
+        // Each coefficient of `P` carries a relative error of a few ulps; on the interval that
+        // is at most `Σ|Pⱼ|·Rʲ` times it, R = max(|lo|, |hi|), whatever the basis.
+        let r = p.lo.abs().max(p.hi.abs());
+        let mut size = 0.0;
+        for &c in p.c[..=n].iter().rev() {
+            size = size * r + c.abs();
+        }
+        let err = INPUT_ERR * (n + 1) as f64 * size;
+        Shifted { q, mid, half, err }
     }
 
     /// The root `u` of `Q` in `T` coordinates, polished on `P` itself when the shift's
@@ -280,22 +325,58 @@ impl<const M: usize> Shifted<M> {
         if t - p.lo <= slack && (t <= p.lo || horner(c, p.lo) == 0.0) {
             return None;
         }
-        if slack <= 16.0 * p.n as f64 * f64::EPSILON * t.abs() {
-            return Some(t);
+        if t.abs() <= slack && c[0] == 0.0 && p.lo < 0.0 {
+            return Some(0.0); // an exact root at 0, blurred by the shift
         }
         let (a, b) = ((t - slack).max(p.lo), (t + slack).min(p.hi));
         let (fa, fb) = (horner(c, a), horner(c, b));
-        if fa != 0.0 && fb != 0.0 && (fa < 0.0) != (fb < 0.0) {
-            Some(false_position(c, a, b, fa, fb))
-        } else {
-            Some(t)
+        let noise = 1e3 * f64::EPSILON * abs_horner(c, t.abs());
+        if fa.abs() > noise || fb.abs() > noise {
+            // A simple root: its value is known as well as the shift allows, or better.
+            if slack <= 16.0 * p.n as f64 * f64::EPSILON * t.abs() {
+                return Some(t);
+            }
+            if fa != 0.0 && fb != 0.0 && (fa < 0.0) != (fb < 0.0) {
+                return Some(false_position(c, a, b, fa, fb));
+            }
+            return Some(t);
         }
+        // `P` is rounding noise around `t`: a numerically multiple root. It is a simple root of
+        // `P'` (double) or `P''` (triple), which locate it far better than `P` can.
+        let scale = self.mid.abs().max(self.half);
+        let pt = horner(c, t).abs();
+        let mut d = [0.0; M];
+        d[..=p.n].copy_from_slice(c);
+        for (k, w) in [(1, 1e-6 * scale), (2, 1e-4 * scale)] {
+            if k > p.n - 1 {
+                break;
+            }
+            for j in 0..=p.n - k {
+                d[j] = d[j + 1] * (j + 1) as f64;
+            }
+            let dk = &d[..=p.n - k];
+            let (a, b) = ((t - w).max(p.lo), (t + w).min(p.hi));
+            let (fa, fb) = (horner(dk, a), horner(dk, b));
+            if fa != 0.0 && fb != 0.0 && (fa < 0.0) != (fb < 0.0) {
+                let x = false_position(dk, a, b, fa, fb);
+                if x > p.lo && horner(c, x).abs() <= pt.max(noise) {
+                    return Some(x);
+                }
+            }
+        }
+        Some(t)
     }
+}
+
+/// `Σ|cⱼ|·xʲ` for `x ≥ 0`: the scale of the rounding error in evaluating `c` at `±x`.
+#[inline]
+fn abs_horner(c: &[f64], x: f64) -> f64 {
+    c.iter().rev().fold(0.0, |s, a| s * x + a.abs())
 }
 
 fn first_impl<const M: usize>(p: &Prepared) -> Option<f64> {
     let sh = Shifted::<M>::new(p);
-    let ch = counting_chain::<M>(&sh.q, p.n);
+    let ch = counting_chain::<M>(&sh.q, p.n, sh.err);
     let mut a = -1.0;
     let mut va = ch.changes(a);
     let vhi = ch.changes(1.0);
@@ -308,7 +389,7 @@ fn first_impl<const M: usize>(p: &Prepared) -> Option<f64> {
             if vlo - vb == 1 {
                 break;
             }
-            let m = 0.5 * (lo + b);
+            let m = split(lo, b);
             if m <= lo || m >= b {
                 break; // an unresolvable cluster: one root
             }
@@ -321,7 +402,7 @@ fn first_impl<const M: usize>(p: &Prepared) -> Option<f64> {
                 vlo = vm;
             }
         }
-        if let Some(t) = sh.to_t(p, refine(&ch, lo, b, vlo)) {
+        if let Some(t) = sh.to_t(p, refine(&ch, &sh.q[..=p.n], lo, b, vlo)) {
             return Some(t * p.scale);
         }
         // The root is at `lo` up to rounding, which the interval excludes: try the next one.
@@ -333,7 +414,7 @@ fn first_impl<const M: usize>(p: &Prepared) -> Option<f64> {
 
 fn all_impl<const M: usize>(p: &Prepared, out: &mut Vec<f64>) {
     let sh = Shifted::<M>::new(p);
-    let ch = counting_chain::<M>(&sh.q, p.n);
+    let ch = counting_chain::<M>(&sh.q, p.n, sh.err);
     let va = ch.changes(-1.0);
     let vb = ch.changes(1.0);
     if va - vb < 1 {
@@ -348,9 +429,9 @@ fn all_impl<const M: usize>(p: &Prepared, out: &mut Vec<f64>) {
             continue;
         }
         steps += 1;
-        let m = 0.5 * (a + b);
+        let m = split(a, b);
         if count == 1 || m <= a || m >= b || steps > 64 * MAX_ITER {
-            if let Some(t) = sh.to_t(p, refine(&ch, a, b, va)) {
+            if let Some(t) = sh.to_t(p, refine(&ch, &sh.q[..=p.n], a, b, va)) {
                 out.push(t * p.scale);
             }
             continue;
