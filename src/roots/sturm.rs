@@ -176,12 +176,17 @@ fn counting_chain<const M: usize>(c: &[f64], n: usize, input_err: f64) -> Chain<
 }
 
 /// True when `[a, b]` can no longer shrink usefully: no double strictly between the ends, or
-/// a width of a few ulps of the larger end.
+/// a width of a few ulps of the larger end plus `floor`.
 #[inline]
-fn converged(a: f64, b: f64) -> bool {
+fn converged(a: f64, b: f64, floor: f64) -> bool {
     let mid = 0.5 * (a + b);
-    mid <= a || mid >= b || b - a <= 4.0 * f64::EPSILON * a.abs().max(b.abs())
+    mid <= a || mid >= b || b - a <= 4.0 * f64::EPSILON * a.abs().max(b.abs()) + floor
 }
+
+/// When `P(hi)` is exactly zero, `hi` is reported as a root and the other roots are isolated
+/// in `(−1, HI_GUARD]` (in `u`): at a multiple root at `hi` every sequence member vanishes, so
+/// the count there is unreliable; a root closer to `hi` than that guard is merged with it.
+const HI_GUARD: f64 = 1.0 - 1e-9;
 
 /// The isolation split point of `(a, b)`: slightly off the middle, so that the dyadic points
 /// where exactly representable roots tend to sit (and where every sequence member may vanish at
@@ -194,13 +199,13 @@ fn split(a: f64, b: f64) -> f64 {
 /// Anderson–Björck false position for the root of `q` in `[a, b]`, where `fa`, `fb` have
 /// opposite signs (neither zero); a step that fails to halve the bracket is followed by a
 /// bisection step. Returns a point of the final bracket.
-fn false_position(q: &[f64], mut a: f64, mut b: f64, mut fa: f64, mut fb: f64) -> f64 {
+fn false_position(q: &[f64], mut a: f64, mut b: f64, mut fa: f64, mut fb: f64, floor: f64) -> f64 {
     let a0 = a;
     // `side` is the end replaced last: -1 left, 1 right, 0 none yet.
     let mut side = 0;
     let mut force_bisect = false;
     for _ in 0..MAX_ITER {
-        if converged(a, b) {
+        if converged(a, b, floor) {
             break;
         }
         let width = b - a;
@@ -245,7 +250,14 @@ fn false_position(q: &[f64], mut a: f64, mut b: f64, mut fa: f64, mut fb: f64) -
 /// Refines the single distinct root of `p` in `(a, b]` isolated by its counting chain `ch`
 /// (whose count at `a` is `va`): by false position on `p`, else on the chain's first member
 /// (the square-free part), else (an even root) by bisection on the count.
-fn refine<const M: usize>(ch: &Chain<M>, p: &[f64], mut a: f64, mut b: f64, mut va: i32) -> f64 {
+fn refine<const M: usize>(
+    ch: &Chain<M>,
+    p: &[f64],
+    mut a: f64,
+    mut b: f64,
+    mut va: i32,
+    floor: f64,
+) -> f64 {
     // `p` itself first: where it changes sign there is certainly a root of it.
     for q in [p, &ch.p[0][..=ch.deg[0]]] {
         let fa = horner(q, a);
@@ -254,12 +266,12 @@ fn refine<const M: usize>(ch: &Chain<M>, p: &[f64], mut a: f64, mut b: f64, mut 
             return b;
         }
         if fa != 0.0 && (fa < 0.0) != (fb < 0.0) {
-            return false_position(q, a, b, fa, fb);
+            return false_position(q, a, b, fa, fb, floor);
         }
     }
     // No usable sign change (rounding has made the root look even): bisect on the count.
     for _ in 0..MAX_ITER {
-        if converged(a, b) {
+        if converged(a, b, floor) {
             break;
         }
         let m = 0.5 * (a + b);
@@ -314,6 +326,11 @@ impl<const M: usize> Shifted<M> {
         Shifted { q, mid, half, err }
     }
 
+    /// Width in `u` below which refinement cannot improve `t = mid + half·u`: an ulp of `mid`.
+    fn floor(&self) -> f64 {
+        2.0 * f64::EPSILON * self.mid.abs() / self.half
+    }
+
     /// The root `u` of `Q` in `T` coordinates, polished on `P` itself when the shift's
     /// rounding could exceed a few ulps of the root, and kept inside `(lo, hi]`; `None` when
     /// the root is `lo` itself, up to that rounding (the interval excludes `lo`).
@@ -337,7 +354,7 @@ impl<const M: usize> Shifted<M> {
                 return Some(t);
             }
             if fa != 0.0 && fb != 0.0 && (fa < 0.0) != (fb < 0.0) {
-                return Some(false_position(c, a, b, fa, fb));
+                return Some(false_position(c, a, b, fa, fb, 0.0));
             }
             return Some(t);
         }
@@ -358,7 +375,7 @@ impl<const M: usize> Shifted<M> {
             let (a, b) = ((t - w).max(p.lo), (t + w).min(p.hi));
             let (fa, fb) = (horner(dk, a), horner(dk, b));
             if fa != 0.0 && fb != 0.0 && (fa < 0.0) != (fb < 0.0) {
-                let x = false_position(dk, a, b, fa, fb);
+                let x = false_position(dk, a, b, fa, fb, 0.0);
                 if x > p.lo && horner(c, x).abs() <= pt.max(noise) {
                     return Some(x);
                 }
@@ -377,14 +394,16 @@ fn abs_horner(c: &[f64], x: f64) -> f64 {
 fn first_impl<const M: usize>(p: &Prepared) -> Option<f64> {
     let sh = Shifted::<M>::new(p);
     let ch = counting_chain::<M>(&sh.q, p.n, sh.err);
+    let at_hi = horner(&p.c[..=p.n], p.hi) == 0.0;
+    let top = if at_hi { HI_GUARD } else { 1.0 };
     let mut a = -1.0;
     let mut va = ch.changes(a);
-    let vhi = ch.changes(1.0);
+    let vhi = ch.changes(top);
     for _ in 0..M {
         if va - vhi < 1 {
-            return None;
+            return at_hi.then_some(p.hi * p.scale);
         }
-        let (mut lo, mut b, mut vlo, mut vb) = (a, 1.0, va, vhi);
+        let (mut lo, mut b, mut vlo, mut vb) = (a, top, va, vhi);
         for _ in 0..MAX_ITER {
             if vlo - vb == 1 {
                 break;
@@ -402,7 +421,7 @@ fn first_impl<const M: usize>(p: &Prepared) -> Option<f64> {
                 vlo = vm;
             }
         }
-        if let Some(t) = sh.to_t(p, refine(&ch, &sh.q[..=p.n], lo, b, vlo)) {
+        if let Some(t) = sh.to_t(p, refine(&ch, &sh.q[..=p.n], lo, b, vlo, sh.floor())) {
             return Some(t * p.scale);
         }
         // The root is at `lo` up to rounding, which the interval excludes: try the next one.
@@ -415,13 +434,12 @@ fn first_impl<const M: usize>(p: &Prepared) -> Option<f64> {
 fn all_impl<const M: usize>(p: &Prepared, out: &mut Vec<f64>) {
     let sh = Shifted::<M>::new(p);
     let ch = counting_chain::<M>(&sh.q, p.n, sh.err);
+    let at_hi = horner(&p.c[..=p.n], p.hi) == 0.0;
+    let top = if at_hi { HI_GUARD } else { 1.0 };
     let va = ch.changes(-1.0);
-    let vb = ch.changes(1.0);
-    if va - vb < 1 {
-        return;
-    }
+    let vb = ch.changes(top);
     // Depth-first, left half first, so roots come out ascending.
-    let mut stack = vec![(-1.0, 1.0, va, vb)];
+    let mut stack = vec![(-1.0, top, va, vb)];
     let mut steps = 0;
     while let Some((a, b, va, vb)) = stack.pop() {
         let count = va - vb;
@@ -431,7 +449,7 @@ fn all_impl<const M: usize>(p: &Prepared, out: &mut Vec<f64>) {
         steps += 1;
         let m = split(a, b);
         if count == 1 || m <= a || m >= b || steps > 64 * MAX_ITER {
-            if let Some(t) = sh.to_t(p, refine(&ch, &sh.q[..=p.n], a, b, va)) {
+            if let Some(t) = sh.to_t(p, refine(&ch, &sh.q[..=p.n], a, b, va, sh.floor())) {
                 out.push(t * p.scale);
             }
             continue;
@@ -440,8 +458,10 @@ fn all_impl<const M: usize>(p: &Prepared, out: &mut Vec<f64>) {
         stack.push((m, b, vm, vb));
         stack.push((a, m, va, vm));
     }
+    if at_hi {
+        out.push(p.hi * p.scale);
+    }
 }
-
 /// See [`super::first_root`].
 pub(crate) fn first_root(p: &Prepared) -> Option<f64> {
     if p.n < 8 {

@@ -13,6 +13,10 @@
 use super::prep::Prepared;
 use super::sturm::CRIT_TOL;
 
+/// Precision, relative to the interval's magnitude, of critical points (roots of derivatives):
+/// they only split the interval, and a multiple root found at one is off by at most this.
+const CRIT_PRECISION: f64 = 1e-12;
+
 /// Newton/bisection steps allowed per piece (bisection alone needs at most ~2100).
 const MAX_ITER: usize = 2200;
 
@@ -41,10 +45,15 @@ fn eval_with_derivative(c: &[f64], x: f64) -> (f64, f64) {
 }
 
 /// The root of `c` (monotonic on `[a, b]`) in the open bracket where `fa`, `fb` have opposite
-/// signs, by Newton steps that fall back to bisection whenever they leave the bracket.
-fn newton_in_bracket(c: &[f64], mut a: f64, mut b: f64, fa: f64) -> f64 {
+/// signs, by Newton steps that fall back to bisection whenever they leave the bracket, until
+/// a step is below an ulp of the root plus `floor`.
+fn newton_in_bracket(c: &[f64], mut a: f64, mut b: f64, fa: f64, fb: f64, floor: f64) -> f64 {
     let neg_at_a = fa < 0.0;
-    let mut x = 0.5 * (a + b);
+    // Start from the secant of the bracket: exact for a linear piece, close for a flat one.
+    let mut x = a - fa * ((b - a) / (fb - fa));
+    if !(x > a && x < b) {
+        x = 0.5 * (a + b);
+    }
     for _ in 0..MAX_ITER {
         let (v, d) = eval_with_derivative(c, x);
         if v == 0.0 {
@@ -60,7 +69,7 @@ fn newton_in_bracket(c: &[f64], mut a: f64, mut b: f64, fa: f64) -> f64 {
             next = 0.5 * (a + b);
         }
         let step = (next - x).abs();
-        if step <= 2.0 * f64::EPSILON * next.abs() || next <= a || next >= b {
+        if step <= 2.0 * f64::EPSILON * next.abs() + floor || next <= a || next >= b {
             return next.clamp(a, b);
         }
         x = next;
@@ -94,6 +103,13 @@ fn roots_in_pieces<const M: usize>(
     first_only: bool,
     out: &mut [f64; M],
 ) -> usize {
+    // Critical points (roots of derivatives) only split intervals: an ulp of the interval's
+    // magnitude is precision enough for them; roots of `P` itself get full relative precision.
+    let floor = if first_only {
+        0.0
+    } else {
+        CRIT_PRECISION * lo.abs().max(hi.abs())
+    };
     let c = &ders[0][..=degs[0]];
     let mut count = 0;
     let mut a = lo;
@@ -122,7 +138,7 @@ fn roots_in_pieces<const M: usize>(
             let root = if fb == 0.0 {
                 Some(b)
             } else if (fa < 0.0) != (fb < 0.0) {
-                Some(newton_in_bracket(c, a, b, fa))
+                Some(newton_in_bracket(c, a, b, fa, fb, floor))
             } else {
                 None
             };
@@ -216,3 +232,4 @@ pub(crate) fn first_root(p: &Prepared) -> Option<f64> {
         first_impl::<17>(p)
     }
 }
+
