@@ -14,7 +14,11 @@ fn reference(r: &CorpusRay) -> Option<f64> {
     let h = (r.hi - r.lo) / steps as f64;
     let (mut a, mut fa) = (r.lo, f(r.lo));
     for k in 1..=steps {
-        let b = if k == steps { r.hi } else { r.lo + k as f64 * h };
+        let b = if k == steps {
+            r.hi
+        } else {
+            r.lo + k as f64 * h
+        };
         let fb = f(b);
         if fa != 0.0 && (fb == 0.0 || (fa < 0.0) != (fb < 0.0)) {
             let (mut x0, mut x1) = (a, b);
@@ -69,7 +73,11 @@ fn corpus_rays_match_the_reference() {
                 (None, Some(t_ref)) => panic!("ray {i}: missed the root at {t_ref} ({r:?})"),
             }
         }
-        assert!(tight * 100 >= corpus.len() * 99, "{tight} of {}", corpus.len());
+        assert!(
+            tight * 100 >= corpus.len() * 99,
+            "{tight} of {}",
+            corpus.len()
+        );
     }
     assert!(hits > 1000, "the corpus must have hits: {hits}");
 }
@@ -93,7 +101,11 @@ fn solvers_agree_on_the_corpus() {
             _ => panic!("ray {i}: sturm {s:?}, yuksel {y:?} ({r:?})"),
         }
     }
-    assert!(tight * 100 >= corpus.len() * 99, "{tight} of {}", corpus.len());
+    assert!(
+        tight * 100 >= corpus.len() * 99,
+        "{tight} of {}",
+        corpus.len()
+    );
 }
 
 /// The exactly constructed hard rays, with their exactly known first roots.
@@ -101,17 +113,17 @@ fn solvers_agree_on_the_corpus() {
 fn hard_rays_have_the_known_first_root() {
     let hard = heart_hard_rays();
     let expected = [
-        Some(2.0),                              // 6-fold root
-        Some(1.0),                              // through the dip along Y
-        Some(2.0 - (0.1f64 / 8.0).powf(0.25)),  // through the dip along X
-        Some(2.0),                              // touches the tip (double)
-        Some(2.0),                              // touches the tip along Y (double)
-        Some(3.0 - 0.5f64.sqrt()),              // Z = 0: triple
-        Some(2.0),                              // Z = 0: triple
-        None,                                   // Z = 0 oblique: checked by the corpus test
-        None,                                   // Z = 0 near miss
-        Some(1.0),                              // the axis: the dip, triple
-        Some(2.0),                              // starts on the surface: t = 0 excluded
+        Some(2.0),                                // 6-fold root
+        Some(1.0),                                // through the dip along Y
+        Some(2.0 - (0.1f64 / 8.0).powf(0.25)),    // through the dip along X
+        Some(2.0),                                // touches the tip (double)
+        Some(2.0),                                // touches the tip along Y (double)
+        Some(3.0 - 0.5f64.sqrt()),                // Z = 0: triple
+        Some(2.0),                                // Z = 0: triple
+        None,                                     // Z = 0 oblique: checked by the corpus test
+        None,                                     // Z = 0 near miss
+        Some(1.0),                                // the axis: the dip, triple
+        Some(2.0),                                // starts on the surface: t = 0 excluded
         Some(2.0 - (1.0f64 - 2.0 * 0.09).sqrt()), // Z = 0 at X = 0.3: triple
     ];
     assert_eq!(hard.len(), expected.len());
@@ -127,7 +139,11 @@ fn hard_rays_have_the_known_first_root() {
                 (Some(t), Some(t0)) => {
                     // Multiple roots (up to 6-fold): eps^(1/m) accuracy; 1e-5 relative covers m ≤ 3,
                     // and the 6-fold and double ones here are exact in floating point.
-                    assert!((t - t0).abs() <= 1e-5 * t0, "ray {i} {}: {t} vs {t0}", solver.1)
+                    assert!(
+                        (t - t0).abs() <= 1e-5 * t0,
+                        "ray {i} {}: {t} vs {t0}",
+                        solver.1
+                    )
                 }
                 _ => panic!("ray {i} {}: {got:?} vs {e:?}", solver.1),
             }

@@ -70,7 +70,9 @@ pub(crate) fn max_abs(c: &[f64]) -> f64 {
 /// trims only exact zeros (a tiny `cₙ` then means a huge but real root).
 pub(crate) fn prepare(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
     // `!(lo < hi)` also rejects NaN bounds.
-    if !(lo < hi) || coeffs.iter().any(|c| !c.is_finite()) {
+    if lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less)
+        || coeffs.iter().any(|c| !c.is_finite())
+    {
         return None;
     }
     let mut n = coeffs.iter().rposition(|&c| c != 0.0)?;
@@ -132,7 +134,7 @@ pub(crate) fn prepare(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
     let bound = 1.0 + max_abs(&c[..n]) / c[n].abs();
     lo = lo.max(-bound);
     hi = hi.min(bound);
-    if !(lo < hi) {
+    if lo >= hi {
         return None;
     }
     Some(Prepared {
@@ -151,7 +153,10 @@ mod tests {
     #[test]
     fn mul_pow2_is_exact_and_safe() {
         assert_eq!(mul_pow2(3.0, 4), 48.0);
-        assert_eq!(mul_pow2(1e-300, 1500), 1e-300 * 2f64.powi(1000) * 2f64.powi(500));
+        assert_eq!(
+            mul_pow2(1e-300, 1500),
+            1e-300 * 2f64.powi(1000) * 2f64.powi(500)
+        );
         assert_eq!(exponent(1.0), 0);
         assert_eq!(exponent(-3.0), 1);
         assert_eq!(exponent(0.75), -1);

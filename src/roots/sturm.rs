@@ -49,15 +49,14 @@ impl<const M: usize> Chain<M> {
             len: 1,
         };
         let s = 1.0 / max_abs(&c[..=n]);
-        for j in 0..=n {
-            ch.p[0][j] = c[j] * s;
+        for (d, &a) in ch.p[0].iter_mut().zip(&c[..=n]) {
+            *d = a * s;
         }
         ch.deg[0] = n;
         let mut m = 0.0f64;
-        for j in 1..=n {
-            let v = c[j] * j as f64;
-            ch.p[1][j - 1] = v;
-            m = m.max(v.abs());
+        for (j, (d, &a)) in ch.p[1].iter_mut().zip(&c[1..=n]).enumerate() {
+            *d = a * (j + 1) as f64;
+            m = m.max(d.abs());
         }
         let inv = 1.0 / m;
         for j in 0..n {
@@ -105,8 +104,8 @@ impl<const M: usize> Chain<M> {
             }
             let mr = max_abs(&r[..=dr]);
             let s = -1.0 / mr;
-            for j in 0..=dr {
-                ch.p[k][j] = r[j] * s;
+            for (d, &a) in ch.p[k].iter_mut().zip(&r[..=dr]) {
+                *d = a * s;
             }
             ch.deg[k] = dr;
             ch.len = k + 1;
@@ -172,7 +171,11 @@ fn counting_chain<const M: usize>(c: &[f64], n: usize, input_err: f64) -> Chain<
         return ch;
     }
     let (q, _) = divide::<M>(&ch.p[0][..=n], &ch.p[g][..=dg]);
-    Chain::<M>::build(&q, n - dg, (input_err / max_abs(&c[..=n]) + f64::EPSILON) * DIVIDE_TOL * max_abs(&q[..=n - dg]))
+    Chain::<M>::build(
+        &q,
+        n - dg,
+        (input_err / max_abs(&c[..=n]) + f64::EPSILON) * DIVIDE_TOL * max_abs(&q[..=n - dg]),
+    )
 }
 
 /// True when `[a, b]` can no longer shrink usefully: no double strictly between the ends, or
@@ -348,18 +351,20 @@ impl<const M: usize> Shifted<M> {
         let (a, b) = ((t - slack).max(p.lo), (t + slack).min(p.hi));
         let (fa, fb) = (horner(c, a), horner(c, b));
         let noise = 1e3 * f64::EPSILON * abs_horner(c, t.abs());
-        if fa.abs() > noise || fb.abs() > noise {
-            // A simple root: its value is known as well as the shift allows, or better.
+        let quiet = fa.abs() <= noise && fb.abs() <= noise;
+        if fa != 0.0 && fb != 0.0 && (fa < 0.0) != (fb < 0.0) && !quiet {
+            // A clean sign change: known as well as the shift allows, or polished on `P`.
             if slack <= 16.0 * p.n as f64 * f64::EPSILON * t.abs() {
                 return Some(t);
             }
-            if fa != 0.0 && fb != 0.0 && (fa < 0.0) != (fb < 0.0) {
-                return Some(false_position(c, a, b, fa, fb, 0.0));
-            }
+            return Some(false_position(c, a, b, fa, fb, 0.0));
+        }
+        if fa == 0.0 || fb == 0.0 {
             return Some(t);
         }
-        // `P` is rounding noise around `t`: a numerically multiple root. It is a simple root of
-        // `P'` (double) or `P''` (triple), which locate it far better than `P` can.
+        // No sign change of `P` at this scale, or only rounding noise: a numerically multiple
+        // root. It is a simple root of `P'` (double) or `P''` (triple), which locate it far
+        // better than `P` can.
         let scale = self.mid.abs().max(self.half);
         let pt = horner(c, t).abs();
         let mut d = [0.0; M];

@@ -15,7 +15,7 @@ use super::sturm::CRIT_TOL;
 
 /// Precision, relative to the interval's magnitude, of critical points (roots of derivatives):
 /// they only split the interval, and a multiple root found at one is off by at most this.
-const CRIT_PRECISION: f64 = 1e-12;
+const CRIT_PRECISION: f64 = 0.0;
 
 /// Newton/bisection steps allowed per piece (bisection alone needs at most ~2100).
 const MAX_ITER: usize = 2200;
@@ -232,4 +232,3 @@ pub(crate) fn first_root(p: &Prepared) -> Option<f64> {
         first_impl::<17>(p)
     }
 }
-
