@@ -3,14 +3,19 @@
 //!
 //! Both strategies share one preparation (`prep`): non-finite input, `lo ≥ hi` and the zero
 //! polynomial give no roots; a leading coefficient negligible on the interval is dropped (the
-//! rule is documented on `prep::prepare`: `|cₙ|·R^(n−i) ≤ ε·|cᵢ|` for some `i`, with
-//! `R = max(|lo|, |hi|)`); the variable is rescaled by a power of two (exactly) so that the
-//! roots have magnitude about one. A multiple root, or a cluster of roots closer than about
-//! 3e-6 times the largest root's magnitude, is reported once (see `sturm` for the exact rule);
-//! every root is refined until it is known to a few ulps of its magnitude, except that a
-//! root of multiplicity `m` is only determined by the coefficients to about `ε^(1/m)`.
-//! No input makes these functions panic or loop without end; none allocates except
-//! [`sturm_roots`], for its result.
+//! rule: `|cₙ|·R^(n−i) ≤ ε·|cᵢ|` for some `i < n`, with `R = max(|lo|, |hi|)` and `ε` the
+//! machine epsilon, i.e. the leading term is below one rounding unit of another term all over
+//! the interval; an infinite interval trims exact zeros only); the variable is rescaled by a
+//! power of two (exactly) so that the interval, or the roots if smaller, has size about one.
+//!
+//! A multiple root is reported once, at its location; what "distinct" means numerically is
+//! set out in the `sturm` module (a numerical gcd of `P` and `P'` with an error bound, checked
+//! by division). Simple roots are refined to a few ulps of their magnitude; a root of
+//! multiplicity `m` is only determined by rounded coefficients to about `ε^(1/m)` relative,
+//! and is located through a derivative of `P` where that does better.
+//!
+//! No input makes these functions panic or loop without end (every loop is bounded); none
+//! allocates except [`sturm_roots`], for its result.
 
 mod corpus;
 mod prep;

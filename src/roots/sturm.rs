@@ -1,22 +1,35 @@
 //! The paper's method: isolation by a Sturm sequence, refinement by Anderson–Björck false
 //! position with a bisection safeguard.
 //!
+//! # Working basis
+//!
+//! `P` (already rescaled by `prep`) is re-expressed on its interval, `Q(u) = P(mid + half·u)`,
+//! so that `(lo, hi]` is `(−1, 1]` and coefficient sizes measure sizes on the interval. Roots
+//! found in `u` are mapped back and, when the shift's rounding could exceed a few ulps of the
+//! root, polished on `P` itself (on `P'` or `P''` for a numerically multiple root, which is a
+//! simple root of those).
+//!
 //! # What "distinct" means numerically
 //!
-//! The sequence is `p₀ = P`, `p₁ = P'`, `pₖ₊₁ = −rem(pₖ₋₁, pₖ)`, every member scaled to a
-//! largest coefficient of 1 (a positive factor changes no sign). A remainder coefficient is
-//! treated as zero when `|rⱼ| ≤ GCD_TOL·(1 + max|quotient|)`, i.e. when it is within a fixed
-//! relative tolerance of the cancellation that produced it; leading coefficients that small
-//! are dropped, and a remainder that small everywhere ends the sequence: its last member is
-//! then the (numerical) `gcd(P, P')`. When the gcd is not a constant, the square-free part
-//! `P / gcd` is formed and its own Sturm sequence is used for counting and refinement, so a
-//! double or triple root, or a cluster that rounding has made of one, is one root. Because
-//! the variable is first rescaled so that the roots have magnitude about one (see
-//! `prep`), roots closer than roughly `√GCD_TOL` (≈ 3e-6) times the largest root's magnitude
-//! may be merged into one; roots farther apart are always reported separately.
+//! The sequence is `p₀ = Q`, `p₁ = Q'`, `pₖ₊₁ = −rem(pₖ₋₁, pₖ)`, every member scaled to a
+//! largest coefficient of 1 (a positive factor changes no sign). Alongside, a running bound on
+//! each member's coefficient error is kept: the input's (a few ulps of `Σ|Pⱼ|·Rʲ`, the size of
+//! `P` on the interval) propagated through each division, times a safety factor of 4, plus the
+//! division's own rounding. A remainder below that bound is noise, and its last non-zero
+//! predecessor `g` is the numerical `gcd(Q, Q')` — but only if `g` also divides `Q` and `Q'`
+//! with a remainder below 1000 times their error; otherwise the remainder is kept (trimmed at
+//! the level of rounding only). A numerical gcd of positive degree means multiple roots: the
+//! square-free part `Q / g` and its own sequence are then used, so a double or triple root,
+//! or a cluster rounding has made of one, counts once. Roots are "distinct" when the sequence,
+//! so computed, separates them: roots far apart relative to the interval always are; roots
+//! whose separation is tiny against the interval's size (say 1e-7 of it), or several multiple
+//! roots packed together in a polynomial of degree above 6, may be merged into one.
 //!
 //! Sign changes are counted with zero members skipped, the standard convention that makes the
-//! count `V(a) − V(b)` the number of distinct roots in the half-open `(a, b]`.
+//! count `V(a) − V(b)` the number of distinct roots in the half-open `(a, b]`. Bisection splits
+//! slightly off the middle so as not to land exactly on dyadic roots, where every member of
+//! the sequence can vanish at once. When `P(hi)` is exactly zero, `hi` is reported and the
+//! count is taken just below it.
 
 use super::prep::{horner, max_abs, Prepared};
 

@@ -5,10 +5,11 @@
 //! critical points of `P`, and then the first root of `P` itself.
 //!
 //! Multiple roots: at a critical point `x` (a root of the derivative), `P(x)` is compared with
-//! a tolerance relative to `Σ|cⱼ||x|ʲ`, the size of the terms being summed; within it, `x` is
-//! a root (a double root of a tangent ray, the triple roots of the heart's `Z = 0` plane). The
-//! tolerance is the Sturm solver's gcd tolerance, so both solvers treat a near-touching
-//! extremum the same way: as one (multiple) root.
+//! `64·ε·Σ|cⱼ||x|ʲ`, a bound on the rounding error of evaluating it; within it, `x` is a root
+//! (a double root of a tangent ray, the triple roots of the heart's `Z = 0` plane), reported
+//! once. Critical points are found to full relative precision, as a multiple root found at
+//! one is only as good as it. A piece starting at `lo` with `P(lo) = 0` takes its sign from
+//! the first non-zero derivative there, so a root at `lo` is excluded as `(lo, hi]` says.
 
 use super::prep::Prepared;
 use super::sturm::CRIT_TOL;
