@@ -155,3 +155,20 @@ fn hard_rays_have_the_known_first_root() {
     assert_eq!(all.len(), 2, "{all:?}");
     assert!((all[1] - axis.hi).abs() <= 1e-5, "{all:?}");
 }
+
+/// On the whole ray `(1e-9, 1e6]` instead of the box interval, the Yuksel solver gives the same
+/// hit/miss and `t` (1e-6 relative) on every corpus ray. (The Sturm solver needs the tight box
+/// interval: with roots packed into a few percent of a wide interval its sequence's numerical
+/// gcd can go wrong — measured: 296 of 2537 hit/miss answers change.)
+#[test]
+fn yuksel_needs_no_tight_interval() {
+    for (i, r) in heart_corpus().iter().enumerate() {
+        let tight = first_root_yuksel(&r.coeffs, r.lo, r.hi);
+        let wide = first_root_yuksel(&r.coeffs, 1e-9, 1e6);
+        match (tight, wide) {
+            (None, None) => {}
+            (Some(a), Some(b)) => assert!((a - b).abs() <= 1e-6 * a, "ray {i}: {a} vs {b}"),
+            _ => panic!("ray {i}: {tight:?} vs {wide:?}"),
+        }
+    }
+}

@@ -36,7 +36,7 @@ pub fn sturm_roots(coeffs: &[f64], lo: f64, hi: f64) -> Vec<f64> {
     }
 }
 
-/// The smallest real root in `(lo, hi]`, the first element [`sturm_roots`] would return,
+/// The smallest real root in `(lo, hi]` (normally the first element [`sturm_roots`] returns),
 /// found by the Sturm method without computing the others (only the leftmost bracket is
 /// isolated and refined). No heap allocation.
 pub fn first_root(coeffs: &[f64], lo: f64, hi: f64) -> Option<f64> {
@@ -55,11 +55,14 @@ pub fn first_root_yuksel(coeffs: &[f64], lo: f64, hi: f64) -> Option<f64> {
 pub enum Solver {
     /// The paper's method: Sturm sequence isolation, false-position refinement. The default:
     /// measured faster than [`Solver::Yuksel`] on the heart ray corpus (see `benches/roots.rs`)
-    /// with the same hit/miss on every ray.
+    /// with the same hit/miss on every ray. Give it a tight interval (the ray's span inside the
+    /// shape's bounding box): when the roots fill only a few percent of a much wider interval,
+    /// its numerical gcd can merge or lose roots.
     #[default]
     Sturm,
     /// Yuksel 2022: split at the derivative's roots (recursively) into monotonic pieces,
-    /// then a bracketed Newton iteration per piece.
+    /// then a bracketed Newton iteration per piece. Slower on the corpus, but indifferent to
+    /// the interval's width.
     Yuksel,
 }
 

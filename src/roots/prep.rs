@@ -60,7 +60,8 @@ pub(crate) fn max_abs(c: &[f64]) -> f64 {
 /// Validates and prepares `coeffs` on `(lo, hi]`; `None` when there can be no reportable root:
 /// a non-finite coefficient or bound, `lo ≥ hi` (or NaN), the zero polynomial (every `t` is a
 /// root; none is reported), a non-zero constant, more than 17 coefficients after dropping
-/// trailing zeros, or an interval that holds no root by the Cauchy bound.
+/// trailing zeros, or an interval that holds no root by the Cauchy or Fujiwara bounds (the
+/// interval is clipped to them).
 ///
 /// Trimming rule (scale-aware): with `R = max(|lo|, |hi|)`, the leading coefficient `cₙ` is
 /// treated as zero when, for some lower coefficient `cᵢ ≠ 0`, `|cₙ|·R^(n−i) ≤ ε·|cᵢ|`
@@ -117,6 +118,8 @@ pub(crate) fn prepare(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
     if e == i32::MIN {
         e = 0; // p = cₙ·tⁿ: every root is 0; any scale works.
     }
+    // Every root has |t| < 2^(e+1) (Fujiwara's bound, rounded up to a power of two).
+    let bound_exp = e.saturating_add(1).clamp(-1000, 1000);
     // Use the interval's size instead when it is smaller: the Sturm sequence's coefficient
     // norms then measure the members' size where it matters, on the interval.
     if r.is_finite() {
@@ -130,8 +133,8 @@ pub(crate) fn prepare(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
     let scale = mul_pow2(1.0, e);
     let mut lo = lo / scale;
     let mut hi = hi / scale;
-    // Cauchy bound: every root has |T| < 1 + max |c_j / c_n|.
-    let bound = 1.0 + max_abs(&c[..n]) / c[n].abs();
+    // Cauchy's and Fujiwara's bounds: every root has |T| below both.
+    let bound = (1.0 + max_abs(&c[..n]) / c[n].abs()).min(mul_pow2(1.0, bound_exp - e));
     lo = lo.max(-bound);
     hi = hi.min(bound);
     if lo >= hi {
