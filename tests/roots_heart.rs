@@ -156,30 +156,35 @@ fn hard_rays_have_the_known_first_root() {
     assert!((all[1] - axis.hi).abs() <= 1e-5, "{all:?}");
 }
 
-/// On the whole ray `(1e-9, 1e6]` instead of the box interval, the Yuksel solver gives the same
-/// hit/miss on every corpus ray, and `t` within 1e-3 relative (1e-9 on 99% of rays; the worst
-/// graze the equator curve). (The Sturm solver needs the tight box interval: with roots packed
-/// into a few percent of a wide interval its sequence's numerical gcd can go wrong; measured:
-/// 296 of 2537 hit/miss answers change.)
+/// On the whole ray `(1e-9, 1e6]` instead of the box interval (as a shape that does not clip
+/// to its box would ask), both solvers give the same hit/miss on every corpus ray, and `t`
+/// within 1e-3 relative (1e-9 on 99% of rays; the worst are near-triple roots of the `Z = 0`
+/// plane).
 #[test]
-fn yuksel_needs_no_tight_interval() {
+fn a_wide_interval_gives_the_same_answers() {
     let corpus = heart_corpus();
-    let mut close = 0;
-    for (i, r) in corpus.iter().enumerate() {
-        let tight = first_root_yuksel(&r.coeffs, r.lo, r.hi);
-        let wide = first_root_yuksel(&r.coeffs, 1e-9, 1e6);
-        match (tight, wide) {
-            (None, None) => close += 1,
-            (Some(a), Some(b)) => {
-                assert!((a - b).abs() <= 1e-3 * a, "ray {i}: {a} vs {b}");
-                close += usize::from((a - b).abs() <= 1e-9 * a);
+    for solver in Solver::ALL {
+        let mut close = 0;
+        for (i, r) in corpus.iter().enumerate() {
+            let tight = solver.0.first_root(&r.coeffs, r.lo, r.hi);
+            let wide = solver.0.first_root(&r.coeffs, 1e-9, 1e6);
+            match (tight, wide) {
+                (None, None) => close += 1,
+                (Some(a), Some(b)) => {
+                    assert!(
+                        (a - b).abs() <= 1e-4 * a,
+                        "{} ray {i}: {a} vs {b}",
+                        solver.1
+                    );
+                    close += usize::from((a - b).abs() <= 1e-9 * a);
+                }
+                _ => panic!("{} ray {i}: {tight:?} vs {wide:?}", solver.1),
             }
-            _ => panic!("ray {i}: {tight:?} vs {wide:?}"),
         }
+        assert!(
+            close * 100 >= corpus.len() * 99,
+            "{close} of {}",
+            corpus.len()
+        );
     }
-    assert!(
-        close * 100 >= corpus.len() * 99,
-        "{close} of {}",
-        corpus.len()
-    );
 }

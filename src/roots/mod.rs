@@ -55,14 +55,13 @@ pub fn first_root_yuksel(coeffs: &[f64], lo: f64, hi: f64) -> Option<f64> {
 pub enum Solver {
     /// The paper's method: Sturm sequence isolation, false-position refinement. The default:
     /// measured faster than [`Solver::Yuksel`] on the heart ray corpus (see `benches/roots.rs`)
-    /// with the same hit/miss on every ray. Give it a tight interval (the ray's span inside the
-    /// shape's bounding box): when the roots fill only a few percent of a much wider interval,
-    /// its numerical gcd can merge or lose roots.
+    /// with the same hit/miss on every ray. A tight interval (the ray's span inside the shape's
+    /// bounding box) is best: a wide one is cut into up to 16 pieces, each with its own
+    /// sequence, which costs more.
     #[default]
     Sturm,
     /// Yuksel 2022: split at the derivative's roots (recursively) into monotonic pieces,
-    /// then a bracketed Newton iteration per piece. Slower on the corpus, but indifferent to
-    /// the interval's width.
+    /// then a bracketed Newton iteration per piece.
     Yuksel,
 }
 

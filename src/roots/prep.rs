@@ -22,6 +22,8 @@ pub(crate) struct Prepared {
     pub lo: f64,
     /// Upper end of the interval in `T` (included), finite, `> lo`.
     pub hi: f64,
+    /// Every root has `|T|` below this (Fujiwara's bound, a power of two).
+    pub bound: f64,
 }
 
 /// The binary exponent of a finite non-zero `x` (`floor(log2 |x|)`, clamped for subnormals).
@@ -134,7 +136,8 @@ pub(crate) fn prepare(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
     let mut lo = lo / scale;
     let mut hi = hi / scale;
     // Cauchy's and Fujiwara's bounds: every root has |T| below both.
-    let bound = (1.0 + max_abs(&c[..n]) / c[n].abs()).min(mul_pow2(1.0, bound_exp - e));
+    let fujiwara = mul_pow2(1.0, bound_exp - e);
+    let bound = (1.0 + max_abs(&c[..n]) / c[n].abs()).min(fujiwara);
     lo = lo.max(-bound);
     hi = hi.min(bound);
     if lo >= hi {
@@ -146,6 +149,7 @@ pub(crate) fn prepare(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
         scale,
         lo,
         hi,
+        bound: fujiwara,
     })
 }
 

@@ -355,7 +355,8 @@ impl<const M: usize> Shifted<M> {
         // Rounding of the shift, in `T`: a few ulps of the interval's magnitude per degree.
         let slack = 4.0 * p.n as f64 * f64::EPSILON * self.mid.abs().max(self.half);
         let c = &p.c[..=p.n];
-        if t - p.lo <= slack && (t <= p.lo || horner(c, p.lo) == 0.0) {
+        // An exact root at `lo` is excluded, and so is what the shift makes of a multiple one.
+        if t <= p.lo || (t - p.lo <= 1e3 * slack && horner(c, p.lo) == 0.0) {
             return None;
         }
         if t.abs() <= slack && c[0] == 0.0 && p.lo < 0.0 {
@@ -480,22 +481,47 @@ fn all_impl<const M: usize>(p: &Prepared, out: &mut Vec<f64>) {
         out.push(p.hi * p.scale);
     }
 }
+/// Most pieces a wide interval is cut into.
+const MAX_PIECES: usize = 16;
+
+/// The interval cut into pieces `(xᵢ, xᵢ₊₁]` no wider than a sixteenth of the root bound: a
+/// Sturm sequence over an interval that the roots fill only a small part of is poorly
+/// conditioned (its members are tiny where the roots are), so each piece gets its own.
+/// The box-clipped intervals of ray tracing are a single piece.
+fn pieces(p: &Prepared) -> impl Iterator<Item = Prepared> + '_ {
+    let width = p.hi - p.lo;
+    let k = ((width / (p.bound / 16.0)).ceil() as usize).clamp(1, MAX_PIECES);
+    let step = width / k as f64;
+    (0..k).map(move |i| {
+        // Interior ends off the dyadic grid, where exactly representable roots sit.
+        let end = |j: usize| p.lo + step * (j as f64 - 0.031_415_926_535_897_93);
+        let mut piece = *p;
+        piece.lo = if i == 0 { p.lo } else { end(i) };
+        piece.hi = if i + 1 == k { p.hi } else { end(i + 1) };
+        piece
+    })
+}
+
 /// See [`super::first_root`].
 pub(crate) fn first_root(p: &Prepared) -> Option<f64> {
-    if p.n < 8 {
-        first_impl::<8>(p)
-    } else {
-        first_impl::<17>(p)
-    }
+    pieces(p).find_map(|piece| {
+        if piece.n < 8 {
+            first_impl::<8>(&piece)
+        } else {
+            first_impl::<17>(&piece)
+        }
+    })
 }
 
 /// See [`super::sturm_roots`].
 pub(crate) fn all_roots(p: &Prepared) -> Vec<f64> {
     let mut out = Vec::new();
-    if p.n < 8 {
-        all_impl::<8>(p, &mut out);
-    } else {
-        all_impl::<17>(p, &mut out);
+    for piece in pieces(p) {
+        if piece.n < 8 {
+            all_impl::<8>(&piece, &mut out);
+        } else {
+            all_impl::<17>(&piece, &mut out);
+        }
     }
     // Roots from neighbouring brackets can only coincide by rounding at a shared end.
     out.dedup();
