@@ -3,6 +3,8 @@
 //! and a small deterministic random generator.
 #![allow(dead_code)]
 
+pub mod cases;
+
 use kardia::geometry::{DVec3, Ray};
 use kardia::shapes::heart::Heart;
 
