@@ -54,12 +54,21 @@ pub fn horner(c: &[f64], x: f64) -> f64 {
 
 /// Brute-force smallest root in `(lo, hi]`: sign changes of the polynomial on a fine grid,
 /// refined by bisection. Misses roots of even multiplicity (tangencies), like any sign test.
+/// The grid is geometric near `lo` (steps from 1e-17 doubling up to the uniform spacing), so
+/// that, like a Sturm count, it sees roots that rounding puts just after `lo`.
 pub fn brute_first_root(c: &[f64; 7], lo: f64, hi: f64) -> Option<f64> {
     const N: usize = 4096;
+    let cell = (hi - lo) / N as f64;
+    let near = (0..200)
+        .map(|k| lo + 1e-17 * 2f64.powi(k))
+        .take_while(|&x| x < lo + cell);
+    let uniform = (1..=N).map(|i| lo + (hi - lo) * i as f64 / N as f64);
     let mut a = lo;
     let mut fa = horner(c, a);
-    for i in 1..=N {
-        let b = lo + (hi - lo) * i as f64 / N as f64;
+    for b in near.chain(uniform) {
+        if b <= a {
+            continue;
+        }
         let fb = horner(c, b);
         if fb == 0.0 && b > lo {
             return Some(b);
