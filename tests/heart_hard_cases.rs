@@ -4,8 +4,8 @@
 
 mod heart_support;
 
-use heart_support::cases::{self, HitFn};
 use heart_support::brute_intersect;
+use heart_support::cases::{self, HitFn};
 use kardia::geometry::DVec3;
 
 const BRUTE: HitFn = &brute_intersect;

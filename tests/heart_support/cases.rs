@@ -47,7 +47,11 @@ pub fn equator_hits_are_exact(hit: HitFn, rays: usize) -> (f64, f64) {
         let target = equator_point(rng.range(0.0, std::f64::consts::TAU)) + DVec3::Z * zt;
         // From outside, mostly near the equator's plane, like a camera at Z ≈ 0.
         let o = loop {
-            let o = DVec3::new(rng.range(-6.0, 6.0), rng.range(-6.0, 6.0), rng.range(-0.5, 0.5));
+            let o = DVec3::new(
+                rng.range(-6.0, 6.0),
+                rng.range(-6.0, 6.0),
+                rng.range(-0.5, 0.5),
+            );
             if o.truncate().length() > 2.0 {
                 break o;
             }
@@ -75,7 +79,10 @@ pub fn equator_hits_are_exact(hit: HitFn, rays: usize) -> (f64, f64) {
         );
         // On the surface to the rounding of o + t·d itself.
         let dist = surface_distance(p);
-        assert!(dist <= 2.0 * f64::EPSILON * (o.length() + 1.0), "{p} is {dist:e} off");
+        assert!(
+            dist <= 2.0 * f64::EPSILON * (o.length() + 1.0),
+            "{p} is {dist:e} off"
+        );
         let n_ref = dd_grad_g_unit(DdVec::on_ray(o, d, tr));
         let a = angle(h.normal(p), n_ref);
         assert!(a < 1e-12, "normal at {p} off by {a:e} rad");
@@ -116,12 +123,15 @@ pub fn z0_plane_triple_roots(hit: HitFn) {
                 continue;
             }
             let t = got.unwrap_or_else(|| panic!("no hit for {o} {d}"));
-            assert!((t - want).abs() <= 4.0 * f64::EPSILON * want, "{t} vs {want}");
+            assert!(
+                (t - want).abs() <= 4.0 * f64::EPSILON * want,
+                "{t} vs {want}"
+            );
             let p = ray.at(t);
             assert!((2.0 * p.x * p.x + p.y * p.y - 1.0).abs() < 1e-15);
             let n = h.normal(p);
-            let want_n = DVec3::new(4.0 * p.x, 2.0 * p.y, -(0.1 * p.x * p.x + p.y * p.y).cbrt())
-                .normalize();
+            let want_n =
+                DVec3::new(4.0 * p.x, 2.0 * p.y, -(0.1 * p.x * p.x + p.y * p.y).cbrt()).normalize();
             assert!(angle(n, want_n) < 1e-14, "{n} vs {want_n}");
         }
     }
@@ -134,8 +144,16 @@ pub fn tangent_rays(hit: HitFn) {
     let h = unit_heart();
     // The points of largest Y and of largest X, where the planes Y = Y_max, X = X_max touch.
     let cases = [
-        (DVec3::new(0.0, EXTENTS.max.y, heart::S_Y / 2.0), DVec3::Y, [DVec3::X, DVec3::Z]),
-        (DVec3::new(EXTENTS.max.x, 0.0, heart::S_X / 2.0), DVec3::X, [DVec3::Y, DVec3::Z]),
+        (
+            DVec3::new(0.0, EXTENTS.max.y, heart::S_Y / 2.0),
+            DVec3::Y,
+            [DVec3::X, DVec3::Z],
+        ),
+        (
+            DVec3::new(EXTENTS.max.x, 0.0, heart::S_X / 2.0),
+            DVec3::X,
+            [DVec3::Y, DVec3::Z],
+        ),
     ];
     for (touch, normal, dirs) in cases {
         for (off, expect_hit) in [(-1e-3, true), (-1e-7, true), (1e-9, false), (1e-3, false)] {
@@ -182,11 +200,18 @@ pub fn singular_points(hit: HitFn) {
     let mut rng = Rng::new(5);
     for k in 0..300 {
         let dir = rng.direction();
-        let miss = if k % 3 == 0 { 0.0 } else { 10f64.powf(-rng.range(3.0, 9.0)) };
+        let miss = if k % 3 == 0 {
+            0.0
+        } else {
+            10f64.powf(-rng.range(3.0, 9.0))
+        };
         let (target, dir) = if k % 2 == 0 {
             (tip, DVec3::new(dir.x, dir.y, dir.z.abs() + 0.8))
         } else {
-            (dip, DVec3::new(dir.x * 0.1, dir.y * 0.1, -(dir.z.abs() + 0.8)))
+            (
+                dip,
+                DVec3::new(dir.x * 0.1, dir.y * 0.1, -(dir.z.abs() + 0.8)),
+            )
         };
         let side = dir.cross(rng.direction()).normalize() * miss;
         let o = target + side - 3.0 * dir;
@@ -209,8 +234,15 @@ pub fn singular_points(hit: HitFn) {
         } else {
             // Near the dip the surface rises steeply (Z ≈ 1 + ∛B/2): the ray meets a lobe a
             // little before the dip itself.
-            assert!(p.z >= 1.0 - 1e-12 && surface_distance(p) < 1e-15, "{p} {:e}", surface_distance(p));
-            assert!(n.dot(dir) < 0.0, "normal {n} faces away from the incoming ray");
+            assert!(
+                p.z >= 1.0 - 1e-12 && surface_distance(p) < 1e-15,
+                "{p} {:e}",
+                surface_distance(p)
+            );
+            assert!(
+                n.dot(dir) < 0.0,
+                "normal {n} faces away from the incoming ray"
+            );
         }
     }
 }
@@ -219,7 +251,11 @@ pub fn singular_points(hit: HitFn) {
 pub fn rays_from_inside(hit: HitFn) {
     let h = unit_heart();
     let mut rng = Rng::new(6);
-    for o in [DVec3::ZERO, DVec3::new(0.0, 0.5, 0.6), DVec3::new(0.1, -0.3, -0.5)] {
+    for o in [
+        DVec3::ZERO,
+        DVec3::new(0.0, 0.5, 0.6),
+        DVec3::new(0.1, -0.3, -0.5),
+    ] {
         assert!(heart::heart_fn(o) < 0.0);
         for _ in 0..200 {
             let d = rng.direction() * rng.range(0.001, 100.0);
@@ -247,7 +283,11 @@ pub fn rays_leaving_the_surface(hit: HitFn, scale: f64, position: DVec3) -> usiz
         let target = if k % 2 == 0 {
             equator_point(rng.range(0.0, 6.3))
         } else {
-            DVec3::new(rng.range(-0.6, 0.6), rng.range(-1.0, 1.0), rng.range(-0.9, 1.2))
+            DVec3::new(
+                rng.range(-0.6, 0.6),
+                rng.range(-1.0, 1.0),
+                rng.range(-0.9, 1.2),
+            )
         };
         let o_obj = rng.direction() * 6.0;
         let primary = Ray::new(
@@ -306,7 +346,14 @@ pub fn rays_leaving_the_surface(hit: HitFn, scale: f64, position: DVec3) -> usiz
 pub fn rays_parallel_to_each_axis(hit: HitFn) {
     let h = unit_heart();
     let mut n = 0;
-    for axis in [DVec3::X, DVec3::Y, DVec3::Z, -DVec3::X, -DVec3::Y, -DVec3::Z] {
+    for axis in [
+        DVec3::X,
+        DVec3::Y,
+        DVec3::Z,
+        -DVec3::X,
+        -DVec3::Y,
+        -DVec3::Z,
+    ] {
         for i in 0..21 {
             for j in 0..21 {
                 let (u, v) = (-1.3 + 2.6 * i as f64 / 20.0, -1.3 + 2.6 * j as f64 / 20.0);
