@@ -145,10 +145,14 @@ fn probe_reports_a_bad_scene() {
         .suffix(".scene")
         .tempfile()
         .unwrap();
-    f.write_all(b"SIZE 10 10\nHEART (0, 0, 0) (1, 0, 0) (2, 0, 0) (0, 0, 1) (1, 0, 0)\n")
-        .unwrap();
-    let (code, out, err) = probe(&[f.path().to_str().unwrap()], "");
+    // A singular basis (u ∥ v) on line 7.
+    let bad = SCENE.replace(
+        "(1, 0, 0) (0, 1, 0) (0, 0, 1)",
+        "(1, 0, 0) (2, 0, 0) (0, 0, 1)",
+    );
+    f.write_all(bad.as_bytes()).unwrap();
+    let (code, out, err) = probe(&[f.path().to_str().unwrap()], "0 -5 0 0 2 0\n");
     assert_eq!(code, 1);
     assert!(out.is_empty());
-    assert!(err.contains(":2:"), "the error names line 2: {err}");
+    assert!(err.contains(":7:"), "the error names line 7: {err}");
 }
