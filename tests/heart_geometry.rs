@@ -272,3 +272,53 @@ fn placed_heart_agrees_with_the_transformed_equation() {
     }
     assert!(hits > 200, "{hits}");
 }
+
+#[test]
+fn sheared_bases_are_hearts_and_singular_ones_are_errors() {
+    // A non-orthogonal basis is a valid (sheared) heart.
+    let sheared = Heart::new(
+        DVec3::ZERO,
+        DVec3::X,
+        DVec3::new(0.9, 1.0, 0.0),
+        DVec3::new(0.0, 0.5, 1.0),
+    );
+    assert!(sheared.is_ok());
+    // Linearly dependent or nearly so: an error whose message says why.
+    for w in [
+        DVec3::X + DVec3::Y,
+        DVec3::X + DVec3::Y + 1e-12 * DVec3::Z,
+        DVec3::ZERO,
+    ] {
+        let err = Heart::new(DVec3::ZERO, DVec3::X, DVec3::Y, w).unwrap_err();
+        assert!(err.to_string().contains("linearly dependent"), "{err}");
+    }
+    assert!(Heart::new(DVec3::splat(f64::NAN), DVec3::X, DVec3::Y, DVec3::Z).is_err());
+}
+
+#[test]
+fn normal_is_a_finite_unit_vector_everywhere() {
+    let h = placed_heart();
+    let mut rng = Rng::new(8);
+    let mut points = vec![
+        DVec3::ZERO,
+        DVec3::new(0.0, 0.0, 1.0),
+        DVec3::new(0.0, 0.0, -1.0),
+        DVec3::new(0.0, 1.0, 0.0),
+        DVec3::new(1e-300, 0.0, 1.0),
+        DVec3::new(0.0, 1e-160, -1.0),
+        DVec3::splat(1e200),
+        DVec3::splat(f64::INFINITY),
+        DVec3::splat(f64::NAN),
+    ];
+    for _ in 0..10_000 {
+        points.push(rng.direction() * rng.range(0.0, 2.0));
+    }
+    for q in points {
+        // Object-space points placed in the world.
+        let n = h.normal(h.frame().point_to_world(q));
+        assert!(
+            n.is_finite() && (n.length() - 1.0).abs() < 1e-15,
+            "{q}: {n}"
+        );
+    }
+}
