@@ -53,6 +53,14 @@ pub(super) fn polish(o: DVec3, d: DVec3, s0: f64, window: f64) -> f64 {
         }
         (s, g, slope) = (next, gn, sn);
     }
+    if bracket.is_none() {
+        // Newton stalled without crossing the root. Where g is already down to its rounding
+        // (a tangent ray's double root, where g' ≈ 0 too), s is as good as it gets.
+        let floor = 8.0 * f64::EPSILON * (1.0 + (o + s * d).length_squared());
+        if g.abs() <= floor {
+            return s;
+        }
+    }
     let Some((mut a, mut ga, mut b, mut gb)) =
         bracket.or_else(|| search(&at, s, g, s0, window, tol))
     else {
