@@ -62,3 +62,10 @@ fn rays_starting_inside_exit_once() {
 fn rays_parallel_to_each_axis() {
     cases::rays_parallel_to_each_axis(BRUTE);
 }
+
+#[test]
+fn hard_case_equator_curve_no_specks_in_a_render() {
+    let n = cases::no_specks_along_the_equator(BRUTE, 400);
+    println!("{n} pixels near the equator checked");
+    assert!(n > 400, "{n}");
+}

@@ -143,3 +143,11 @@ fn unit_heart_is_usable_with_every_solver() {
         assert_eq!(h.solver(), *solver);
     }
 }
+
+#[test]
+fn solvers_equator_curve_no_specks_in_a_render() {
+    each_solver(|hit| {
+        let n = cases::no_specks_along_the_equator(hit, 400);
+        assert!(n > 400, "{n}");
+    });
+}
