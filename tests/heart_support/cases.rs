@@ -278,7 +278,7 @@ pub fn rays_leaving_the_surface(hit: HitFn, scale: f64, position: DVec3) -> usiz
     let frame: Frame = *h.frame();
     let mut rng = Rng::new(12);
     let mut checked = 0;
-    for k in 0..120 {
+    for k in 0..100 {
         // A primary ray, half of them aimed at the equator curve.
         let target = if k % 2 == 0 {
             equator_point(rng.range(0.0, 6.3))
@@ -323,7 +323,7 @@ pub fn rays_leaving_the_surface(hit: HitFn, scale: f64, position: DVec3) -> usiz
             let start = 1e-5 / r.dir.length();
             let want = BOUNDS
                 .clip(&r, start, f64::INFINITY)
-                .and_then(|(_, t1)| reference_first_root(r.origin, r.dir, start, t1))
+                .and_then(|(_, t1)| reference_first_root_n(r.origin, r.dir, start, t1, 6000))
                 .map(|t| t.to_f64());
             match (got, want) {
                 (Some(a), Some(b)) => {

@@ -344,7 +344,13 @@ pub fn dd_root_g(o: DVec3, d: DVec3, ta: f64, tb: f64) -> Dd {
 /// The reference first root of `g` along the ray in `(lo, hi]`: located with a dense f64 scan
 /// of `g` (simple roots everywhere, so a sign scan is reliable) and refined in double-double.
 pub fn reference_first_root(o: DVec3, d: DVec3, lo: f64, hi: f64) -> Option<Dd> {
-    const N: usize = 20_000;
+    reference_first_root_n(o, d, lo, hi, 20_000)
+}
+
+/// [`reference_first_root`] with an `n`-step scan.
+pub fn reference_first_root_n(o: DVec3, d: DVec3, lo: f64, hi: f64, n: usize) -> Option<Dd> {
+    #[allow(non_snake_case)]
+    let N = n;
     let g = |t: f64| kardia::shapes::heart::factor_g(o + t * d);
     let mut a = lo;
     let mut ga = g(a);
