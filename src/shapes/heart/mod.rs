@@ -23,7 +23,7 @@
 mod polish;
 mod surface;
 
-use polish::polish;
+use polish::{earlier_crossing, polish};
 
 pub use surface::{
     factor_g, factor_g_with_slope, gradient_f, heart_fn, outward_direction, scaled_gradient_g,
@@ -39,13 +39,16 @@ use crate::roots::Solver;
 /// reports a hit closer than this, at any world scale (see [`Heart::self_hit_guard`]).
 pub const SELF_HIT_GUARD: f64 = 1e-6;
 
-/// How far (object-space length) polishing may move a root found on `f`: several times the
-/// worst error of a triple root of `f` in f64 (~1e-5); a Newton iterate beyond it is refused.
-const POLISH_WINDOW: f64 = 1e-3;
+/// How far (object-space length) polishing may move a root found on `f`: far beyond the
+/// error of a triple root of `f` in f64 (~1e-5), and beyond the spread of a cluster of roots
+/// a solver may merge into one where `f` is below its rounding over a sliver of the heart
+/// (measured up to ~1e-3 at the equator).
+const POLISH_WINDOW: f64 = 1e-2;
 
-/// How many roots at or before the ray's origin may be skipped (a triple root of `f` splits
-/// into at most three by rounding) before the ray is declared to miss.
-const MAX_SKIPS: usize = 4;
+/// How many roots may be skipped, at or before the ray's origin (a triple root of `f` splits
+/// into at most three by rounding) or off the surface (near-tangencies), before the ray is
+/// declared to miss.
+const MAX_SKIPS: usize = 6;
 
 /// A heart placed in the world; see the module doc.
 #[derive(Debug, Clone, PartialEq)]
@@ -128,18 +131,48 @@ impl Heart {
         let d = r.dir * len;
         let coeffs = sextic_coefficients(o, d);
         let window = POLISH_WINDOW / (dir_len * len);
+        // Which side of the surface the search starts on (f's sign is g's: use the free c0
+        // when it is clear of rounding, else g, which is accurate there).
+        let side = |s: f64, f_value: f64| -> Option<bool> {
+            if f_value.abs() > 1e-10 {
+                return Some(f_value > 0.0);
+            }
+            let g = factor_g(o + s * d);
+            (g != 0.0).then_some(g > 0.0)
+        };
+        let mut outside = side(0.0, coeffs[0]);
+        let mut side_lo = 0.0; // where `outside` holds
         let mut lo = 0.0;
         for _ in 0..MAX_SKIPS {
             let s_root = first_root(&coeffs, lo, 1.0)?;
-            let s = polish(o, d, s_root, window);
-            let t = t0 + s * len;
+            let Some(mut root) = polish(o, d, s_root, window) else {
+                // Not on the surface (a near-tangency or rounding noise the solver took for a
+                // root), and g keeps its sign within the window around it: go on past it.
+                lo = (s_root + window).max(s_root.next_up());
+                if lo >= 1.0 {
+                    return None;
+                }
+                continue;
+            };
+            // From outside the first crossing must enter (g falls), from inside leave (g
+            // rises). The other way round, the solver merged or lost an earlier root.
+            if let (Some(rising), Some(out)) = (root.rising, outside) {
+                if rising == out {
+                    if let Some(earlier) = earlier_crossing(o, d, side_lo, root.s, out) {
+                        root = earlier;
+                    }
+                }
+            }
+            let t = t0 + root.s * len;
             if t > t_lo {
                 return (t < t_max).then_some(t);
             }
             // The root is the ray's own origin (or another below the guard): rounding of a
             // multiple root may put more copies just after it, spread about as far from the
             // true root as this one; resume the search beyond them.
-            lo = (s_root + 2.0 * (s_root - s).abs()).max(s_root.next_up());
+            lo = (s_root + 2.0 * (s_root - root.s).abs()).max(s_root.next_up());
+            side_lo = lo;
+            outside = side(lo, 0.0);
         }
         None
     }
