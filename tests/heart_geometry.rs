@@ -322,3 +322,21 @@ fn normal_is_a_finite_unit_vector_everywhere() {
         );
     }
 }
+
+#[test]
+fn t_is_in_units_of_the_direction_at_any_length() {
+    for h in [unit_heart(), placed_heart()] {
+        let frame = *h.frame();
+        let o = frame.point_to_world(DVec3::new(0.5, 0.2, 0.0));
+        let d = frame.m * DVec3::new(0.1, -0.2, 1.0);
+        let base = brute_intersect(&h, &Ray::new(o, d), 0.0, f64::INFINITY).unwrap();
+        for k in [1e-300, 1e-150, 1e-20, 0.37, 1.0, 3.0, 1e20, 1e150, 1e300] {
+            let t = brute_intersect(&h, &Ray::new(o, d * k), 0.0, f64::INFINITY)
+                .unwrap_or_else(|| panic!("no hit with |d| scaled by {k}"));
+            assert!(
+                (t * k - base).abs() <= 1e-14 * base,
+                "k={k}: {t} · k vs {base}"
+            );
+        }
+    }
+}

@@ -116,7 +116,9 @@ impl Heart {
         mut first_root: impl FnMut(&[f64; 7], f64, f64) -> Option<f64>,
     ) -> Option<f64> {
         let r = self.frame.ray_to_object(ray);
-        let dir_len = r.dir.length();
+        // |d|, without the underflow or overflow of squaring tiny or huge components.
+        let scale = r.dir.abs().max_element();
+        let dir_len = scale * (r.dir / scale).length();
         if !(dir_len > 0.0 && dir_len.is_finite() && r.origin.is_finite()) {
             return None;
         }
