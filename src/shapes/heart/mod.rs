@@ -13,8 +13,11 @@
 //! 5. that root polished by a few safeguarded Newton steps on the well-conditioned factor
 //!    `g = A − ∛B·Z` ([`factor_g`]): where `f` has a triple root (the equator curve) its root
 //!    is only good to ~1e-5, where `g`'s is good to the last bit;
-//! 6. a root at or before the ray's own origin (a ray leaving the surface) is skipped and the
-//!    search resumes past it.
+//! 6. checked: a root with no root of `g` near it (a near-tangency or rounding noise of `f`)
+//!    is skipped; a root where `g` crosses the wrong way (leaving the heart although the ray
+//!    started outside) means the solver merged an earlier root into it, which is recovered
+//!    from `g`; a root at or before the ray's own origin (a ray leaving the surface) is
+//!    skipped. The search then resumes past the skipped root.
 //!
 //! The normal ([`Shape::normal`]) is `∇g` (parallel to `∇f` on the surface, but well-defined
 //! and well-conditioned on the equator curve), with `∇f` and then the axis as fallbacks at the
