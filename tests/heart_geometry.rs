@@ -340,3 +340,43 @@ fn t_is_in_units_of_the_direction_at_any_length() {
         }
     }
 }
+
+#[test]
+fn lower_half_lies_in_the_ellipsoid_used_for_clipping() {
+    // Below Z = 0 the solid heart (g ≤ 0) is inside 2X² + Y² + Z² ≤ 1: check the surface
+    // densely (the proof's parametrisation) and solid points on a grid.
+    let n = 800;
+    for i in 0..=n {
+        let s = 1.2 * i as f64 / n as f64;
+        for j in 0..=n {
+            let z = -1.0 * j as f64 / n as f64;
+            let u = 1.0 + s * z - z * z;
+            let s3 = s * s * s;
+            if u < s3 || u > 20.0 * s3 {
+                continue;
+            }
+            assert!(u + z * z <= 1.0 + 1e-15, "s={s} z={z}");
+        }
+    }
+    for i in 0..60 {
+        for j in 0..60 {
+            for k in 0..40 {
+                let p = DVec3::new(
+                    -0.75 + 1.5 * i as f64 / 59.0,
+                    -1.2 + 2.4 * j as f64 / 59.0,
+                    -1.05 + 1.05 * k as f64 / 39.0,
+                );
+                if heart::factor_g(p) <= 0.0 {
+                    assert!(2.0 * p.x * p.x + p.y * p.y + p.z * p.z <= 1.0, "{p}");
+                }
+            }
+        }
+    }
+    // And rays through the lower corners of the box, beside the tip, are rejected before
+    // any root finding: a root finder that is never called proves it.
+    let h = unit_heart();
+    let ray = Ray::new(DVec3::new(5.0, 1.0, -0.8), DVec3::NEG_X);
+    assert!(BOUNDS.clip(&ray, 0.0, f64::INFINITY).is_some());
+    let got = h.intersect_with(&ray, 0.0, f64::INFINITY, |_, _, _| panic!("solver called"));
+    assert_eq!(got, None);
+}

@@ -127,6 +127,7 @@ impl Heart {
         }
         let t_lo = t_min.max(self.self_hit_guard(r.origin) / dir_len);
         let (t0, t1) = BOUNDS.clip(&r, t_lo, t_max)?;
+        let (t0, t1) = clip_lower_half(&r, t0, t1)?;
         let len = t1 - t0;
         if !(len > 0.0 && len.is_finite()) {
             return None;
@@ -181,6 +182,57 @@ impl Heart {
         }
         None
     }
+}
+
+/// The part of `[t0, t1]` (a chord of [`BOUNDS`]) that can meet the heart, given that its
+/// lower half lies in the ellipsoid `2X² + Y² + Z² ≤ 1` (below `Z = 0`, `g ≤ 0` gives
+/// `A ≤ ∛B·Z ≤ 0`): the hull of the ray's spans inside that ellipsoid and above `Z = 0`, each
+/// widened by [`BOUNDS_MARGIN`]. Rejects the rays that pass beside the tip in the box's lower
+/// corners, and shortens the chord the solver sees.
+#[inline]
+fn clip_lower_half(r: &Ray, t0: f64, t1: f64) -> Option<(f64, f64)> {
+    // Parametrise from the box entry so that every quantity is of the heart's size.
+    let o = r.at(t0);
+    let d = r.dir;
+    let len = t1 - t0;
+    // Above Z = −margin: a half-line in u = t − t0.
+    let z_floor = -BOUNDS_MARGIN;
+    let above = if d.z > 0.0 {
+        let u = ((z_floor - o.z) / d.z).max(0.0);
+        (u <= len).then_some((u, len))
+    } else if d.z < 0.0 {
+        let u = (z_floor - o.z) / d.z;
+        (u >= 0.0).then_some((0.0, u.min(len)))
+    } else {
+        (o.z >= z_floor).then_some((0.0, len))
+    };
+    // Inside 2X² + Y² + Z² ≤ (1 + margin)²: a·u² + 2·hb·u + c ≤ 0.
+    let rr = (1.0 + BOUNDS_MARGIN) * (1.0 + BOUNDS_MARGIN);
+    let a = 2.0 * d.x * d.x + d.y * d.y + d.z * d.z;
+    let hb = 2.0 * o.x * d.x + o.y * d.y + o.z * d.z;
+    let c = 2.0 * o.x * o.x + o.y * o.y + o.z * o.z - rr;
+    let disc = hb * hb - a * c;
+    let inside = if disc >= 0.0 {
+        let q = -(hb + hb.signum() * disc.sqrt());
+        let (mut u0, mut u1) = (q / a, c / q);
+        if u0 > u1 {
+            std::mem::swap(&mut u0, &mut u1);
+        }
+        if !(u0.is_finite() && u1.is_finite()) {
+            // q = 0: o at the centre plane with hb = 0 and c = 0; keep everything.
+            (u0, u1) = (0.0, len);
+        }
+        let (u0, u1) = (u0.max(0.0), u1.min(len));
+        (u0 <= u1).then_some((u0, u1))
+    } else {
+        None
+    };
+    let (u0, u1) = match (above, inside) {
+        (Some(p), Some(q)) => (p.0.min(q.0), p.1.max(q.1)),
+        (Some(p), None) | (None, Some(p)) => p,
+        (None, None) => return None,
+    };
+    Some((t0 + u0, t0 + u1))
 }
 
 impl Shape for Heart {
