@@ -349,7 +349,7 @@ fn lower_half_lies_in_the_ellipsoid_used_for_clipping() {
     for i in 0..=n {
         let s = 1.2 * i as f64 / n as f64;
         for j in 0..=n {
-            let z = -1.0 * j as f64 / n as f64;
+            let z = -(j as f64) / n as f64;
             let u = 1.0 + s * z - z * z;
             let s3 = s * s * s;
             if u < s3 || u > 20.0 * s3 {
