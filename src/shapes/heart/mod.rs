@@ -3,8 +3,10 @@
 //!
 //! A ray's path through [`Heart::intersect`](Shape::intersect):
 //! 1. into object space with `M⁻¹` (direction not renormalised, so `t` is shared);
-//! 2. clipped to the object-space box [`surface::BOUNDS`] (the exact extents plus a margin):
-//!    a ray that misses it costs a slab test only;
+//! 2. clipped to the object-space box [`surface::BOUNDS`] (the exact extents plus a margin),
+//!    then to the hull of its spans above `Z = 0` and inside the ellipsoid
+//!    `2X² + Y² + Z² ≤ 1` that holds the lower half: a ray that misses them costs a slab test
+//!    and a quadratic only;
 //! 3. re-parametrised over the clipped chord, `s ∈ [0, 1]` from box entry to exit, so the
 //!    sextic's coefficients are built from a point near the heart and are well scaled whatever
 //!    the distance, length of `d` or size of the heart;
