@@ -85,7 +85,7 @@ impl Coef {
     }
 
     /// `-self`.
-    pub fn neg(self) -> Coef {
+    pub fn negated(self) -> Coef {
         match self {
             Coef::Exact(n, d) => match n.checked_neg() {
                 Some(m) => Coef::Exact(m, d),
@@ -96,7 +96,7 @@ impl Coef {
     }
 
     /// `self + o`.
-    pub fn add(self, o: Coef) -> Coef {
+    pub fn plus(self, o: Coef) -> Coef {
         if let (Coef::Exact(a, b), Coef::Exact(c, d)) = (self, o) {
             let g = gcd(b, d);
             let exact = (|| {
@@ -113,12 +113,12 @@ impl Coef {
     }
 
     /// `self − o`.
-    pub fn sub(self, o: Coef) -> Coef {
-        self.add(o.neg())
+    pub fn minus(self, o: Coef) -> Coef {
+        self.plus(o.negated())
     }
 
     /// `self · o`.
-    pub fn mul(self, o: Coef) -> Coef {
+    pub fn times(self, o: Coef) -> Coef {
         if let (Coef::Exact(a, b), Coef::Exact(c, d)) = (self, o) {
             let exact = (|| {
                 let g1 = gcd(a, d).max(1);
@@ -135,7 +135,7 @@ impl Coef {
     }
 
     /// `self / o`, `o ≠ 0`.
-    pub fn div(self, o: Coef) -> Coef {
+    pub fn over(self, o: Coef) -> Coef {
         match o {
             Coef::Exact(n, d) => {
                 let inv = if n < 0 {
@@ -145,7 +145,7 @@ impl Coef {
                     Some(Coef::Exact(d, n))
                 };
                 match inv {
-                    Some(i) => self.mul(i),
+                    Some(i) => self.times(i),
                     None => Coef::Approx(self.to_f64() / o.to_f64()),
                 }
             }
@@ -159,11 +159,11 @@ impl Coef {
         let mut acc = Coef::ONE;
         while e > 0 {
             if e & 1 == 1 {
-                acc = acc.mul(base);
+                acc = acc.times(base);
             }
             e >>= 1;
             if e > 0 {
-                base = base.mul(base);
+                base = base.times(base);
             }
         }
         acc
@@ -207,11 +207,11 @@ mod tests {
     fn exact_arithmetic_and_overflow_fallback() {
         let tenth = Coef::parse_decimal("0.1").unwrap();
         assert_eq!(tenth, Coef::Exact(1, 10));
-        assert_eq!(tenth.add(tenth).add(tenth), Coef::Exact(3, 10));
+        assert_eq!(tenth.plus(tenth).plus(tenth), Coef::Exact(3, 10));
         assert_eq!(Coef::parse_decimal("2.5e2").unwrap(), Coef::int(250));
         assert_eq!(Coef::parse_decimal("125e-3").unwrap(), Coef::Exact(1, 8));
         assert_eq!(Coef::parse_decimal(".5").unwrap(), Coef::Exact(1, 2));
-        assert_eq!(Coef::int(9).div(Coef::int(-6)), Coef::Exact(-3, 2));
+        assert_eq!(Coef::int(9).over(Coef::int(-6)), Coef::Exact(-3, 2));
         let big = tenth.pow(40);
         assert!(matches!(big, Coef::Approx(_)));
         assert!((big.to_f64() - 1e-40).abs() < 1e-54);

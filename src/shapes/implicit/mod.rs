@@ -77,7 +77,7 @@ struct Surface {
 #[derive(Debug, Clone)]
 enum Kind {
     Generic(Box<Surface>),
-    Heart(Heart),
+    Heart(Box<Heart>),
 }
 
 /// An implicit polynomial surface `p(x, y, z) = 0` in object space, placed by a [`Frame`],
@@ -187,7 +187,7 @@ impl Implicit {
             frame,
             solver: Solver::default(),
             bound,
-            kind: Kind::Heart(heart),
+            kind: Kind::Heart(Box::new(heart)),
         }
     }
 
@@ -195,7 +195,7 @@ impl Implicit {
     pub fn with_solver(mut self, solver: Solver) -> Self {
         self.solver = solver;
         if let Kind::Heart(h) = self.kind {
-            self.kind = Kind::Heart(h.with_solver(solver));
+            self.kind = Kind::Heart(Box::new(h.with_solver(solver)));
         }
         self
     }
@@ -256,7 +256,7 @@ impl Implicit {
         let t_mid = -r.origin.dot(r.dir) / dd;
         let mid = r.origin + t_mid * r.dir;
         let h2 = self.bound * self.bound - mid.length_squared();
-        if !(h2 > 0.0) {
+        if h2.is_nan() || h2 <= 0.0 {
             return None;
         }
         let t_half = (h2 / dd).sqrt();
@@ -288,7 +288,7 @@ impl Implicit {
         };
         let lo_t = guard.max(t_mid - t_half);
         let hi_t = t_max.min(t_mid + t_half);
-        if !(lo_t < hi_t) {
+        if lo_t.is_nan() || hi_t.is_nan() || lo_t >= hi_t {
             return None;
         }
         let n = s.f.degree;
@@ -315,7 +315,7 @@ impl Implicit {
             if t > guard && t < t_max {
                 return Some(t);
             }
-            if !(root > s_lo) {
+            if root <= s_lo {
                 return None;
             }
             s_lo = root;

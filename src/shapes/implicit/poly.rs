@@ -55,7 +55,7 @@ impl Poly {
 
     fn add_term(&mut self, e: Exps, c: Coef) {
         let sum = match self.terms.get(&e) {
-            Some(&old) => old.add(c),
+            Some(&old) => old.plus(c),
             None => c,
         };
         if sum.is_zero() {
@@ -68,7 +68,7 @@ impl Poly {
     /// `self + sign·o`.
     fn add(mut self, o: &Poly, negate: bool) -> Poly {
         for (&e, &c) in &o.terms {
-            self.add_term(e, if negate { c.neg() } else { c });
+            self.add_term(e, if negate { c.negated() } else { c });
         }
         self
     }
@@ -78,7 +78,7 @@ impl Poly {
         let mut r = Poly::default();
         for (a, &ca) in &self.terms {
             for (b, &cb) in &o.terms {
-                r.add_term([a[0] + b[0], a[1] + b[1], a[2] + b[2]], ca.mul(cb));
+                r.add_term([a[0] + b[0], a[1] + b[1], a[2] + b[2]], ca.times(cb));
             }
         }
         r
@@ -87,7 +87,7 @@ impl Poly {
     fn scale(&self, c: Coef) -> Poly {
         let mut r = Poly::default();
         for (&e, &v) in &self.terms {
-            r.add_term(e, v.mul(c));
+            r.add_term(e, v.times(c));
         }
         r
     }
@@ -126,7 +126,7 @@ impl Poly {
                 if c.is_zero() {
                     return Err(b.span.error("division by zero"));
                 }
-                pa.scale(Coef::ONE.div(c))
+                pa.scale(Coef::ONE.over(c))
             }
             Node::Pow(a, b) => {
                 let pa = Poly::expand(a)?;
@@ -172,7 +172,7 @@ impl Poly {
             if e[v] > 0 {
                 let mut f = e;
                 f[v] -= 1;
-                r.add_term(f, c.mul(Coef::int(e[v] as i128)));
+                r.add_term(f, c.times(Coef::int(e[v] as i128)));
             }
         }
         r

@@ -141,7 +141,7 @@ pub fn preset(name: &str, params: &[f64]) -> Result<Preset, String> {
                 format!(
                     "(x^2 + y^2 + z^2 - {m}^2)^2 - (3*{m}^2 - 1)/(3 - {m}^2)*((1 - z)^2 - 2*x^2)*((1 + z)^2 - 2*y^2)"
                 ),
-                3f64.max(2.0 * mu.abs()),
+                2f64.max(2.0 * mu.abs()),
             )
         }
         "barth_sextic" => {
