@@ -3,7 +3,7 @@
 use kardia::geometry::{DVec3, Frame, Ray};
 use kardia::shapes::implicit::coef::Coef;
 use kardia::shapes::implicit::equation;
-use kardia::shapes::implicit::poly::{derive_bound, Compiled, Poly};
+use kardia::shapes::implicit::poly::{derive_bound, Compiled};
 use kardia::shapes::implicit::{self, preset, preset_equation, Implicit, PRESETS};
 use rand::{Rng, SeedableRng};
 
@@ -303,6 +303,72 @@ fn presets_parse_and_reject_bad_parameters() {
     for x in [-2.0, 0.3, 1.7] {
         assert!(c.eval([x, -x, -1.0]).abs() < 1e-12);
     }
-    // Kummer: 16 nodes; for μ² = 1.3 … at least f and ∇f vanish at some point found below.
-    let _ = Poly::default();
+}
+
+#[test]
+fn bounded_presets_fit_inside_their_default_bound() {
+    let mut r = rng();
+    for (name, params) in [
+        ("heart", vec![]),
+        ("taubin_heart", vec![]),
+        ("torus", vec![1.0, 0.3]),
+        ("torus", vec![0.5, 0.7]),
+        ("chmutov", vec![2.0]),
+        ("chmutov", vec![6.0]),
+        ("chmutov", vec![16.0]),
+    ] {
+        let p = preset(name, &params).unwrap();
+        let c = Compiled::new(&implicit::expand(&p.equation).unwrap());
+        for _ in 0..3000 {
+            let u = DVec3::new(
+                r.random_range(-1.0..1.0),
+                r.random_range(-1.0..1.0),
+                r.random_range(-1.0..1.0),
+            )
+            .normalize();
+            let q = u * p.bound * r.random_range(1.0..2.0);
+            assert!(
+                c.eval(q.to_array()) > 0.0,
+                "{name} {params:?}: f ≤ 0 at {q}"
+            );
+        }
+    }
+    // The heart's containing radius really contains it.
+    let h = implicit::presets::HEART_RADIUS;
+    let c = Compiled::new(&implicit::expand(implicit::HEART_EQUATION).unwrap());
+    for _ in 0..3000 {
+        let u = DVec3::new(
+            r.random_range(-1.0..1.0),
+            r.random_range(-1.0..1.0),
+            r.random_range(-1.0..1.0),
+        )
+        .normalize();
+        assert!(c.eval((u * h * r.random_range(1.0..2.0)).to_array()) > 0.0);
+    }
+}
+
+#[test]
+fn kummer_and_barth_have_their_nodes() {
+    // Kummer μ² = 1.3: a node at (±√(μ² − 1), 0, −1), where r·s = (1 + z)² − 2y² vanishes
+    // to second order and the sphere term x² + z² − μ² = 0.
+    let k = Implicit::new(
+        &preset_equation("kummer", &[1.3f64.sqrt()]).unwrap(),
+        Frame::identity(),
+        Some(3.0),
+    )
+    .unwrap();
+    let p = DVec3::new(0.3f64.sqrt(), 0.0, -1.0);
+    assert!(k.value(p).abs() < 1e-12, "{}", k.value(p));
+    assert!(k.gradient(p).length() < 1e-10, "{}", k.gradient(p));
+    // Barth: nodes at radius 1 and √3, e.g. (1, 0, 0) and (1, 1, 1).
+    let b = Implicit::new(
+        &preset_equation("barth_sextic", &[]).unwrap(),
+        Frame::identity(),
+        Some(2.0),
+    )
+    .unwrap();
+    for q in [DVec3::ONE, DVec3::X, DVec3::new(-1.0, 1.0, -1.0)] {
+        assert!(b.value(q).abs() < 1e-12, "{}", b.value(q));
+        assert!(b.gradient(q).length() < 1e-10, "{}", b.gradient(q));
+    }
 }

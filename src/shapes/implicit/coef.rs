@@ -53,7 +53,8 @@ impl Coef {
         match self {
             Coef::Approx(v) => v,
             Coef::Exact(n, d) => {
-                // Both parts exact in f64: one correctly rounded division.
+                // One rounding when both parts have at most 53 bits (the usual case),
+                // at most three otherwise.
                 n as f64 / d as f64
             }
         }
