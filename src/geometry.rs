@@ -80,6 +80,19 @@ impl Aabb {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
     }
 
+    /// This box grown on every side by `rel × (largest extent + largest |coordinate|)`, so that
+    /// points computed on the surface it bounds (with rounding error) still fall inside, and a
+    /// flat box (a polygon's) gets some thickness. Empty and infinite boxes come back unchanged.
+    pub fn padded(self, rel: f64) -> Self {
+        if !self.is_finite() || self.min.cmpgt(self.max).any() {
+            return self;
+        }
+        let scale =
+            (self.max - self.min).max_element() + self.min.abs().max(self.max.abs()).max_element();
+        let margin = DVec3::splat(rel * scale);
+        Self::new(self.min - margin, self.max + margin)
+    }
+
     /// The part `[t_enter, t_exit]` of `[t_min, t_max]` where the ray is inside the box, or
     /// `None` when the ray misses it there. Exact slab test; robust to zero direction
     /// components (a ray parallel to a slab is inside it iff its origin is).

@@ -1,34 +1,156 @@
 //! An ellipsoid: the unit sphere placed by a centre and three axis vectors.
 
+use super::sphere::{first_root_in, sphere_roots, BOUNDS_PAD, SURFACE_SNAP};
 use super::{Shape, ShapeError};
-use crate::geometry::{Aabb, DVec3, Frame, Ray};
+use crate::geometry::{Aabb, DVec3, Frame, FrameError, Ray};
 
-/// The surface `centre + M·s`, `|s| = 1`, `M = [u v w]`; normals face outward.
+/// The surface `centre + M·s`, `|s| = 1`, `M = [u v w]`: the unit sphere mapped by the frame,
+/// so `u`, `v`, `w` are semi-axis vectors (world units) that need not be orthogonal. Normals
+/// face outward (away from the centre).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Ellipsoid {
     frame: Frame,
+    /// ∞-norm of `M⁻¹`, to bound the rounding of object-space ray origins.
+    inv_norm: f64,
 }
 
 impl Ellipsoid {
-    /// An ellipsoid with semi-axis vectors `u`, `v`, `w` (linearly independent).
+    /// An ellipsoid with centre and semi-axis vectors `u`, `v`, `w`: all finite, and the three
+    /// vectors linearly independent (the ellipsoid must not be flat).
     pub fn new(centre: DVec3, u: DVec3, v: DVec3, w: DVec3) -> Result<Self, ShapeError> {
-        Ok(Self {
-            frame: Frame::new(centre, u, v, w)?,
-        })
+        let frame = Frame::new(centre, u, v, w).map_err(|e| match e {
+            FrameError::NotFinite => {
+                ShapeError("the ellipsoid's centre and axis vectors must all be finite".into())
+            }
+            FrameError::Singular => ShapeError(
+                "the ellipsoid's three axis vectors lie in one plane (or nearly so, or one is \
+                 zero), so the ellipsoid would be flat"
+                    .into(),
+            ),
+        })?;
+        let inv_norm = (0..3)
+            .map(|i| frame.m_inv.row(i).abs().element_sum())
+            .fold(0.0, f64::max);
+        Ok(Self { frame, inv_norm })
     }
 }
 
 impl Shape for Ellipsoid {
-    fn intersect(&self, _ray: &Ray, _t_min: f64, _t_max: f64) -> Option<f64> {
-        None // TODO: shapes work
+    fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+        let o = self.frame.ray_to_object(ray);
+        // Bound on the rounding of the object-space origin (the world origin, the subtraction,
+        // then M⁻¹); see SURFACE_SNAP.
+        let origin_err = SURFACE_SNAP
+            * self.inv_norm
+            * (ray.origin.abs().max_element() + self.frame.position.abs().max_element());
+        let roots = sphere_roots(o.origin, o.dir, 1.0, origin_err)?;
+        first_root_in(roots, t_min, t_max)
     }
 
-    fn normal(&self, _p: DVec3) -> DVec3 {
-        DVec3::Z // TODO: shapes work
+    fn normal(&self, p: DVec3) -> DVec3 {
+        // Gradient of |M⁻¹(p − c)|² is 2·M⁻ᵀ·s; rescale s first so tiny values cannot
+        // underflow, and fall back to a fixed axis at the centre itself.
+        let s = self.frame.point_to_object(p);
+        let scale = s.abs().max_element();
+        if scale > 0.0 && scale.is_finite() {
+            let n = (self.frame.normal_matrix * (s / scale)).normalize_or_zero();
+            if n != DVec3::ZERO {
+                return n;
+            }
+        }
+        self.frame.normal_to_world(DVec3::Z)
     }
 
     fn bounds(&self) -> Aabb {
-        self.frame
-            .bounds_to_world(&Aabb::new(DVec3::splat(-1.0), DVec3::ONE))
+        // Tight: coordinate i of centre + M·s over |s| = 1 ranges over ± |row i of M|.
+        let m = &self.frame.m;
+        let ext = DVec3::new(m.row(0).length(), m.row(1).length(), m.row(2).length());
+        let c = self.frame.position;
+        Aabb::new(c - ext, c + ext).padded(BOUNDS_PAD)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn egg() -> Ellipsoid {
+        Ellipsoid::new(
+            DVec3::new(1.0, 1.0, 1.0),
+            DVec3::new(3.0, 0.0, 0.0),
+            DVec3::new(0.0, 2.0, 0.0),
+            DVec3::new(0.0, 0.0, 1.0),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn axis_hits_known_t_and_normal() {
+        let e = egg();
+        let r = Ray::new(DVec3::new(-9.0, 1.0, 1.0), DVec3::new(2.0, 0.0, 0.0));
+        let t = e.intersect(&r, 0.0, f64::INFINITY).unwrap();
+        assert!((t - 3.5).abs() < 1e-12, "{t}");
+        assert!((e.normal(r.at(t)) - DVec3::NEG_X).length() < 1e-12);
+        let r = Ray::new(DVec3::new(1.0, 1.0, 9.0), DVec3::NEG_Z);
+        let t = e.intersect(&r, 0.0, f64::INFINITY).unwrap();
+        assert!((t - 7.0).abs() < 1e-12);
+        assert!((e.normal(r.at(t)) - DVec3::Z).length() < 1e-12);
+    }
+
+    #[test]
+    fn off_axis_normal_matches_gradient() {
+        // x²/9 + y²/4 + z² = 1 about (1,1,1): at object point s, the normal ∝ (x/9, y/4, z).
+        let e = egg();
+        let s = DVec3::new(0.6, 0.0, 0.8);
+        let p = DVec3::ONE + DVec3::new(3.0 * s.x, 2.0 * s.y, s.z);
+        let expected = DVec3::new(3.0 * s.x / 9.0, 0.0, s.z).normalize();
+        assert!((e.normal(p) - expected).length() < 1e-12);
+    }
+
+    #[test]
+    fn inside_miss_range() {
+        let e = egg();
+        let r = Ray::new(DVec3::new(1.0, 1.0, 1.0), DVec3::new(0.0, 0.5, 0.0));
+        assert_eq!(e.intersect(&r, 0.0, f64::INFINITY), Some(4.0));
+        assert_eq!(e.intersect(&r, 0.0, 4.0), None);
+        let miss = Ray::new(DVec3::new(-9.0, 3.01, 1.0), DVec3::X);
+        assert_eq!(e.intersect(&miss, 0.0, f64::INFINITY), None);
+        let r = Ray::new(DVec3::new(-9.0, 1.0, 1.0), DVec3::X);
+        assert_eq!(
+            e.intersect(&r, 7.0, f64::INFINITY).map(|t| t.round()),
+            Some(13.0)
+        );
+    }
+
+    #[test]
+    fn sheared_axes_contain_the_sphere_image() {
+        let e = Ellipsoid::new(
+            DVec3::new(0.5, -1.0, 2.0),
+            DVec3::new(1.0, 0.5, 0.0),
+            DVec3::new(0.0, 1.0, 0.7),
+            DVec3::new(0.2, 0.0, 0.4),
+        )
+        .unwrap();
+        // Each c ± u etc. is on the surface: rays from the centre along u hit at t = 1.
+        for a in [
+            DVec3::new(1.0, 0.5, 0.0),
+            DVec3::new(0.0, 1.0, 0.7),
+            DVec3::new(0.2, 0.0, 0.4),
+        ] {
+            let r = Ray::new(DVec3::new(0.5, -1.0, 2.0), -a);
+            let t = e.intersect(&r, 1e-9, f64::INFINITY).unwrap();
+            assert!((t - 1.0).abs() < 1e-12);
+            let n = e.normal(r.at(t));
+            assert!(n.dot(-a) > 0.0 && (n.length() - 1.0).abs() < 1e-12);
+            assert!(e.bounds().contains(r.at(t)));
+        }
+        assert!(e.normal(DVec3::new(0.5, -1.0, 2.0)).is_finite());
+    }
+
+    #[test]
+    fn rejects_flat_ellipsoids() {
+        let e = Ellipsoid::new(DVec3::ZERO, DVec3::X, DVec3::Y, 2.0 * DVec3::Y).unwrap_err();
+        assert!(e.0.contains("flat"), "{e}");
+        assert!(Ellipsoid::new(DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::splat(f64::NAN)).is_err());
     }
 }
