@@ -264,6 +264,18 @@ fn bounds_are_derived_or_asked_for() {
         }
     }
     assert!(Implicit::new("x^2 + y^2 = 1", Frame::identity(), Some(0.0)).is_err());
+    // A preset's text keeps its default bound, even for unbounded presets.
+    for (name, params) in [
+        ("kummer", vec![1.2]),
+        ("clebsch", vec![]),
+        ("chmutov", vec![5.0]),
+    ] {
+        let p = preset(name, &params).unwrap();
+        let s = Implicit::new(&p.equation, Frame::identity(), None).unwrap();
+        assert_eq!(s.bound(), p.bound, "{name}");
+        let s = Implicit::from_preset(name, &params, Frame::identity(), Some(0.5)).unwrap();
+        assert_eq!(s.bound(), 0.5, "{name}");
+    }
 }
 
 #[test]

@@ -234,7 +234,8 @@ fn clipping_limits_hits_and_shows_the_inside() {
     );
     // Bounds: the clip sphere's box.
     let b = tube.bounds();
-    assert!((b.max - DVec3::ONE).abs().max_element() < 1e-12);
+    assert!((b.max - DVec3::ONE).abs().max_element() < 1e-8);
+    assert!(b.contains(DVec3::new(0.0, 0.0, 1.0)));
 }
 
 #[test]

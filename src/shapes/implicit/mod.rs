@@ -126,8 +126,9 @@ pub fn expand(equation: &str) -> Result<Poly, EquationError> {
 
 impl Implicit {
     /// Parses and expands `equation` (see docs/scene-format.md) and places it with `frame`.
-    /// `bound` is the object-space clip radius (`BOUND r`), `None` to derive one (an error
-    /// asking for `BOUND` when the surface may be unbounded).
+    /// `bound` is the object-space clip radius (`BOUND r`); `None` takes the preset's default
+    /// when `equation` is exactly a preset's text (from [`preset_equation`]), else derives one
+    /// (an error asking for `BOUND` when the surface may be unbounded).
     pub fn new(equation: &str, frame: Frame, bound: Option<f64>) -> Result<Self, EquationError> {
         let whole = equation::Span {
             start: 0,
@@ -145,7 +146,7 @@ impl Implicit {
         }
         let poly = expand(equation)?;
         let f = Compiled::new(&poly);
-        let bound = match bound {
+        let bound = match bound.or_else(|| presets::recognise(equation).map(|p| p.bound)) {
             Some(b) => b,
             None => poly::derive_bound(&f).ok_or_else(|| {
                 whole.error(
@@ -384,7 +385,7 @@ impl Shape for Implicit {
             rows.y_axis.length(),
             rows.z_axis.length(),
         ) * self.bound;
-        let sphere = Aabb::new(self.frame.position - half, self.frame.position + half);
+        let sphere = Aabb::new(self.frame.position - half, self.frame.position + half).padded(1e-9);
         match &self.kind {
             Kind::Heart(h) => {
                 let hb = h.bounds();

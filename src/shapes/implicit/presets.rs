@@ -191,6 +191,38 @@ pub fn preset(name: &str, params: &[f64]) -> Result<Preset, String> {
     }
 }
 
+fn parse_num(text: &str) -> Option<f64> {
+    text.trim_start_matches('(')
+        .trim_end_matches(')')
+        .parse()
+        .ok()
+}
+
+/// The preset whose equation text is exactly `equation` (as [`preset`] writes it), if any:
+/// lets an equation obtained from `preset_equation` keep its preset's default bound.
+pub fn recognise(equation: &str) -> Option<Preset> {
+    let eq = equation.trim();
+    let same = |name: &str, params: &[f64]| preset(name, params).ok().filter(|p| p.equation == eq);
+    for name in ["heart", "taubin_heart", "barth_sextic", "clebsch"] {
+        if let Some(p) = same(name, &[]) {
+            return Some(p);
+        }
+    }
+    if let Some(p) = (1..=16).find_map(|n| same("chmutov", &[n as f64])) {
+        return Some(p);
+    }
+    if let Some(rest) = eq.strip_prefix("(x^2 + y^2 + z^2 - ") {
+        let mu = parse_num(rest.split_once("^2)^2").map(|(m, _)| m)?)?;
+        return same("kummer", &[mu]);
+    }
+    if let Some(rest) = eq.strip_prefix("(x^2 + y^2 + z^2 + ") {
+        let (big, rest) = rest.split_once("^2 - ")?;
+        let small = rest.split_once("^2)^2").map(|(m, _)| m)?;
+        return same("torus", &[parse_num(big)?, parse_num(small)?]);
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -209,5 +241,26 @@ mod tests {
             .rev()
             .fold(0.0, |acc, &k| acc * th.cos() + k as f64);
         assert!((v - (16.0 * th).cos()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn every_preset_text_is_recognised() {
+        for (name, params) in [
+            ("heart", vec![]),
+            ("taubin_heart", vec![]),
+            ("barth_sextic", vec![]),
+            ("clebsch", vec![]),
+            ("chmutov", vec![3.0]),
+            ("chmutov", vec![16.0]),
+            ("kummer", vec![1.3f64.sqrt()]),
+            ("kummer", vec![-0.5]),
+            ("torus", vec![1.0, 0.3]),
+            ("torus", vec![2.5e-3, 1e-3]),
+        ] {
+            let p = preset(name, &params).unwrap();
+            assert_eq!(recognise(&p.equation), Some(p), "{name} {params:?}");
+        }
+        assert_eq!(recognise("x^2 + y^2 = 1"), None);
+        assert_eq!(recognise("(x^2 + y^2 + z^2 - 1^2)^2"), None);
     }
 }
