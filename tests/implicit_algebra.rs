@@ -209,6 +209,10 @@ const BAD: &[(&str, usize, usize, &str)] = &[
     ("3 = 4", 0, 5, "does not involve"),
     ("x . y", 2, 1, "part of a number"),
     ("x + ()", 4, 2, "empty parentheses"),
+    ("x + 10^400", 0, 10, "too large"),
+    ("x + 1e400", 4, 5, "out of range"),
+    ("(x + y", 0, 1, "never closed"),
+    ("x + y +* z", 7, 1, "not '*'"),
 ];
 
 #[test]

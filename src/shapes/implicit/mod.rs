@@ -116,6 +116,11 @@ pub fn expand(equation: &str) -> Result<Poly, EquationError> {
             "the equation is identically zero (it holds everywhere), so it describes no surface",
         ));
     }
+    if poly.terms.values().any(|c| !c.to_f64().is_finite()) {
+        return Err(whole.error(
+            "a coefficient of the expanded equation is too large for a floating-point number",
+        ));
+    }
     if poly.degree() == 0 {
         return Err(
             whole.error("the equation does not involve x, y or z, so it describes no surface")
