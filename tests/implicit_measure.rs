@@ -108,3 +108,29 @@ fn composition_versus_interpolation() {
         );
     }
 }
+
+#[test]
+#[ignore]
+fn intersection_cost_per_ray() {
+    use kardia::camera::Camera;
+    use kardia::shapes::Shape;
+    let cam = Camera::new(DVec3::new(6.0, 1.2, 0.9), DVec3::ZERO, DVec3::Z, 32.0).unwrap();
+    let n = 200u32;
+    for (name, params) in [
+        ("heart", vec![]),
+        ("taubin_heart", vec![]),
+        ("torus", vec![1.0, 0.3]),
+        ("barth_sextic", vec![]),
+        ("chmutov", vec![16.0]),
+    ] {
+        let s = Implicit::from_preset(name, &params, Frame::identity(), None).unwrap();
+        let t0 = Instant::now();
+        let mut hits = 0;
+        for i in 0..n * n {
+            let ray = cam.ray((i % n) as f64 + 0.5, (i / n) as f64 + 0.5, n, n);
+            hits += s.intersect(&ray, 1e-9, f64::INFINITY).is_some() as u32;
+        }
+        let dt = t0.elapsed().as_secs_f64() / (n * n) as f64;
+        println!("{name} {params:?}: {:.2} µs per ray, {hits} hits", dt * 1e6);
+    }
+}

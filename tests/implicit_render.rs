@@ -102,12 +102,13 @@ fn generic_heart_matches_heart_closely() {
 fn degree_16_sphere_has_exactly_the_unit_sphere_silhouette() {
     let s16 = Implicit::new("(x^2+y^2+z^2)^8 - 1 = 0", Frame::identity(), None).unwrap();
     let unit = Sphere::new(DVec3::ZERO, 1.0).unwrap();
-    for eye in [
-        DVec3::new(4.0, 0.0, 0.0),
-        DVec3::new(2.0, -2.5, 1.5),
-        DVec3::new(0.0, 0.0, 30.0),
+    for (eye, fov) in [
+        (DVec3::new(4.0, 0.0, 0.0), 40.0),
+        (DVec3::new(2.0, -2.5, 1.5), 40.0),
+        (DVec3::new(0.0, 0.0, 30.0), 5.0),
+        (DVec3::new(3000.0, 200.0, -100.0), 0.05),
     ] {
-        let cam = Camera::new(eye, DVec3::ZERO, DVec3::new(0.0, 1.0, 0.3), 40.0).unwrap();
+        let cam = Camera::new(eye, DVec3::ZERO, DVec3::new(0.0, 1.0, 0.3), fov).unwrap();
         let (a, b) = (cast(&unit, &cam), cast(&s16, &cam));
         for (i, (ta, tb)) in a.iter().zip(&b).enumerate() {
             match (ta, tb) {
