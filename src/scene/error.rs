@@ -45,3 +45,67 @@ pub struct InvalidScene {
     #[help]
     pub help: Option<String>,
 }
+
+impl SceneError {
+    /// An error about bytes `span` of `text` (the scene read from `file`): computes the line
+    /// and column and keeps the text for the caret display. Out-of-range or mid-character
+    /// offsets are clamped to the text.
+    pub(crate) fn at(
+        text: &str,
+        file: &str,
+        span: std::ops::Range<usize>,
+        message: impl Into<String>,
+        label: impl Into<String>,
+        help: Option<String>,
+    ) -> Self {
+        let start = floor_boundary(text, span.start);
+        let end = ceil_boundary(text, span.end.max(start));
+        let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+        let line = text[..start].matches('\n').count() + 1;
+        let column = text[line_start..start].chars().count() + 1;
+        SceneError::Invalid(Box::new(InvalidScene {
+            file: file.to_string(),
+            line,
+            column,
+            message: message.into(),
+            src: NamedSource::new(file, text.to_string()),
+            span: (start, end - start).into(),
+            label: label.into(),
+            help,
+        }))
+    }
+
+    /// The 1-based `(line, column)` of the problem, for errors about the scene text.
+    pub fn location(&self) -> Option<(usize, usize)> {
+        match self {
+            SceneError::Unreadable { .. } => None,
+            SceneError::Invalid(e) => Some((e.line, e.column)),
+        }
+    }
+
+    /// The message without the `file:line:column: ` prefix.
+    pub fn message(&self) -> String {
+        match self {
+            SceneError::Unreadable { .. } => self.to_string(),
+            SceneError::Invalid(e) => e.message.clone(),
+        }
+    }
+}
+
+/// The largest character boundary of `text` at or before `i` (clamped to the text).
+pub(crate) fn floor_boundary(text: &str, i: usize) -> usize {
+    let mut i = i.min(text.len());
+    while !text.is_char_boundary(i) {
+        i -= 1;
+    }
+    i
+}
+
+/// The smallest character boundary of `text` at or after `i` (clamped to the text).
+pub(crate) fn ceil_boundary(text: &str, i: usize) -> usize {
+    let mut i = i.min(text.len());
+    while !text.is_char_boundary(i) {
+        i += 1;
+    }
+    i
+}

@@ -1,11 +1,13 @@
 //! The scene: objects with materials, lights, camera, image settings; and its text format
 //! (see docs/scene-format.md), read by [`parse`].
 
+mod cursor;
 mod error;
+mod lexer;
 mod parser;
 
 pub use error::{InvalidScene, SceneError};
-pub use parser::{parse, parse_file};
+pub use parser::{parse, parse_file, DEFAULT_SIZE};
 
 use crate::camera::Camera;
 use crate::geometry::{Aabb, DVec3, Ray};

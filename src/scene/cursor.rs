@@ -1,0 +1,479 @@
+//! Reading the arguments of one statement: numbers, vectors, colours and the end of the
+//! line, each with an error that says what was expected at the offending token.
+
+use std::ops::Range;
+
+use super::lexer::{Token, TokenKind};
+use super::parser::{PROPERTIES, SURFACE_USAGE};
+use super::SceneError;
+use crate::geometry::DVec3;
+
+type Span = Range<usize>;
+type Result<T> = std::result::Result<T, SceneError>;
+
+/// The scene text and its name, for building errors.
+#[derive(Clone, Copy)]
+pub(super) struct Source<'a> {
+    pub(super) text: &'a str,
+    pub(super) name: &'a str,
+}
+
+impl Source<'_> {
+    pub(super) fn error(
+        &self,
+        span: Span,
+        message: impl Into<String>,
+        label: impl Into<String>,
+        help: Option<String>,
+    ) -> SceneError {
+        SceneError::at(self.text, self.name, span, message, label, help)
+    }
+}
+
+/// A vector argument as written: its value, the span of `( … )` and of each component.
+#[derive(Debug, Clone)]
+pub(super) struct VecArg {
+    pub(super) v: DVec3,
+    pub(super) span: Span,
+    pub(super) parts: [Span; 3],
+}
+
+/// Why a word is not a usable number.
+#[derive(Debug, PartialEq)]
+pub(super) enum NumberError {
+    /// Not a number at all.
+    NotANumber,
+    /// NaN or infinite (written so, or too large for an f64); the reason in words.
+    NotFinite(&'static str),
+}
+
+/// A finite f64 written in any notation Rust's `f64::from_str` accepts, other than NaN and
+/// infinities (which are rejected with a reason).
+pub(super) fn parse_number(s: &str) -> std::result::Result<f64, NumberError> {
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        Ok(x) if x.is_nan() => Err(NumberError::NotFinite("is not a number (NaN)")),
+        Ok(_) if s.to_ascii_lowercase().contains("inf") => {
+            Err(NumberError::NotFinite("is infinite"))
+        }
+        Ok(_) => Err(NumberError::NotFinite(
+            "is too large: it overflows a 64-bit float to infinity",
+        )),
+        Err(_) => Err(NumberError::NotANumber),
+    }
+}
+
+/// The first `max` characters of `s`, with `…` when cut.
+pub(super) fn shorten(s: &str, max: usize) -> String {
+    match s.char_indices().nth(max) {
+        Some((i, _)) => format!("{}…", &s[..i]),
+        None => s.to_string(),
+    }
+}
+
+/// Levenshtein distance between two short ASCII-case-folded strings.
+pub(super) fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.to_lowercase().chars().collect();
+    let b: Vec<char> = b.to_lowercase().chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.iter().enumerate() {
+        let mut cur = vec![i + 1; b.len() + 1];
+        for (j, cb) in b.iter().enumerate() {
+            let sub = prev[j] + usize::from(ca != cb);
+            cur[j + 1] = sub.min(prev[j + 1] + 1).min(cur[j] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+/// The candidate closest to `word`, if it is close enough to be a likely typo.
+pub(super) fn suggest<'k>(
+    word: &str,
+    candidates: impl IntoIterator<Item = &'k str>,
+) -> Option<&'k str> {
+    if word.chars().count() > 40 {
+        return None;
+    }
+    candidates
+        .into_iter()
+        .map(|c| (edit_distance(word, c), c))
+        .filter(|&(d, c)| d <= 2 && d < c.len().max(2))
+        .min_by_key(|&(d, _)| d)
+        .map(|(_, c)| c)
+}
+
+/// One line being parsed.
+pub(super) struct Cursor<'a> {
+    pub(super) src: Source<'a>,
+    pub(super) tokens: Vec<Token>,
+    pub(super) pos: usize,
+    /// 1-based line number.
+    pub(super) line: usize,
+    /// Byte offset where the next line starts.
+    pub(super) next_line: usize,
+    /// Usage of the statement being parsed, shown as help.
+    pub(super) usage: &'static str,
+    /// True while a `<surface>` is parsed: its usage is added to the help.
+    pub(super) in_surface: bool,
+}
+
+impl<'a> Cursor<'a> {
+    pub(super) fn text(&self, t: &Token) -> &'a str {
+        &self.src.text[t.span.clone()]
+    }
+
+    pub(super) fn peek(&self) -> Option<Token> {
+        self.tokens.get(self.pos).cloned()
+    }
+
+    pub(super) fn peek_kind(&self) -> Option<TokenKind> {
+        self.tokens.get(self.pos).map(|t| t.kind)
+    }
+
+    /// The next token's text if it is a word.
+    pub(super) fn peek_word(&self) -> Option<&'a str> {
+        match self.tokens.get(self.pos) {
+            Some(t) if t.kind == TokenKind::Word => Some(self.text(t)),
+            _ => None,
+        }
+    }
+
+    /// The span of the next token, or an empty span at the end of the line's last token.
+    pub(super) fn here(&self) -> Span {
+        match self.tokens.get(self.pos) {
+            Some(t) => t.span.clone(),
+            None => {
+                let end = self.tokens.last().map_or(0, |t| t.span.end);
+                end..end
+            }
+        }
+    }
+
+    /// From the start of `a` to the end of `b`.
+    pub(super) fn join(a: &Span, b: &Span) -> Span {
+        a.start..b.end
+    }
+
+    /// The whole statement written so far (keyword to last token).
+    pub(super) fn statement_span(&self) -> Span {
+        let first = self.tokens.first().map_or(0, |t| t.span.start);
+        let last = self.tokens.last().map_or(first, |t| t.span.end);
+        first..last
+    }
+
+    pub(super) fn describe(&self, t: Option<&Token>) -> String {
+        match t {
+            None => "end of line".into(),
+            Some(t) => match t.kind {
+                TokenKind::Open => "`(`".into(),
+                TokenKind::Close => "`)`".into(),
+                TokenKind::Comma => "`,`".into(),
+                TokenKind::Str => format!("the string {}", shorten(self.text(t), 30)),
+                TokenKind::Word => {
+                    let s = self.text(t);
+                    if parse_number(s) == Err(NumberError::NotANumber) {
+                        format!("`{}`", shorten(s, 30))
+                    } else {
+                        format!("the number `{}`", shorten(s, 30))
+                    }
+                }
+            },
+        }
+    }
+
+    pub(super) fn usage_help(&self) -> Option<String> {
+        (!self.usage.is_empty()).then(|| {
+            if self.in_surface {
+                format!("usage: {}\n{SURFACE_USAGE}", self.usage)
+            } else {
+                format!("usage: {}", self.usage)
+            }
+        })
+    }
+
+    /// An error at `span` with the statement's usage as help.
+    pub(super) fn fail(
+        &self,
+        span: Span,
+        message: impl Into<String>,
+        label: impl Into<String>,
+    ) -> SceneError {
+        self.src.error(span, message, label, self.usage_help())
+    }
+
+    /// An error at `span` with the given help.
+    pub(super) fn fail_help(
+        &self,
+        span: Span,
+        message: impl Into<String>,
+        label: impl Into<String>,
+        help: impl Into<String>,
+    ) -> SceneError {
+        self.src.error(span, message, label, Some(help.into()))
+    }
+
+    /// "expected …, found …" at the next token.
+    pub(super) fn unexpected(&self, expected: &str) -> SceneError {
+        let found = self.describe(self.peek().as_ref());
+        self.fail(
+            self.here(),
+            format!("expected {expected}, found {found}"),
+            format!("expected {expected}"),
+        )
+    }
+
+    /// A finite number.
+    pub(super) fn number(&mut self, what: &str) -> Result<(f64, Span)> {
+        let Some(t) = self.peek().filter(|t| t.kind == TokenKind::Word) else {
+            return Err(self.unexpected(&format!("{what} (a number)")));
+        };
+        let s = self.text(&t);
+        match parse_number(s) {
+            Ok(x) => {
+                self.pos += 1;
+                Ok((x, t.span))
+            }
+            Err(NumberError::NotANumber) => Err(self.unexpected(&format!("{what} (a number)"))),
+            Err(NumberError::NotFinite(reason)) => Err(self.fail(
+                t.span,
+                format!(
+                    "{what} must be a finite number, but `{}` {reason}",
+                    shorten(s, 30)
+                ),
+                "not a finite number",
+            )),
+        }
+    }
+
+    /// A number `> 0`.
+    pub(super) fn positive(&mut self, what: &str) -> Result<(f64, Span)> {
+        let (x, span) = self.number(what)?;
+        if x > 0.0 {
+            Ok((x, span))
+        } else {
+            Err(self.fail(
+                span,
+                format!("{what} must be greater than 0, not {x}"),
+                "must be > 0",
+            ))
+        }
+    }
+
+    /// A number in `[lo, hi]`.
+    pub(super) fn in_range(&mut self, what: &str, lo: f64, hi: f64) -> Result<(f64, Span)> {
+        let (x, span) = self.number(what)?;
+        if (lo..=hi).contains(&x) {
+            Ok((x, span))
+        } else if hi == f64::MAX {
+            Err(self.fail(
+                span,
+                format!("{what} must be at least {lo}, not {x}"),
+                format!("must be ≥ {lo}"),
+            ))
+        } else {
+            Err(self.fail(
+                span,
+                format!("{what} must be between {lo} and {hi}, not {x}"),
+                format!("must be in [{lo}, {hi}]"),
+            ))
+        }
+    }
+
+    /// A whole number in `[lo, hi]`.
+    pub(super) fn whole(&mut self, what: &str, lo: u32, hi: u32) -> Result<(u32, Span)> {
+        let (x, span) = self.number(what)?;
+        if x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 {
+            Ok((x as u32, span))
+        } else {
+            Err(self.fail(
+                span,
+                format!("{what} must be a whole number from {lo} to {hi}, not {x}"),
+                format!("must be a whole number in {lo}..={hi}"),
+            ))
+        }
+    }
+
+    /// A vector `(a, b, c)`; commas are optional. `names` name the components in messages.
+    pub(super) fn vector(&mut self, what: &str, names: [&str; 3]) -> Result<VecArg> {
+        let open = match self.peek() {
+            Some(t) if t.kind == TokenKind::Open => t.span,
+            _ => {
+                return Err(self.unexpected(&format!(
+                    "{what}, a vector ({}, {}, {})",
+                    names[0], names[1], names[2]
+                )))
+            }
+        };
+        self.pos += 1;
+        let mut v = [0.0; 3];
+        let mut parts = [0..0, 0..0, 0..0];
+        for i in 0..3 {
+            if i > 0 && self.peek_kind() == Some(TokenKind::Comma) {
+                self.pos += 1;
+            }
+            if self.peek_kind() == Some(TokenKind::Close) {
+                return Err(self.fail(
+                    self.here(),
+                    format!(
+                        "{what} has only {i} number{}: a vector needs 3, written ({}, {}, {})",
+                        if i == 1 { "" } else { "s" },
+                        names[0],
+                        names[1],
+                        names[2]
+                    ),
+                    format!("expected the {} component", names[i]),
+                ));
+            }
+            let (x, span) = self.number(&format!("the {} component of {what}", names[i]))?;
+            v[i] = x;
+            parts[i] = span;
+        }
+        if let Some(t) = self.peek().filter(|t| t.kind == TokenKind::Close) {
+            self.pos += 1;
+            return Ok(VecArg {
+                v: DVec3::from_array(v),
+                span: open.start..t.span.end,
+                parts,
+            });
+        }
+        // Too many components?
+        let mut k = self.pos;
+        if self.tokens.get(k).map(|t| t.kind) == Some(TokenKind::Comma) {
+            k += 1;
+        }
+        if let Some(t) = self.tokens.get(k) {
+            if t.kind == TokenKind::Word && parse_number(self.text(t)).is_ok() {
+                return Err(self.fail(
+                    t.span.clone(),
+                    format!("too many numbers in {what}: a vector has exactly 3 components"),
+                    "extra number",
+                ));
+            }
+        }
+        Err(self.unexpected(&format!("`)` to close {what}")))
+    }
+
+    /// A point.
+    pub(super) fn point(&mut self, what: &str) -> Result<VecArg> {
+        self.vector(what, ["x", "y", "z"])
+    }
+
+    /// A non-zero vector.
+    pub(super) fn direction(&mut self, what: &str) -> Result<VecArg> {
+        let a = self.vector(what, ["x", "y", "z"])?;
+        if a.v == DVec3::ZERO {
+            return Err(self.fail(
+                a.span,
+                format!("{what} is the zero vector, but it must give a direction"),
+                "zero-length vector",
+            ));
+        }
+        Ok(a)
+    }
+
+    /// A colour with non-negative components.
+    pub(super) fn colour(&mut self, what: &str) -> Result<VecArg> {
+        let a = self.vector(what, ["r", "g", "b"])?;
+        for (i, name) in ["red", "green", "blue"].iter().enumerate() {
+            if a.v[i] < 0.0 {
+                return Err(self.fail(
+                    a.parts[i].clone(),
+                    format!(
+                        "the {name} component of {what} must not be negative, not {}",
+                        a.v[i]
+                    ),
+                    "negative colour component",
+                ));
+            }
+        }
+        Ok(a)
+    }
+
+    /// The end of the statement.
+    pub(super) fn end(&self) -> Result<()> {
+        match self.peek() {
+            None => Ok(()),
+            Some(_) => Err(self.unexpected("end of line")),
+        }
+    }
+
+    /// The end of a statement whose last part was a surface: explains stray words.
+    pub(super) fn end_after_surface(&mut self) -> Result<()> {
+        self.in_surface = true;
+        let r = self.end_after_surface_inner();
+        self.in_surface = false;
+        r
+    }
+
+    pub(super) fn end_after_surface_inner(&self) -> Result<()> {
+        let Some(t) = self.peek() else {
+            return Ok(());
+        };
+        if let Some(word) = self.peek_word() {
+            if word.eq_ignore_ascii_case("BOUND") {
+                return Err(self.fail(
+                    t.span,
+                    "BOUND applies only to IMPLICIT surfaces",
+                    "not allowed here",
+                ));
+            }
+            if parse_number(word) == Err(NumberError::NotANumber) {
+                let found = self.describe(Some(&t));
+                let message = format!("expected a surface property or end of line, found {found}");
+                if let Some(s) = suggest(word, PROPERTIES.iter().map(|p| p.0)) {
+                    return Err(self.fail_help(
+                        t.span,
+                        message,
+                        "unknown surface property",
+                        format!("did you mean {s}?\n{SURFACE_USAGE}"),
+                    ));
+                }
+                return Err(self.fail(t.span, message, "unknown surface property"));
+            }
+        }
+        if t.kind == TokenKind::Open && self.usage.starts_with("POLYGON") {
+            return Err(self.fail(
+                t.span,
+                "expected a surface property or end of line, found `(`: is there one vertex \
+                 more than the polygon's vertex count n?",
+                "unexpected vector",
+            ));
+        }
+        Err(self.unexpected("a surface property or end of line"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_in_any_notation_but_finite() {
+        for (s, x) in [
+            ("1", 1.0),
+            ("-2.5", -2.5),
+            ("+.5", 0.5),
+            ("1e3", 1e3),
+            ("2.E-2", 0.02),
+        ] {
+            assert_eq!(parse_number(s), Ok(x), "{s}");
+        }
+        for s in ["nan", "NaN", "inf", "-Infinity", "1e999", "-1e400"] {
+            assert!(
+                matches!(parse_number(s), Err(NumberError::NotFinite(_))),
+                "{s}"
+            );
+        }
+        for s in ["abc", "1.2.3", "0x10", "", "1e"] {
+            assert_eq!(parse_number(s), Err(NumberError::NotANumber), "{s}");
+        }
+    }
+
+    #[test]
+    fn suggestions_catch_typos_only() {
+        assert_eq!(suggest("SPHER", ["SPHERE", "PLANE"]), Some("SPHERE"));
+        assert_eq!(suggest("elipsoid", ["ELLIPSOID", "BOX"]), Some("ELLIPSOID"));
+        assert_eq!(suggest("TEAPOT", ["SPHERE", "PLANE"]), None);
+    }
+}
