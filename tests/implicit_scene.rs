@@ -61,3 +61,63 @@ fn scene_answers_for_generic_implicit_objects() {
     assert!((hit.point - DVec3::new(1.3, 0.0, 0.0)).length() < 1e-12);
     assert!((hit.normal - DVec3::X).length() < 1e-12, "{}", hit.normal);
 }
+
+const CAMERA: &str = "CAMERA (6, 1.2, 0.9) (0, 0, 0) (0, 0, 1) 32\n";
+const BASIS: &str = "(0, 0, 0) (1, 0, 0) (0, 1, 0) (0, 0, 1) (0.8, 0.2, 0.2)";
+
+#[test]
+fn every_preset_loads_from_a_scene_without_bound() {
+    use kardia::scene::{parse, LoadOptions};
+    for line in [
+        "heart",
+        "taubin_heart",
+        "torus 1 0.3",
+        "kummer 1.140175425",
+        "barth_sextic",
+        "clebsch",
+        "chmutov 3",
+        "chmutov 16",
+        "\"(x^2+y^2+z^2)^8 = 1\"",
+        "\"x^2 + y^2 = 0.25\" INSIDE (1, 1, 0)",
+    ] {
+        let (head, tail) = line
+            .split_once(" INSIDE")
+            .map_or((line, ""), |(h, t)| (h, t));
+        let bound = if head.contains("0.25") {
+            " BOUND 1"
+        } else {
+            ""
+        };
+        let text = format!(
+            "{CAMERA}IMPLICIT {head} {BASIS}{}{bound}\n",
+            if tail.is_empty() {
+                String::new()
+            } else {
+                format!(" INSIDE{tail}")
+            }
+        );
+        let scene = parse(&text, "t.scene", &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{text}: {}", e.message()));
+        assert_eq!(scene.objects.len(), 1);
+        assert_eq!(scene.objects[0].keyword, "IMPLICIT");
+        assert!(scene.objects[0].bounds.is_finite(), "{line}");
+    }
+}
+
+#[test]
+fn equation_errors_reach_the_scene_with_their_caret() {
+    use kardia::scene::{parse, LoadOptions};
+    for (eq, at, words) in [
+        ("x^2.5 + y", "2.5", "whole number"),
+        ("x^2 + w", "w", "unknown variable"),
+        ("1/(x+1) + y", "(x+1)", "constant"),
+        ("x^2 + y^2 = 1", "x^2", "BOUND"),
+    ] {
+        let text = format!("{CAMERA}IMPLICIT \"{eq}\" {BASIS}\n");
+        let e = parse(&text, "t.scene", &LoadOptions::default()).unwrap_err();
+        assert!(e.message().contains(words), "{eq}: {}", e.message());
+        let line = text.lines().nth(1).unwrap();
+        let column = line.find(at).unwrap() + 1;
+        assert_eq!(e.location(), Some((2, column)), "{eq}: {}", e.message());
+    }
+}
