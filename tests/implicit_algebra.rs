@@ -388,3 +388,27 @@ fn kummer_and_barth_have_their_nodes() {
         assert!(b.gradient(q).length() < 1e-10, "{}", b.gradient(q));
     }
 }
+
+#[test]
+fn long_and_deep_equations_are_safe() {
+    // A long flat sum is fine (no deep recursion).
+    let long = format!("x{}", " + x - y".repeat(50_000));
+    let p = implicit::expand(&long).unwrap();
+    assert_eq!(p.terms[&[1, 0, 0]], Coef::int(50_001));
+    let long_product = format!("x{}", " * 1.5 / 1.5".repeat(20_000));
+    assert_eq!(
+        implicit::expand(&long_product).unwrap().terms[&[1, 0, 0]],
+        Coef::ONE
+    );
+    // Deep nesting is refused with a clear message instead of overflowing the stack.
+    let ok = format!("{}x{} + y", "(".repeat(150), ")".repeat(150));
+    assert!(implicit::expand(&ok).is_ok());
+    for deep in [
+        format!("{}x{}", "(".repeat(5000), ")".repeat(5000)),
+        format!("{}x", "-".repeat(5000)),
+        format!("x{}", "^1".repeat(5000)),
+    ] {
+        let e = implicit::expand(&deep).unwrap_err();
+        assert!(e.message.contains("nested too deeply"), "{}", e.message);
+    }
+}

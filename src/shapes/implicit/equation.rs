@@ -43,7 +43,9 @@ impl Span {
     }
 }
 
-/// A syntax-tree node.
+/// A syntax-tree node. Sums and products are n-ary (flat lists), so long chains of terms
+/// never make the tree deep; nesting (parentheses, unary minus, powers) is limited to
+/// [`MAX_NESTING`] levels.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Node {
     /// A number as written.
@@ -52,17 +54,16 @@ pub enum Node {
     Var(usize),
     /// `-a`.
     Neg(Box<Expr>),
-    /// `a + b`.
-    Add(Box<Expr>, Box<Expr>),
-    /// `a - b` (also `lhs = rhs`).
-    Sub(Box<Expr>, Box<Expr>),
-    /// `a * b`.
-    Mul(Box<Expr>, Box<Expr>),
-    /// `a / b`.
-    Div(Box<Expr>, Box<Expr>),
+    /// `±a ± b ± …`: each term with `true` when it is subtracted (also `lhs = rhs`).
+    Sum(Vec<(bool, Expr)>),
+    /// `a * b / c …`: each factor with `true` when it divides.
+    Product(Vec<(bool, Expr)>),
     /// `a ^ b`.
     Pow(Box<Expr>, Box<Expr>),
 }
+
+/// Deepest nesting of parentheses, unary signs and powers accepted.
+pub const MAX_NESTING: usize = 200;
 
 /// A node with the span of text it came from.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,10 +82,17 @@ impl Expr {
             Node::Num(c) => c.to_f64(),
             Node::Var(i) => p[*i],
             Node::Neg(a) => -a.eval(p),
-            Node::Add(a, b) => a.eval(p) + b.eval(p),
-            Node::Sub(a, b) => a.eval(p) - b.eval(p),
-            Node::Mul(a, b) => a.eval(p) * b.eval(p),
-            Node::Div(a, b) => a.eval(p) / b.eval(p),
+            Node::Sum(terms) => terms
+                .iter()
+                .map(|(minus, t)| if *minus { -t.eval(p) } else { t.eval(p) })
+                .sum(),
+            Node::Product(factors) => factors.iter().fold(1.0, |acc, (div, f)| {
+                if *div {
+                    acc / f.eval(p)
+                } else {
+                    acc * f.eval(p)
+                }
+            }),
             Node::Pow(a, b) => a.eval(p).powi(b.eval(p) as i32),
         }
     }
@@ -213,12 +221,18 @@ struct Parser<'a> {
     text: &'a str,
     toks: Vec<(Tok, Span)>,
     pos: usize,
+    depth: usize,
 }
 
 /// Parses an equation into a syntax tree for `lhs − rhs` (or just `lhs`).
 pub fn parse(text: &str) -> Result<Expr, EquationError> {
     let toks = Lexer::run(text)?;
-    let mut p = Parser { text, toks, pos: 0 };
+    let mut p = Parser {
+        text,
+        toks,
+        pos: 0,
+        depth: 0,
+    };
     if p.peek().0 == Tok::End {
         return Err(Span {
             start: 0,
@@ -238,7 +252,7 @@ pub fn parse(text: &str) -> Result<Expr, EquationError> {
         let span = lhs.span.to(rhs.span);
         let _ = eq_span;
         Expr {
-            node: Node::Sub(Box::new(lhs), Box::new(rhs)),
+            node: Node::Sum(vec![(false, lhs), (true, rhs)]),
             span,
         }
     } else {
@@ -267,25 +281,27 @@ impl Parser<'_> {
     }
 
     fn sum(&mut self) -> Result<Expr, EquationError> {
-        let mut acc = self.term()?;
+        let first = self.term()?;
+        let mut span = first.span;
+        let mut terms = vec![(false, first)];
         loop {
             let op = self.peek().0;
             if op != Tok::Plus && op != Tok::Minus {
-                return Ok(acc);
+                break;
             }
             self.next();
-            let rhs = self.term()?;
-            let span = acc.span.to(rhs.span);
-            let (a, b) = (Box::new(acc), Box::new(rhs));
-            acc = Expr {
-                node: if op == Tok::Plus {
-                    Node::Add(a, b)
-                } else {
-                    Node::Sub(a, b)
-                },
-                span,
-            };
+            let t = self.term()?;
+            span = span.to(t.span);
+            terms.push((op == Tok::Minus, t));
         }
+        Ok(if terms.len() == 1 {
+            terms.pop().map(|(_, t)| t).expect("one term")
+        } else {
+            Expr {
+                node: Node::Sum(terms),
+                span,
+            }
+        })
     }
 
     fn starts_primary(t: Tok) -> bool {
@@ -293,33 +309,53 @@ impl Parser<'_> {
     }
 
     fn term(&mut self) -> Result<Expr, EquationError> {
-        let mut acc = self.unary()?;
+        let first = self.unary()?;
+        let mut span = first.span;
+        let mut factors = vec![(false, first)];
         loop {
             let op = self.peek().0;
             let div = match op {
                 Tok::Star => false,
                 Tok::Slash => true,
                 t if Self::starts_primary(t) => false,
-                _ => return Ok(acc),
+                _ => break,
             };
             if matches!(op, Tok::Star | Tok::Slash) {
                 self.next();
             }
-            let rhs = self.unary()?;
-            let span = acc.span.to(rhs.span);
-            let (a, b) = (Box::new(acc), Box::new(rhs));
-            acc = Expr {
-                node: if div {
-                    Node::Div(a, b)
-                } else {
-                    Node::Mul(a, b)
-                },
-                span,
-            };
+            let f = self.unary()?;
+            span = span.to(f.span);
+            factors.push((div, f));
         }
+        Ok(if factors.len() == 1 {
+            factors.pop().map(|(_, f)| f).expect("one factor")
+        } else {
+            Expr {
+                node: Node::Product(factors),
+                span,
+            }
+        })
+    }
+
+    /// Enters one level of nesting, or fails past [`MAX_NESTING`].
+    fn deeper(&mut self, span: Span) -> Result<(), EquationError> {
+        self.depth += 1;
+        if self.depth > MAX_NESTING {
+            return Err(span.error(format!(
+                "the equation is nested too deeply (more than {MAX_NESTING} levels of parentheses, signs or powers)"
+            )));
+        }
+        Ok(())
     }
 
     fn unary(&mut self) -> Result<Expr, EquationError> {
+        self.deeper(self.peek().1)?;
+        let r = self.unary_inner();
+        self.depth -= 1;
+        r
+    }
+
+    fn unary_inner(&mut self) -> Result<Expr, EquationError> {
         match self.peek() {
             (Tok::Minus, span) => {
                 self.next();

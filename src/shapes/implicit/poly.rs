@@ -2,7 +2,7 @@
 //! `f64` form for ray tracing (composition with a ray, value, gradient).
 
 use super::coef::Coef;
-use super::equation::{Expr, Node};
+use super::equation::{Expr, Node, Span};
 use super::{EquationError, MAX_DEGREE};
 use std::collections::BTreeMap;
 
@@ -105,28 +105,43 @@ impl Poly {
             Node::Num(c) => Poly::constant(*c),
             Node::Var(v) => Poly::var(*v),
             Node::Neg(a) => Poly::default().add(&Poly::expand(a)?, true),
-            Node::Add(a, b) => Poly::expand(a)?.add(&Poly::expand(b)?, false),
-            Node::Sub(a, b) => Poly::expand(a)?.add(&Poly::expand(b)?, true),
-            Node::Mul(a, b) => {
-                let (pa, pb) = (Poly::expand(a)?, Poly::expand(b)?);
-                let d = pa.degree() + pb.degree();
-                if d > MAX_DEGREE && !pa.terms.is_empty() && !pb.terms.is_empty() {
-                    return Err(too_high(d));
+            Node::Sum(terms) => {
+                let mut acc = Poly::default();
+                for (minus, t) in terms {
+                    acc = acc.add(&Poly::expand(t)?, *minus);
                 }
-                pa.mul(&pb)
+                acc
             }
-            Node::Div(a, b) => {
-                let pa = Poly::expand(a)?;
-                let pb = Poly::expand(b)?;
-                let Some(c) = pb.as_constant() else {
-                    return Err(b.span.error(
-                        "division is only allowed by a constant (this contains x, y or z)",
-                    ));
-                };
-                if c.is_zero() {
-                    return Err(b.span.error("division by zero"));
+            Node::Product(factors) => {
+                let mut acc = Poly::constant(Coef::ONE);
+                let start = factors[0].1.span.start;
+                for (div, f) in factors {
+                    let pf = Poly::expand(f)?;
+                    if *div {
+                        let Some(c) = pf.as_constant() else {
+                            return Err(f.span.error(
+                                "division is only allowed by a constant (this contains x, y or z)",
+                            ));
+                        };
+                        if c.is_zero() {
+                            return Err(f.span.error("division by zero"));
+                        }
+                        acc = acc.scale(Coef::ONE.over(c));
+                    } else {
+                        let d = acc.degree() + pf.degree();
+                        if d > MAX_DEGREE && !acc.terms.is_empty() && !pf.terms.is_empty() {
+                            let span = Span {
+                                start,
+                                end: f.span.end,
+                            };
+                            return Err(span.error(format!(
+                                "this part has degree {d}, above the maximum of {MAX_DEGREE}"
+                            )));
+                        }
+                        acc = acc.mul(&pf);
+                    }
                 }
-                pa.scale(Coef::ONE.over(c))
+                acc
             }
             Node::Pow(a, b) => {
                 let pa = Poly::expand(a)?;
