@@ -412,3 +412,26 @@ fn long_and_deep_equations_are_safe() {
         assert!(e.message.contains("nested too deeply"), "{}", e.message);
     }
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(400))]
+
+    /// Any text: no panic, and an error's caret lies within the text (or just past its end,
+    /// for "ends too early"), on character boundaries.
+    #[test]
+    fn arbitrary_text_never_panics(eq in "[xyzw0-9 .()+*/^=eE²-]{0,40}") {
+        match Implicit::new(&eq, Frame::identity(), Some(2.0)) {
+            Ok(_) => {}
+            Err(e) => {
+                proptest::prop_assert!(e.offset <= eq.len(), "{eq:?}: {e:?}");
+                proptest::prop_assert!(
+                    e.offset == eq.len() || e.offset + e.len <= eq.len(),
+                    "{eq:?}: {e:?}"
+                );
+                proptest::prop_assert!(eq.is_char_boundary(e.offset + e.len.min(eq.len() - e.offset)));
+                proptest::prop_assert!(eq.is_char_boundary(e.offset.min(eq.len())));
+                proptest::prop_assert!(!e.message.is_empty());
+            }
+        }
+    }
+}
