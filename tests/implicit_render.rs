@@ -295,3 +295,35 @@ fn singular_points_give_finite_normals() {
     .unwrap();
     assert!((tip.normal(DVec3::new(0.0, 0.0, -1.0)) - DVec3::new(0.0, 0.0, -1.0)).length() < 1e-12);
 }
+
+#[test]
+fn secondary_rays_never_re_hit_their_origin() {
+    // Reflection, shadow-like and refraction-like rays from every primary hit.
+    let cam = camera(DVec3::new(5.0, 4.0, 3.0));
+    let n = 48u32;
+    for (name, params) in [
+        ("chmutov", vec![16.0]),
+        ("barth_sextic", vec![]),
+        ("kummer", vec![1.14]),
+    ] {
+        let shape = Implicit::from_preset(name, &params, Frame::identity(), None).unwrap();
+        let mut primaries = 0;
+        for i in 0..n * n {
+            let ray = cam.ray((i % n) as f64 + 0.5, (i / n) as f64 + 0.5, n, n);
+            let Some(t) = shape.intersect(&ray, 1e-9, f64::INFINITY) else {
+                continue;
+            };
+            primaries += 1;
+            let p = ray.at(t);
+            let nn = shape.normal(p);
+            let facing = if nn.dot(ray.dir) < 0.0 { nn } else { -nn };
+            let reflected = ray.dir - 2.0 * ray.dir.dot(facing) * facing;
+            for d in [reflected, facing + DVec3::new(0.15, -0.1, 0.25), -facing] {
+                if let Some(t2) = shape.intersect(&Ray::new(p, d), 1e-9, f64::INFINITY) {
+                    assert!(t2 > 1e-5, "{name}: re-hit at t = {t2} from {p} along {d}");
+                }
+            }
+        }
+        assert!(primaries > 100, "{name}: {primaries}");
+    }
+}
