@@ -314,11 +314,29 @@ fn presets_parse_and_reject_bad_parameters() {
     assert!(t.eval([1.3, 0.0, 0.0]).abs() < 1e-12);
     assert!(t.eval([1.0, 0.0, 0.3]).abs() < 1e-12);
     assert!(t.eval([0.0, 0.0, 0.0]) > 0.0);
-    // Clebsch: the line x + y = 0, z = −1 lies on it.
+    // Clebsch: the line z = −1, x + y = −2 (x₀ + x₄ = 0, x₁ + x₂ = 0, x₃ = 0) lies on it, and
+    // so do its Eckardt points −v_i, where three lines meet.
     let c = Compiled::new(&implicit::expand(&preset_equation("clebsch", &[]).unwrap()).unwrap());
     for x in [-2.0, 0.3, 1.7] {
-        assert!(c.eval([x, -x, -1.0]).abs() < 1e-12);
+        assert!(c.eval([x, -2.0 - x, -1.0]).abs() < 1e-12);
     }
+    for v in [
+        [-1.0, -1.0, -1.0],
+        [-1.0, 1.0, 1.0],
+        [1.0, -1.0, 1.0],
+        [1.0, 1.0, -1.0],
+    ] {
+        assert!(c.eval(v).abs() < 1e-12);
+    }
+    // It is the diagonal cubic: the same as x₀³ + … + x₄³ written with x₄ = −Σ_{i<4} x_i.
+    let d = Compiled::new(
+        &implicit::expand(
+            "(x+y+z-1)^3 + (x-y-z-1)^3 + (-x+y-z-1)^3 + (-x-y+z-1)^3 \
+             - ((x+y+z-1) + (x-y-z-1) + (-x+y-z-1) + (-x-y+z-1))^3",
+        )
+        .unwrap(),
+    );
+    assert_eq!(c, d);
 }
 
 #[test]

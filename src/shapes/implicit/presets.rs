@@ -158,7 +158,14 @@ pub fn preset(name: &str, params: &[f64]) -> Result<Preset, String> {
         }
         "clebsch" => {
             check_count(name, params, 0, "none")?;
-            p("x^3 + y^3 + z^3 + 1 - (x + y + z + 1)^3".into(), 3.0)
+            // Σ x_i³ = 0 with Σ x_i = 0 (i = 0…4), in the chart x₄ = 4 with
+            // x_i = v_i·(x, y, z) − 1 for the tetrahedron v = (1,1,1), (1,−1,−1), (−1,1,−1),
+            // (−1,−1,1): Σ_{i<4} x_i = −4 = −x₄, and the chart shows the tetrahedral symmetry.
+            p(
+                "(x + y + z - 1)^3 + (x - y - z - 1)^3 + (-x + y - z - 1)^3 + (-x - y + z - 1)^3 + 64"
+                    .into(),
+                5.0,
+            )
         }
         "chmutov" => {
             check_count(name, params, 1, "the degree n")?;
