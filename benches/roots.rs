@@ -1,14 +1,31 @@
-//! Root-finder micro-benchmark (filled in by the roots work).
-use criterion::{criterion_group, criterion_main, Criterion};
+//! `first_root` on the shared heart ray corpus (`kardia::roots::heart_corpus`: camera rays
+//! through an axis-aligned heart, each restricted to its bounding box, hits and misses), for
+//! every strategy. The throughput line gives calls per second: ns per call = 1e9 / that.
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use kardia::roots::{heart_corpus, Solver};
+use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
-    let coeffs = kardia::shapes::heart::sextic_coefficients(
-        glam::DVec3::new(5.0, 0.1, 0.2),
-        glam::DVec3::new(-1.0, 0.0, 0.0),
-    );
-    c.bench_function("first_root", |b| {
-        b.iter(|| kardia::roots::first_root(std::hint::black_box(&coeffs), 0.0, 10.0))
-    });
+    let corpus = heart_corpus();
+    let mut group = c.benchmark_group("first_root");
+    group.throughput(Throughput::Elements(corpus.len() as u64));
+    for &(solver, name) in Solver::ALL {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                let mut hits = 0usize;
+                for r in &corpus {
+                    if solver
+                        .first_root(black_box(&r.coeffs), r.lo, r.hi)
+                        .is_some()
+                    {
+                        hits += 1;
+                    }
+                }
+                hits
+            })
+        });
+    }
+    group.finish();
 }
 
 criterion_group!(benches, bench);

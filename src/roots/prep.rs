@@ -1,0 +1,188 @@
+//! Shared preparation of a polynomial before root isolation: validation, the scale-aware
+//! leading-coefficient trimming rule, and an exact power-of-two rescaling of the variable so
+//! that the roots have magnitude about one.
+
+/// Most coefficients accepted (degree 16).
+pub(crate) const MAX_COEFFS: usize = 17;
+
+/// Relative size below which a leading term is rounding noise (one unit of round-off).
+const TRIM_EPS: f64 = f64::EPSILON;
+
+/// A validated, trimmed, rescaled polynomial `P(T) = p(scale·T) / norm` with the interval
+/// `(lo, hi]` expressed in `T` (exactly: `scale` is a power of two).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Prepared {
+    /// Coefficients of `P`, ascending; `c[n]` is the leading one, in `[1, 2)` in magnitude.
+    pub c: [f64; MAX_COEFFS],
+    /// Degree of `P`, at least 1.
+    pub n: usize,
+    /// `t = scale · T`; a power of two.
+    pub scale: f64,
+    /// Lower end of the interval in `T` (excluded), finite.
+    pub lo: f64,
+    /// Upper end of the interval in `T` (included), finite, `> lo`.
+    pub hi: f64,
+    /// Every root has `|T|` below this (Fujiwara's bound, a power of two).
+    pub bound: f64,
+}
+
+/// The binary exponent of a finite non-zero `x` (`floor(log2 |x|)`, clamped for subnormals).
+#[inline]
+pub(crate) fn exponent(x: f64) -> i32 {
+    (((x.to_bits() >> 52) & 0x7ff) as i32) - 1023
+}
+
+/// `x · 2^k`, exact unless the result under- or overflows, without intermediate overflow.
+#[inline]
+pub(crate) fn mul_pow2(mut x: f64, mut k: i32) -> f64 {
+    while k != 0 {
+        let step = k.clamp(-1000, 1000);
+        x *= f64::from_bits(((step + 1023) as u64) << 52);
+        k -= step;
+    }
+    x
+}
+
+/// `p(x)` by Horner's rule for ascending coefficients.
+#[inline]
+pub(crate) fn horner(c: &[f64], x: f64) -> f64 {
+    let mut acc = 0.0;
+    for &a in c.iter().rev() {
+        acc = acc * x + a;
+    }
+    acc
+}
+
+/// Largest absolute value among the coefficients.
+#[inline]
+pub(crate) fn max_abs(c: &[f64]) -> f64 {
+    c.iter().fold(0.0f64, |m, &a| m.max(a.abs()))
+}
+
+/// Validates and prepares `coeffs` on `(lo, hi]`; `None` when there can be no reportable root:
+/// a non-finite coefficient or bound, `lo ≥ hi` (or NaN), the zero polynomial (every `t` is a
+/// root; none is reported), a non-zero constant, more than 17 coefficients after dropping
+/// trailing zeros, or an interval that holds no root by the Cauchy or Fujiwara bounds (the
+/// interval is clipped to them).
+///
+/// Trimming rule (scale-aware): with `R = max(|lo|, |hi|)`, the leading coefficient `cₙ` is
+/// treated as zero when, for some lower coefficient `cᵢ ≠ 0`, `|cₙ|·R^(n−i) ≤ ε·|cᵢ|`
+/// (`ε` = `f64::EPSILON`): the leading term is then smaller than one rounding unit of another
+/// term everywhere on the interval, so dropping it changes `p` by less than evaluating `p`
+/// already does. The rule is repeated on the new leading coefficient. An infinite interval
+/// trims only exact zeros (a tiny `cₙ` then means a huge but real root).
+pub(crate) fn prepare(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
+    // `!(lo < hi)` also rejects NaN bounds.
+    if lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less)
+        || coeffs.iter().any(|c| !c.is_finite())
+    {
+        return None;
+    }
+    let mut n = coeffs.iter().rposition(|&c| c != 0.0)?;
+    if n >= MAX_COEFFS {
+        return None;
+    }
+    let r = lo.abs().max(hi.abs());
+    while n > 0 && r.is_finite() {
+        let cn = coeffs[n].abs();
+        let mut pow = 1.0;
+        let mut negligible = false;
+        for i in (0..n).rev() {
+            pow *= r;
+            if coeffs[i] != 0.0 && cn * pow <= TRIM_EPS * coeffs[i].abs() {
+                negligible = true;
+                break;
+            }
+        }
+        if !negligible {
+            break;
+        }
+        n -= 1;
+        while n > 0 && coeffs[n] == 0.0 {
+            n -= 1;
+        }
+    }
+    if n == 0 {
+        return None;
+    }
+    // Fujiwara-style root-size estimate, in binary exponents only: 2^e ≳ max |c_{n-k}/c_n|^(1/k).
+    let en = exponent(coeffs[n]);
+    let mut e = i32::MIN;
+    for k in 1..=n {
+        let ck = coeffs[n - k];
+        if ck != 0.0 {
+            let d = exponent(ck) - en + 1;
+            // ceil(d / k) for either sign of d
+            let q = d.div_euclid(k as i32) + i32::from(d.rem_euclid(k as i32) != 0);
+            e = e.max(q);
+        }
+    }
+    if e == i32::MIN {
+        e = 0; // p = cₙ·tⁿ: every root is 0; any scale works.
+    }
+    // Every root has |t| < 2^(e+1) (Fujiwara's bound, rounded up to a power of two).
+    let bound_exp = e.saturating_add(1).clamp(-1000, 1000);
+    // Use the interval's size instead when it is smaller: the Sturm sequence's coefficient
+    // norms then measure the members' size where it matters, on the interval.
+    if r.is_finite() {
+        e = e.min(exponent(r) + 1);
+    }
+    let e = e.clamp(-1000, 1000);
+    let mut c = [0.0; MAX_COEFFS];
+    for (j, cj) in c.iter_mut().enumerate().take(n + 1) {
+        *cj = mul_pow2(coeffs[j], j as i32 * e - n as i32 * e - en);
+    }
+    let scale = mul_pow2(1.0, e);
+    let mut lo = lo / scale;
+    let mut hi = hi / scale;
+    // Cauchy's and Fujiwara's bounds: every root has |T| below both.
+    let fujiwara = mul_pow2(1.0, bound_exp - e);
+    let bound = (1.0 + max_abs(&c[..n]) / c[n].abs()).min(fujiwara);
+    lo = lo.max(-bound);
+    hi = hi.min(bound);
+    if lo >= hi {
+        return None;
+    }
+    Some(Prepared {
+        c,
+        n,
+        scale,
+        lo,
+        hi,
+        bound: fujiwara,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mul_pow2_is_exact_and_safe() {
+        assert_eq!(mul_pow2(3.0, 4), 48.0);
+        assert_eq!(
+            mul_pow2(1e-300, 1500),
+            1e-300 * 2f64.powi(1000) * 2f64.powi(500)
+        );
+        assert_eq!(exponent(1.0), 0);
+        assert_eq!(exponent(-3.0), 1);
+        assert_eq!(exponent(0.75), -1);
+    }
+
+    #[test]
+    fn rejects_bad_input() {
+        assert!(prepare(&[1.0, 1.0], 1.0, 1.0).is_none());
+        assert!(prepare(&[1.0, 1.0], f64::NAN, 1.0).is_none());
+        assert!(prepare(&[f64::NAN, 1.0], 0.0, 1.0).is_none());
+        assert!(prepare(&[0.0, 0.0], 0.0, 1.0).is_none());
+        assert!(prepare(&[2.0], 0.0, 1.0).is_none());
+    }
+
+    #[test]
+    fn trims_a_negligible_leading_term_only_on_a_bounded_interval() {
+        let p = prepare(&[-1.0, 1.0, 1e-30], 0.0, 10.0).unwrap();
+        assert_eq!(p.n, 1);
+        let p = prepare(&[-1.0, 1.0, 1e-30], 0.0, f64::INFINITY).unwrap();
+        assert_eq!(p.n, 2);
+    }
+}
