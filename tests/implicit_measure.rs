@@ -1,9 +1,12 @@
 //! Measurements behind the design choices (run with `--ignored --nocapture`): forming the
 //! per-ray polynomial by composition versus interpolation at Chebyshev points.
 
+use kardia::camera::Camera;
 use kardia::geometry::{DVec3, Frame, Ray};
+use kardia::roots::Solver;
 use kardia::shapes::implicit::poly::Compiled;
 use kardia::shapes::implicit::{self, preset_equation, Implicit};
+use kardia::shapes::Shape;
 use rand::{Rng, SeedableRng};
 use std::time::Instant;
 
@@ -112,8 +115,6 @@ fn composition_versus_interpolation() {
 #[test]
 #[ignore]
 fn intersection_cost_per_ray() {
-    use kardia::camera::Camera;
-    use kardia::shapes::Shape;
     let cam = Camera::new(DVec3::new(6.0, 1.2, 0.9), DVec3::ZERO, DVec3::Z, 32.0).unwrap();
     let n = 200u32;
     for (name, params) in [
@@ -132,5 +133,63 @@ fn intersection_cost_per_ray() {
         }
         let dt = t0.elapsed().as_secs_f64() / (n * n) as f64;
         println!("{name} {params:?}: {:.2} µs per ray, {hits} hits", dt * 1e6);
+    }
+}
+
+/// Per preset and solver: primary rays whose first hit disagrees with dense sampling of f.
+#[test]
+#[ignore]
+fn solvers_against_dense_sampling() {
+    for (name, params) in [
+        ("chmutov", vec![16.0]),
+        ("chmutov", vec![8.0]),
+        ("barth_sextic", vec![]),
+        ("kummer", vec![1.14]),
+    ] {
+        let base = Implicit::from_preset(name, &params, Frame::identity(), None).unwrap();
+        let n = 96u32;
+        let cam = Camera::new(
+            DVec3::new(5.0, 4.0, 3.0) * base.bound() / 1.75,
+            DVec3::ZERO,
+            DVec3::Z,
+            40.0,
+        )
+        .unwrap();
+        for (solver, sname) in Solver::ALL {
+            let shape = base.clone().with_solver(*solver);
+            let (mut wrong, mut hits) = (0, 0);
+            let t0 = std::time::Instant::now();
+            for i in 0..n * n {
+                let ray = cam.ray((i % n) as f64 + 0.5, (i / n) as f64 + 0.5, n, n);
+                let hit = shape.intersect(&ray, 1e-9, f64::INFINITY);
+                hits += hit.is_some() as u32;
+                let Some(rp) = shape.ray_polynomial(&ray) else {
+                    if hit.is_some() {
+                        wrong += 1
+                    };
+                    continue;
+                };
+                let samples = 4000;
+                let f = |k: i32| {
+                    shape.value(
+                        ray.at(rp.t_mid + rp.t_half * (2.0 * k as f64 / samples as f64 - 1.0)),
+                    )
+                };
+                let first = f(0);
+                let reference = (1..=samples)
+                    .find(|&k| (f(k) > 0.0) != (first > 0.0))
+                    .map(|k| rp.t_mid + rp.t_half * (2.0 * k as f64 / samples as f64 - 1.0));
+                match (hit, reference) {
+                    (Some(a), Some(b)) => {
+                        if (a - b).abs() > 2.0 * rp.t_half / samples as f64 + 1e-9 {
+                            wrong += 1
+                        }
+                    }
+                    (None, None) => {}
+                    _ => wrong += 1,
+                }
+            }
+            println!("{name} {params:?} {sname}: hits {hits}, disagree with dense sampling {wrong} ({:.2}s)", t0.elapsed().as_secs_f64());
+        }
     }
 }

@@ -67,6 +67,23 @@ pub fn preset(name: &str, params: &[f64]) -> Result<Preset, String> {
 /// is only known to about this relative accuracy (double roots: ~√ε).
 const SELF_HIT_GUARD: f64 = 1e-7;
 
+/// Largest residual `|p(s)|`, relative to `Σ |c_k sᵏ|` (the scale of rounding in evaluating
+/// `p`), accepted from the solver as a root. Rounding alone gives ~1e-15; a polished multiple
+/// root a few orders more. A larger residual means the solver reported a non-root, which is
+/// skipped (defence in depth: it would be a wrong pixel).
+const MAX_ROOT_RESIDUAL: f64 = 1e-8;
+
+/// True when `s` is a root of `c` up to rounding (see [`MAX_ROOT_RESIDUAL`]).
+fn is_root(c: &[f64], s: f64) -> bool {
+    let (mut v, mut m) = (0.0f64, 0.0f64);
+    let a = s.abs();
+    for &k in c.iter().rev() {
+        v = v * s + k;
+        m = m * a + k.abs();
+    }
+    v.abs() <= MAX_ROOT_RESIDUAL * m
+}
+
 /// The expanded surface with its derivatives, compiled for evaluation.
 #[derive(Debug, Clone)]
 struct Surface {
@@ -309,16 +326,17 @@ impl Implicit {
         while deg > 0 && c[deg].abs() <= 1e-15 * big {
             deg -= 1;
         }
-        let inv = 1.0 / big;
+        // A power of two: exact, so the solver sees the composed coefficients unrounded.
+        let inv = 2f64.powi(-(big.log2().floor() as i32));
         for v in &mut c[..=deg] {
             *v *= inv;
         }
         let mut s_lo = (lo_t - t_mid) / t_half;
         let s_hi = ((hi_t - t_mid) / t_half).min(1.0);
-        for _ in 0..4 {
+        for _ in 0..8 {
             let root = self.solver.first_root(&c[..=deg], s_lo, s_hi)?;
             let t = t_mid + root * t_half;
-            if t > guard && t < t_max {
+            if t > guard && t < t_max && is_root(&c[..=deg], root) {
                 return Some(t);
             }
             if root <= s_lo {
