@@ -124,15 +124,22 @@ fn intersection_cost_per_ray() {
         ("barth_sextic", vec![]),
         ("chmutov", vec![16.0]),
     ] {
-        let s = Implicit::from_preset(name, &params, Frame::identity(), None).unwrap();
-        let t0 = Instant::now();
-        let mut hits = 0;
-        for i in 0..n * n {
-            let ray = cam.ray((i % n) as f64 + 0.5, (i / n) as f64 + 0.5, n, n);
-            hits += s.intersect(&ray, 1e-9, f64::INFINITY).is_some() as u32;
+        for &(solver, sname) in Solver::ALL {
+            let s = Implicit::from_preset(name, &params, Frame::identity(), None)
+                .unwrap()
+                .with_solver(solver);
+            let t0 = Instant::now();
+            let mut hits = 0;
+            for i in 0..n * n {
+                let ray = cam.ray((i % n) as f64 + 0.5, (i / n) as f64 + 0.5, n, n);
+                hits += s.intersect(&ray, 1e-9, f64::INFINITY).is_some() as u32;
+            }
+            let dt = t0.elapsed().as_secs_f64() / (n * n) as f64;
+            println!(
+                "{name} {params:?} {sname}: {:.2} µs per ray, {hits} hits",
+                dt * 1e6
+            );
         }
-        let dt = t0.elapsed().as_secs_f64() / (n * n) as f64;
-        println!("{name} {params:?}: {:.2} µs per ray, {hits} hits", dt * 1e6);
     }
 }
 
