@@ -346,3 +346,36 @@ fn secondary_rays_never_re_hit_their_origin() {
         assert!(primaries > 100, "{name}: {primaries}");
     }
 }
+
+#[test]
+fn clipped_heart_preset_shows_only_the_inside_of_its_bound() {
+    let f = Frame::identity();
+    let clipped = Implicit::from_preset("heart", &[], f, Some(0.9)).unwrap();
+    assert!(clipped.is_heart());
+    let heart = Heart::new(DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z).unwrap();
+    let cam = camera(DVec3::new(6.0, 1.2, 0.9));
+    let (mut hits, mut inner) = (0, 0);
+    for i in 0..N * N {
+        let ray = cam.ray((i % N) as f64 + 0.5, (i / N) as f64 + 0.5, N, N);
+        let whole = heart.intersect(&ray, 1e-9, f64::INFINITY);
+        match clipped.intersect(&ray, 1e-9, f64::INFINITY) {
+            Some(t) => {
+                hits += 1;
+                let p = ray.at(t);
+                assert!(p.length() <= 0.9 + 1e-9, "{p}");
+                // Where the heart's own first hit is inside the ball, it is the same hit (to
+                // the solver's accuracy: the search interval differs).
+                if let Some(w) = whole.filter(|&w| ray.at(w).length() < 0.9) {
+                    assert!((w - t).abs() < 1e-8 * t, "{w} vs {t}");
+                    inner += 1;
+                }
+                // Otherwise it is a hit further on (the inside seen through the cut).
+                if whole.is_some_and(|w| ray.at(w).length() >= 0.9) {
+                    assert!(clipped.normal(p).dot(ray.dir) > 0.0 || t > whole.unwrap());
+                }
+            }
+            None => assert!(whole.is_none_or(|w| ray.at(w).length() >= 0.9)),
+        }
+    }
+    assert!(hits > 100 && inner < hits, "{hits} {inner}");
+}
