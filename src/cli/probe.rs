@@ -1,6 +1,16 @@
-//! `kardia probe`.
+//! `kardia probe`: intersect rays with a scene and print one JSON object per ray (JSON Lines).
+//!
+//! Input (stdin), one ray per line: six numbers `ox oy oz dx dy dz` (world space, separated by
+//! spaces, tabs or commas; `d` need not be unit length). Output, one line per input line:
+//! `{"hit":true,"t":…,"point":[x,y,z],"normal":[x,y,z],"object":"HEART","line":N}` (t in units
+//! of the given d; point and unit outward normal in world space; line the scene-file line of the
+//! object), or `{"hit":false}`, or `{"error":"…"}` for a line that is not a ray.
 
+use crate::geometry::{DVec3, Ray};
+use crate::roots::Solver;
+use crate::scene::{self, LoadOptions, Scene};
 use clap::Args;
+use std::io::{self, BufRead, BufReader, Write};
 use std::path::PathBuf;
 
 /// Arguments of `kardia probe`.
@@ -8,11 +18,334 @@ use std::path::PathBuf;
 pub struct ProbeArgs {
     /// Scene file.
     pub scene: PathBuf,
+    /// Probe the camera's primary ray through the centre of pixel X,Y ((0,0) is the top-left
+    /// pixel) instead of reading rays from stdin.
+    #[arg(long, value_name = "X,Y", value_parser = parse_pixel)]
+    pub pixel: Option<(u32, u32)>,
+    /// Root-isolation strategy for polynomial surfaces (hearts, implicit surfaces).
+    #[arg(long, value_name = "NAME", value_parser = parse_solver, help = solver_help())]
+    pub solver: Option<Solver>,
 }
 
-/// Runs `kardia probe`; returns the exit code.
+/// The `--solver` help line, listing every name in [`Solver::ALL`].
+fn solver_help() -> String {
+    let names: Vec<&str> = Solver::ALL.iter().map(|(_, n)| *n).collect();
+    format!(
+        "Root-isolation strategy for polynomial surfaces: {} (default {})",
+        names.join(", "),
+        Solver::default().name()
+    )
+}
+
+fn parse_solver(s: &str) -> Result<Solver, String> {
+    s.parse()
+}
+
+/// Parses `X,Y` (two non-negative integers).
+fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("expected X,Y (two whole numbers, e.g. 400,300), not '{s}'");
+    let (x, y) = s.split_once(',').ok_or_else(bad)?;
+    let x = x.trim().parse().map_err(|_| bad())?;
+    let y = y.trim().parse().map_err(|_| bad())?;
+    Ok((x, y))
+}
+
+/// Runs `kardia probe`; returns the exit code (0 success, 1 unreadable or invalid scene or an
+/// output failure, 2 a pixel outside the image).
 pub fn run(args: ProbeArgs) -> i32 {
-    let _ = args;
-    eprintln!("kardia probe: not implemented yet");
-    1
+    let options = LoadOptions {
+        solver: args.solver.unwrap_or_default(),
+    };
+    let scene = match scene::parse_file(&args.scene, &options) {
+        Ok(scene) => scene,
+        Err(e) => {
+            eprintln!("{:?}", miette::Report::new(e));
+            return 1;
+        }
+    };
+    let stdout = io::stdout();
+    let result = match args.pixel {
+        Some((x, y)) => {
+            if x >= scene.width || y >= scene.height {
+                eprintln!(
+                    "kardia probe: pixel {x},{y} is outside the {}×{} image (0,0 is the top-left pixel)",
+                    scene.width, scene.height
+                );
+                return 2;
+            }
+            let ray = scene
+                .camera
+                .ray(x as f64 + 0.5, y as f64 + 0.5, scene.width, scene.height);
+            let mut out = stdout.lock();
+            writeln!(out, "{}", hit_json(&scene, &ray)).and_then(|_| out.flush())
+        }
+        None => probe_stream(&scene, BufReader::new(io::stdin().lock()), stdout.lock()),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) if e.kind() == io::ErrorKind::BrokenPipe => 0,
+        Err(e) => {
+            eprintln!("kardia probe: {e}");
+            1
+        }
+    }
+}
+
+/// Answers every line of `input` with one JSON line on `out`; output is flushed whenever the
+/// input has no more data buffered, so an interactive caller gets each answer at once.
+pub fn probe_stream<R: io::Read>(
+    scene: &Scene,
+    mut input: BufReader<R>,
+    out: impl Write,
+) -> io::Result<()> {
+    let mut out = io::BufWriter::new(out);
+    let mut raw = Vec::new();
+    let mut number = 0usize;
+    loop {
+        raw.clear();
+        if input.read_until(b'\n', &mut raw)? == 0 {
+            break;
+        }
+        number += 1;
+        let answer = match std::str::from_utf8(&raw) {
+            Ok(text) => match parse_ray(text) {
+                Ok(ray) => hit_json(scene, &ray),
+                Err(why) => error_json(&format!("line {number}: {why}")),
+            },
+            Err(_) => error_json(&format!("line {number}: not valid UTF-8 text")),
+        };
+        writeln!(out, "{answer}")?;
+        if input.buffer().is_empty() {
+            out.flush()?;
+        }
+    }
+    out.flush()
+}
+
+/// Parses `ox oy oz dx dy dz` (whitespace- or comma-separated finite numbers, non-zero
+/// direction) into a world ray; the error says what is wrong with the line.
+pub fn parse_ray(line: &str) -> Result<Ray, String> {
+    let fields: Vec<&str> = line
+        .split(|c: char| c.is_whitespace() || c == ',')
+        .filter(|f| !f.is_empty())
+        .collect();
+    if fields.len() != 6 {
+        return Err(format!(
+            "expected 6 numbers 'ox oy oz dx dy dz', found {} field{}",
+            fields.len(),
+            if fields.len() == 1 { "" } else { "s" }
+        ));
+    }
+    let mut v = [0.0; 6];
+    for (slot, field) in v.iter_mut().zip(&fields) {
+        let x: f64 = field
+            .parse()
+            .map_err(|_| format!("'{field}' is not a number"))?;
+        if !x.is_finite() {
+            return Err(format!("'{field}' is not a finite number"));
+        }
+        *slot = x;
+    }
+    let origin = DVec3::new(v[0], v[1], v[2]);
+    let dir = DVec3::new(v[3], v[4], v[5]);
+    if dir == DVec3::ZERO {
+        return Err("the direction (dx, dy, dz) must not be zero".into());
+    }
+    Ok(Ray::new(origin, dir))
+}
+
+/// The JSON answer for one ray: its first hit with `t > 0` in the scene (each shape keeps a
+/// ray that starts on it from hitting its own origin), or `{"hit":false}`.
+pub fn hit_json(scene: &Scene, ray: &Ray) -> String {
+    let Some(hit) = scene.intersect(ray, 0.0, f64::INFINITY) else {
+        return r#"{"hit":false}"#.to_string();
+    };
+    let object = &scene.objects[hit.object];
+    let finite = hit.t.is_finite() && hit.point.is_finite() && hit.normal.is_finite();
+    if !finite {
+        return error_json("the intersection produced a non-finite number");
+    }
+    format!(
+        r#"{{"hit":true,"t":{},"point":{},"normal":{},"object":{},"line":{}}}"#,
+        json_number(hit.t),
+        json_vec(hit.point),
+        json_vec(hit.normal),
+        json_string(object.keyword),
+        object.line
+    )
+}
+
+/// `{"error":"…"}` with the message escaped.
+pub fn error_json(message: &str) -> String {
+    format!(r#"{{"error":{}}}"#, json_string(message))
+}
+
+/// A finite f64 as a JSON number that reads back to the same bits (Rust's shortest
+/// round-trip form: `1.0`, `0.1`, `1e-7`, `-0.0`). Callers check finiteness.
+fn json_number(x: f64) -> String {
+    debug_assert!(x.is_finite());
+    format!("{x:?}")
+}
+
+fn json_vec(v: DVec3) -> String {
+    format!(
+        "[{},{},{}]",
+        json_number(v.x),
+        json_number(v.y),
+        json_number(v.z)
+    )
+}
+
+/// A JSON string literal.
+fn json_string(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\r' => out.push_str("\\r"),
+            '\t' => out.push_str("\\t"),
+            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Camera;
+    use crate::materials::Material;
+    use crate::scene::Object;
+    use crate::shapes::{Heart, Sphere};
+
+    fn scene() -> Scene {
+        Scene {
+            width: 40,
+            height: 30,
+            camera: Camera::new(
+                DVec3::new(6.0, 0.0, 0.1),
+                DVec3::new(0.0, 0.0, 0.1),
+                DVec3::Z,
+                30.0,
+            )
+            .unwrap(),
+            background: DVec3::ZERO,
+            ambient: DVec3::ZERO,
+            lights: Vec::new(),
+            objects: vec![
+                Object::new(
+                    Box::new(Sphere::new(DVec3::new(0.0, 5.0, 0.0), 1.0).unwrap()),
+                    Material::default(),
+                    "SPHERE",
+                    3,
+                ),
+                Object::new(
+                    Box::new(Heart::new(DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z).unwrap()),
+                    Material::default(),
+                    "HEART",
+                    7,
+                ),
+            ],
+        }
+    }
+
+    #[test]
+    fn numbers_round_trip_and_stay_json() {
+        for x in [
+            0.0,
+            -0.0,
+            1.0,
+            -2.0,
+            0.1,
+            1e-7,
+            1.5e300,
+            123456789.0,
+            f64::MIN_POSITIVE,
+        ] {
+            let s = json_number(x);
+            assert_eq!(s.parse::<f64>().unwrap().to_bits(), x.to_bits(), "{s}");
+            assert!(!s.contains("inf") && !s.contains("NaN"));
+            assert!(
+                s.starts_with(|c: char| c == '-' || c.is_ascii_digit()),
+                "{s}"
+            );
+        }
+        assert_eq!(json_number(1.0), "1.0");
+        assert_eq!(json_string("a\"b\\c\n\u{1}"), r#""a\"b\\c\n\u0001""#);
+    }
+
+    #[test]
+    fn parses_rays_and_explains_bad_lines() {
+        let r = parse_ray("  1 2 3\t4,5 , 6 \r\n").unwrap();
+        assert_eq!(
+            r,
+            Ray::new(DVec3::new(1.0, 2.0, 3.0), DVec3::new(4.0, 5.0, 6.0))
+        );
+        assert!(parse_ray("1 2 3 4 5")
+            .unwrap_err()
+            .contains("found 5 fields"));
+        assert!(parse_ray("").unwrap_err().contains("found 0 fields"));
+        assert!(parse_ray("1 2 3 4 5 x")
+            .unwrap_err()
+            .contains("'x' is not a number"));
+        assert!(parse_ray("1 2 3 4 5 inf").unwrap_err().contains("finite"));
+        assert!(parse_ray("1 2 3 0 0 0")
+            .unwrap_err()
+            .contains("must not be zero"));
+    }
+
+    #[test]
+    fn stream_answers_every_line() {
+        let input = b"6 0 0.1 -1 0 0\n0 0 0 0 0 0\n0 -5 0 0 2 0\n9 9 9 1 0 0\nbad\n6 0 0.1 -2 0 0";
+        let mut out = Vec::new();
+        probe_stream(&scene(), BufReader::new(&input[..]), &mut out).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 6, "{text}");
+        assert!(lines[0].starts_with(r#"{"hit":true,"t":"#), "{}", lines[0]);
+        assert!(
+            lines[0].ends_with(r#","object":"HEART","line":7}"#),
+            "{}",
+            lines[0]
+        );
+        assert!(
+            lines[1].starts_with(r#"{"error":"line 2: the direction"#),
+            "{}",
+            lines[1]
+        );
+        // From Y = −5 along +Y in the plane Z = 0: the heart's equator at Y = −1 (t = 2 in
+        // units of d = 2), before the sphere behind it.
+        assert!(
+            lines[2].starts_with(r#"{"hit":true,"t":2.0,"point":[0.0,-1.0,0.0],"normal":"#),
+            "{}",
+            lines[2]
+        );
+        assert_eq!(lines[3], r#"{"hit":false}"#);
+        assert!(lines[4].starts_with(r#"{"error":"line 5: expected 6 numbers"#));
+        // t is in units of the given direction: twice as long a direction, half the t.
+        let t = |l: &str| -> f64 {
+            let rest = &l[l.find(r#""t":"#).unwrap() + 4..];
+            rest[..rest.find(',').unwrap()].parse().unwrap()
+        };
+        // The front of the heart at Y = 0, Z = 0.1 is at X ≈ 0.70.
+        assert!((t(lines[0]) - 5.3).abs() < 0.02, "{}", lines[0]);
+        assert!((t(lines[0]) - 2.0 * t(lines[5])).abs() < 1e-12);
+    }
+
+    #[test]
+    fn pixel_and_solver_arguments() {
+        assert_eq!(parse_pixel("400,300"), Ok((400, 300)));
+        assert_eq!(parse_pixel(" 0 , 0"), Ok((0, 0)));
+        assert!(parse_pixel("1;2").is_err() && parse_pixel("-1,2").is_err());
+        for (solver, name) in Solver::ALL {
+            assert_eq!(parse_solver(name), Ok(*solver));
+            assert!(solver_help().contains(name));
+        }
+        assert!(parse_solver("nope").is_err());
+    }
 }

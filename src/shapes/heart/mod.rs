@@ -1,0 +1,260 @@
+//! The paper's implicit heart, `(2X² + Y² + Z² − 1)³ − (0.1X² + Y²)·Z³ = 0`, placed in the
+//! world by a position and a basis `u, v, w` (the scene line `HEART (position) (u) (v) (w)`).
+//!
+//! A ray's path through [`Heart::intersect`](Shape::intersect):
+//! 1. into object space with `M⁻¹` (direction not renormalised, so `t` is shared);
+//! 2. clipped to the object-space box [`surface::BOUNDS`] (the exact extents plus a margin),
+//!    then to the hull of its spans above `Z = 0` and inside the ellipsoid
+//!    `2X² + Y² + Z² ≤ 1` that holds the lower half: a ray that misses them costs a slab test
+//!    and a quadratic only;
+//! 3. re-parametrised over the clipped chord, `s ∈ [0, 1]` from box entry to exit, so the
+//!    sextic's coefficients are built from a point near the heart and are well scaled whatever
+//!    the distance, length of `d` or size of the heart;
+//! 4. the coefficients in closed form ([`sextic_coefficients`]) and the first root in `(0, 1]`
+//!    from the scene's [`Solver`];
+//! 5. that root polished by a few safeguarded Newton steps on the well-conditioned factor
+//!    `g = A − ∛B·Z` ([`factor_g`]): where `f` has a triple root (the equator curve) its root
+//!    is only good to ~1e-5, where `g`'s is good to the last bit;
+//! 6. checked: a root with no root of `g` near it (a near-tangency or rounding noise of `f`)
+//!    is skipped; a root where `g` crosses the wrong way (leaving the heart although the ray
+//!    started outside) means the solver merged an earlier root into it, which is recovered
+//!    from `g`; a root at or before the ray's own origin (a ray leaving the surface) is
+//!    skipped. The search then resumes past the skipped root.
+//!
+//! The normal ([`Shape::normal`]) is `∇g` (parallel to `∇f` on the surface, but well-defined
+//! and well-conditioned on the equator curve), with `∇f` and then the axis as fallbacks at the
+//! two singular points, mapped to world space by `(M⁻¹)ᵀ`.
+
+mod polish;
+mod surface;
+
+use polish::{earlier_crossing, polish};
+
+pub use surface::{
+    factor_g, factor_g_with_slope, gradient_f, heart_fn, outward_direction, scaled_gradient_g,
+    sextic_coefficients, BOUNDS, BOUNDS_MARGIN, EXTENTS, S_X, S_Y, S_Z,
+};
+
+use super::{Shape, ShapeError};
+use crate::geometry::{Aabb, DVec3, Frame, Ray};
+use crate::roots::Solver;
+
+/// Object-space length (the heart is about 2 units across in object space) below which a
+/// root next to the ray's origin counts as the origin itself: a ray leaving the surface never
+/// reports a hit closer than this, at any world scale (see [`Heart::self_hit_guard`]).
+pub const SELF_HIT_GUARD: f64 = 1e-6;
+
+/// How far (object-space length) polishing may move a root found on `f`: far beyond the
+/// error of a triple root of `f` in f64 (~1e-5), and beyond the spread of a cluster of roots
+/// a solver may merge into one where `f` is below its rounding over a sliver of the heart
+/// (measured up to ~1e-3 at the equator).
+const POLISH_WINDOW: f64 = 1e-2;
+
+/// How many roots may be skipped, at or before the ray's origin (a triple root of `f` splits
+/// into at most three by rounding) or off the surface (near-tangencies), before the ray is
+/// declared to miss.
+const MAX_SKIPS: usize = 6;
+
+/// A heart placed in the world; see the module doc.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Heart {
+    frame: Frame,
+    solver: Solver,
+    /// `‖M⁻¹‖∞·‖position‖∞`: how large the world position is in object units, which bounds the
+    /// rounding of an object-space ray origin.
+    position_scale: f64,
+}
+
+impl Heart {
+    /// A heart at `position` with object-to-world basis columns `u, v, w` (any invertible
+    /// basis; a singular or nearly singular one is an error).
+    pub fn new(position: DVec3, u: DVec3, v: DVec3, w: DVec3) -> Result<Self, ShapeError> {
+        Ok(Self::from_frame(Frame::new(position, u, v, w)?))
+    }
+
+    /// A heart placed by an already validated frame.
+    pub fn from_frame(frame: Frame) -> Self {
+        let m = frame.m_inv;
+        let norm_inf = (0..3)
+            .map(|r| m.row(r).abs().element_sum())
+            .fold(0.0, f64::max);
+        Self {
+            frame,
+            solver: Solver::default(),
+            position_scale: norm_inf * frame.position.abs().max_element(),
+        }
+    }
+
+    /// The same heart, intersected with the given root-isolation strategy.
+    pub fn with_solver(mut self, solver: Solver) -> Self {
+        self.solver = solver;
+        self
+    }
+
+    /// The placement of the heart.
+    pub fn frame(&self) -> &Frame {
+        &self.frame
+    }
+
+    /// The root-isolation strategy in use.
+    pub fn solver(&self) -> Solver {
+        self.solver
+    }
+
+    /// The object-space distance along a ray from `origin_obj` within which roots are taken to
+    /// be the origin itself: [`SELF_HIT_GUARD`], or more when the origin is so far away (in
+    /// object units, counting the world position) that its own rounding exceeds that.
+    #[inline]
+    pub fn self_hit_guard(&self, origin_obj: DVec3) -> f64 {
+        let reach = origin_obj.abs().max_element() + self.position_scale;
+        SELF_HIT_GUARD.max(1024.0 * f64::EPSILON * reach)
+    }
+
+    /// [`Shape::intersect`] with the first-root query supplied by the caller (tests use it to
+    /// check the geometry independently of the solver). `first_root(c, lo, hi)` must return
+    /// the smallest root in `(lo, hi]` of `c0 + c1·s + … + c6·s⁶`, if any.
+    pub fn intersect_with(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+        mut first_root: impl FnMut(&[f64; 7], f64, f64) -> Option<f64>,
+    ) -> Option<f64> {
+        let r = self.frame.ray_to_object(ray);
+        // |d|, without the underflow or overflow of squaring tiny or huge components.
+        let scale = r.dir.abs().max_element();
+        let dir_len = scale * (r.dir / scale).length();
+        if !(dir_len > 0.0 && dir_len.is_finite() && r.origin.is_finite()) {
+            return None;
+        }
+        let t_lo = t_min.max(self.self_hit_guard(r.origin) / dir_len);
+        let (t0, t1) = BOUNDS.clip(&r, t_lo, t_max)?;
+        let (t0, t1) = clip_lower_half(&r, t0, t1)?;
+        let len = t1 - t0;
+        if !(len > 0.0 && len.is_finite()) {
+            return None;
+        }
+        // s ∈ [0, 1] over the chord: origin at box entry (or at t_lo), direction the chord.
+        let o = r.at(t0);
+        let d = r.dir * len;
+        let coeffs = sextic_coefficients(o, d);
+        let window = POLISH_WINDOW / (dir_len * len);
+        // Which side of the surface the search starts on (f's sign is g's: use the free c0
+        // when it is clear of rounding, else g, which is accurate there).
+        let side = |s: f64, f_value: f64| -> Option<bool> {
+            if f_value.abs() > 1e-10 {
+                return Some(f_value > 0.0);
+            }
+            let g = factor_g(o + s * d);
+            (g != 0.0).then_some(g > 0.0)
+        };
+        let mut outside = side(0.0, coeffs[0]);
+        let mut side_lo = 0.0; // where `outside` holds
+        let mut lo = 0.0;
+        for _ in 0..MAX_SKIPS {
+            let s_root = first_root(&coeffs, lo, 1.0)?;
+            let Some(mut root) = polish(o, d, s_root, window) else {
+                // Not on the surface (a near-tangency or rounding noise the solver took for a
+                // root), and g keeps its sign within the window around it: go on past it.
+                lo = (s_root + window).max(s_root.next_up());
+                if lo >= 1.0 {
+                    return None;
+                }
+                continue;
+            };
+            // From outside the first crossing must enter (g falls), from inside leave (g
+            // rises). The other way round, the solver merged or lost an earlier root.
+            if let (Some(rising), Some(out)) = (root.rising, outside) {
+                if rising == out {
+                    if let Some(earlier) = earlier_crossing(o, d, side_lo, root.s, out) {
+                        root = earlier;
+                    }
+                }
+            }
+            let t = t0 + root.s * len;
+            if t > t_lo {
+                return (t < t_max).then_some(t);
+            }
+            // The root is the ray's own origin (or another below the guard): rounding of a
+            // multiple root may put more copies just after it, spread about as far from the
+            // true root as this one; resume the search beyond them.
+            lo = (s_root + 2.0 * (s_root - root.s).abs()).max(s_root.next_up());
+            side_lo = lo;
+            outside = side(lo, 0.0);
+        }
+        None
+    }
+}
+
+/// The part of `[t0, t1]` (a chord of [`BOUNDS`]) that can meet the heart, given that its
+/// lower half lies in the ellipsoid `2X² + Y² + Z² ≤ 1` (below `Z = 0`, `g ≤ 0` gives
+/// `A ≤ ∛B·Z ≤ 0`): the hull of the ray's spans inside that ellipsoid and above `Z = 0`, each
+/// widened by [`BOUNDS_MARGIN`]. Rejects the rays that pass beside the tip in the box's lower
+/// corners, and shortens the chord the solver sees.
+#[inline]
+fn clip_lower_half(r: &Ray, t0: f64, t1: f64) -> Option<(f64, f64)> {
+    // Parametrise from the box entry so that every quantity is of the heart's size.
+    let o = r.at(t0);
+    let d = r.dir;
+    let len = t1 - t0;
+    // Above Z = −margin: a half-line in u = t − t0.
+    let z_floor = -BOUNDS_MARGIN;
+    let above = if d.z > 0.0 {
+        let u = ((z_floor - o.z) / d.z).max(0.0);
+        (u <= len).then_some((u, len))
+    } else if d.z < 0.0 {
+        let u = (z_floor - o.z) / d.z;
+        (u >= 0.0).then_some((0.0, u.min(len)))
+    } else {
+        (o.z >= z_floor).then_some((0.0, len))
+    };
+    // Inside 2X² + Y² + Z² ≤ (1 + margin)²: a·u² + 2·hb·u + c ≤ 0.
+    let rr = (1.0 + BOUNDS_MARGIN) * (1.0 + BOUNDS_MARGIN);
+    let a = 2.0 * d.x * d.x + d.y * d.y + d.z * d.z;
+    let hb = 2.0 * o.x * d.x + o.y * d.y + o.z * d.z;
+    let c = 2.0 * o.x * o.x + o.y * o.y + o.z * o.z - rr;
+    let disc = hb * hb - a * c;
+    let inside = if disc >= 0.0 {
+        let q = -(hb + hb.signum() * disc.sqrt());
+        let (mut u0, mut u1) = (q / a, c / q);
+        if u0 > u1 {
+            std::mem::swap(&mut u0, &mut u1);
+        }
+        if !(u0.is_finite() && u1.is_finite()) {
+            // q = 0: o at the centre plane with hb = 0 and c = 0; keep everything.
+            (u0, u1) = (0.0, len);
+        }
+        let (u0, u1) = (u0.max(0.0), u1.min(len));
+        (u0 <= u1).then_some((u0, u1))
+    } else {
+        None
+    };
+    let (u0, u1) = match (above, inside) {
+        (Some(p), Some(q)) => (p.0.min(q.0), p.1.max(q.1)),
+        (Some(p), None) | (None, Some(p)) => p,
+        (None, None) => return None,
+    };
+    Some((t0 + u0, t0 + u1))
+}
+
+impl Shape for Heart {
+    fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+        let solver = self.solver;
+        self.intersect_with(ray, t_min, t_max, |c, lo, hi| solver.first_root(c, lo, hi))
+    }
+
+    fn normal(&self, p: DVec3) -> DVec3 {
+        let q = self.frame.point_to_object(p);
+        let n = outward_direction(q);
+        let world = self.frame.normal_matrix * n;
+        match surface::rescaled(world) {
+            Some(w) => w.normalize(),
+            // Unreachable for an invertible frame; keeps the never-NaN promise regardless.
+            None => DVec3::Z,
+        }
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.frame.bounds_to_world(&BOUNDS)
+    }
+}

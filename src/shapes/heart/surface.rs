@@ -1,0 +1,294 @@
+//! The heart in object space: the implicit function `f`, its ray sextic, its well-conditioned
+//! factor `g`, gradients and outward normals, and the exact extents of the surface.
+//!
+//! Everything here is pure math on object-space points and directions; placement in the world
+//! lives in [`super::Heart`].
+
+use crate::geometry::{Aabb, DVec3};
+
+/// The coefficients `c0..=c6` (ascending powers of `t`) of `f(o + t·d)` for the object-space
+/// heart `f`, by the closed form of the paper (the a…k route of shared notes):
+/// `f(t) = A(t)³ − B(t)·Z(t)³` with `A = a + b·t + c·t²`, `B = d + e·t + f·t²`,
+/// `Z³ = g + h·t + i·t² + k·t³`.
+#[inline]
+pub fn sextic_coefficients(o: DVec3, d: DVec3) -> [f64; 7] {
+    let (x0, y0, z0) = (o.x, o.y, o.z);
+    let (x1, y1, z1) = (d.x, d.y, d.z);
+    let a = 2.0 * x0 * x0 + y0 * y0 + z0 * z0 - 1.0;
+    let b = 4.0 * x0 * x1 + 2.0 * y0 * y1 + 2.0 * z0 * z1;
+    let c = 2.0 * x1 * x1 + y1 * y1 + z1 * z1;
+    let d_ = 0.1 * x0 * x0 + y0 * y0;
+    let e = 0.2 * x0 * x1 + 2.0 * y0 * y1;
+    let f = 0.1 * x1 * x1 + y1 * y1;
+    let g = z0 * z0 * z0;
+    let h = 3.0 * z0 * z0 * z1;
+    let i = 3.0 * z0 * z1 * z1;
+    let k = z1 * z1 * z1;
+    [
+        a * a * a - d_ * g,
+        3.0 * a * a * b - d_ * h - e * g,
+        3.0 * a * a * c + 3.0 * a * b * b - d_ * i - e * h - f * g,
+        6.0 * a * b * c + b * b * b - d_ * k - e * i - f * h,
+        3.0 * b * b * c + 3.0 * a * c * c - e * k - f * i,
+        3.0 * b * c * c - f * k,
+        c * c * c,
+    ]
+}
+
+/// `A = 2X² + Y² + Z² − 1`, the first factor of the heart.
+#[inline]
+fn a_of(p: DVec3) -> f64 {
+    2.0 * p.x * p.x + p.y * p.y + p.z * p.z - 1.0
+}
+
+/// `B = 0.1X² + Y² ≥ 0`.
+#[inline]
+fn b_of(p: DVec3) -> f64 {
+    0.1 * p.x * p.x + p.y * p.y
+}
+
+/// The heart function `f = A³ − B·Z³` at an object-space point: negative inside, positive
+/// outside, zero on the surface.
+#[inline]
+pub fn heart_fn(p: DVec3) -> f64 {
+    let a = a_of(p);
+    a * a * a - b_of(p) * p.z * p.z * p.z
+}
+
+/// The well-conditioned factor `g = A − ∛B·Z` of `f = g·Q` (`Q ≥ 0`, zero only on the equator
+/// curve `Z = 0, 2X² + Y² = 1`): same zero set and, off that curve, the same sign as `f`. Unlike
+/// `f` it has a simple zero on the equator curve, so it measures distance to the surface there.
+/// Continuous everywhere; smooth wherever `B > 0` (off the Z axis).
+#[inline]
+pub fn factor_g(p: DVec3) -> f64 {
+    a_of(p) - b_of(p).cbrt() * p.z
+}
+
+/// `g` at `p` and its directional derivative `∇g·d`. On (or so near that `∛B²` underflows) the
+/// Z axis, where `∇g` is unbounded, the derivative is that of `A` alone (exact on the axis).
+#[inline]
+pub fn factor_g_with_slope(p: DVec3, d: DVec3) -> (f64, f64) {
+    let b = b_of(p);
+    let s = b.cbrt();
+    let g = a_of(p) - s * p.z;
+    let da = 4.0 * p.x * d.x + 2.0 * p.y * d.y + 2.0 * p.z * d.z;
+    let db = 0.2 * p.x * d.x + 2.0 * p.y * d.y;
+    let s2 = s * s;
+    let cusp = if s2 > 0.0 { p.z * db / (3.0 * s2) } else { 0.0 };
+    (g, da - cusp - s * d.z)
+}
+
+/// `∇f`, the paper's normal: `(12X·A² − 0.2X·Z³, 6Y·A² − 2Y·Z³, 6Z·A² − 3Z²·B)`. Zero on the
+/// whole equator curve and at the two singular points `(0, 0, ±1)`.
+#[inline]
+pub fn gradient_f(p: DVec3) -> DVec3 {
+    let a = a_of(p);
+    let a2 = a * a;
+    let z2 = p.z * p.z;
+    let z3 = z2 * p.z;
+    DVec3::new(
+        12.0 * p.x * a2 - 0.2 * p.x * z3,
+        6.0 * p.y * a2 - 2.0 * p.y * z3,
+        6.0 * p.z * a2 - 3.0 * z2 * b_of(p),
+    )
+}
+
+/// A positive multiple of `∇g`, namely `3∛B²·∇g = (X(12s² − 0.2Z), Y(6s² − 2Z), 3s²(2Z − s))`
+/// with `s = ∛B`: bounded everywhere (no division), equal in direction to `∇f` on the surface
+/// wherever `∇f ≠ 0`, and well-conditioned across the equator curve. Zero on the Z axis.
+#[inline]
+pub fn scaled_gradient_g(p: DVec3) -> DVec3 {
+    let s = b_of(p).cbrt();
+    let s2 = s * s;
+    DVec3::new(
+        p.x * (12.0 * s2 - 0.2 * p.z),
+        p.y * (6.0 * s2 - 2.0 * p.z),
+        3.0 * s2 * (2.0 * p.z - s),
+    )
+}
+
+/// The outward direction (any positive length, finite, non-zero) of the object-space surface
+/// at `p`: `∇g` (scaled); on the Z axis, where that vanishes, `∇f`; at the singular points
+/// `(0, 0, ±1)`, where both vanish, the axis direction `(0, 0, ±1)` pointing out of the heart
+/// (down at the tip, up at the dip). Non-finite input gives `+Z`.
+pub fn outward_direction(p: DVec3) -> DVec3 {
+    let n = scaled_gradient_g(p);
+    if let Some(n) = rescaled(n) {
+        return n;
+    }
+    if let Some(n) = rescaled(gradient_f(p)) {
+        return n;
+    }
+    if p.z < 0.0 {
+        DVec3::NEG_Z
+    } else {
+        DVec3::Z
+    }
+}
+
+/// `v` divided by its largest absolute component, or `None` when `v` is zero or not finite.
+#[inline]
+pub(crate) fn rescaled(v: DVec3) -> Option<DVec3> {
+    let m = v.abs().max_element();
+    if m > 0.0 && m.is_finite() {
+        Some(v / m)
+    } else {
+        None
+    }
+}
+
+/// `∛B` at the extreme points, the roots that fix the heart's exact extents (see [`EXTENTS`]).
+/// `S_X`: the real root of `20s³ − s²/4 − 1`.
+pub const S_X: f64 = 0.372_617_297_117_608_8;
+/// `S_Y`: the real root of `s³ − s²/4 − 1`.
+pub const S_Y: f64 = 1.090_660_643_736_038_5;
+/// `S_Z`: the positive root of `9s⁴ − 2s³ − 1`.
+pub const S_Z: f64 = 0.642_043_396_771_111_7;
+
+/// The heart's exact extents in object space (to the last bit of the constants):
+/// `|X| ≤ √(10·S_X³) = 0.71927…`, `|Y| ≤ S_Y^{3/2} = 1.13903…`, `−1 ≤ Z ≤ 3·S_Z² = 1.23666…`.
+///
+/// Proof. The surface is `g = 0`, i.e. `A = s·Z` with `s = ∛B ≥ 0`. Put `u = 2X² + Y²`; then
+/// `u = 1 + s·Z − Z²` and `s³ = 0.1X² + Y²`, so `X² = (u − s³)/1.9`, `Y² = (s³ − 0.05u)/0.95`:
+/// a surface point is a pair `(s, Z)` with `s³ ≤ u ≤ 20s³`, and `u ≤ 1 + s²/4` for every `Z`.
+/// - `Y² ≤ s³` (equality iff `u = s³`, i.e. `X = 0`) and `s³ ≤ u ≤ 1 + s²/4` bound `s` by the
+///   root `S_Y` of `s³ − s²/4 − 1`; so `|Y| ≤ S_Y^{3/2}`, attained at `Z = S_Y/2`.
+/// - `X² = (u − s³)/1.9 ≤ (min(1 + s²/4, 20s³) − s³)/1.9`, increasing in `s` while `20s³` is
+///   the minimum and decreasing after (its derivative `s/2 − 3s²` is negative for `s > 1/6`);
+///   the maximum is where `20s³ = 1 + s²/4`, at `S_X`, giving `X² ≤ 10·S_X³`.
+/// - `u ≥ s³` reads `Z² − sZ + s³ − 1 ≤ 0`, so `Z ≤ (s + √(s² + 4 − 4s³))/2`, whose maximum
+///   over `s` (derivative zero ⇔ `9s⁴ − 2s³ − 1 = 0`) is `3·S_Z²`; and
+///   `Z ≥ (s − √(s² + 4 − 4s³))/2 ≥ −1` because `(s + 2)² − (s² + 4 − 4s³) = 4s + 4s³ ≥ 0`.
+pub const EXTENTS: Aabb = Aabb {
+    min: DVec3::new(-0.719_274_256_639_221_1, -1.139_028_164_686_316, -1.0),
+    max: DVec3::new(
+        0.719_274_256_639_221_1,
+        1.139_028_164_686_316,
+        1.236_659_170_012_161_4,
+    ),
+};
+
+/// Object-space distance by which [`BOUNDS`] exceeds [`EXTENTS`] on every side: far above the
+/// rounding of the constants (~1e-16) and of the box clip, so every surface point, and every
+/// root the solver may report for it, lies strictly inside the clipped interval.
+pub const BOUNDS_MARGIN: f64 = 1e-4;
+
+/// The object-space bounding box used for clipping rays: [`EXTENTS`] grown by
+/// [`BOUNDS_MARGIN`].
+pub const BOUNDS: Aabb = Aabb {
+    min: DVec3::new(
+        EXTENTS.min.x - BOUNDS_MARGIN,
+        EXTENTS.min.y - BOUNDS_MARGIN,
+        EXTENTS.min.z - BOUNDS_MARGIN,
+    ),
+    max: DVec3::new(
+        EXTENTS.max.x + BOUNDS_MARGIN,
+        EXTENTS.max.y + BOUNDS_MARGIN,
+        EXTENTS.max.z + BOUNDS_MARGIN,
+    ),
+};
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Newton on a polynomial (descending closure) from `x`, to convergence.
+    fn newton(p: impl Fn(f64) -> (f64, f64), mut x: f64) -> f64 {
+        for _ in 0..100 {
+            let (v, dv) = p(x);
+            let step = v / dv;
+            x -= step;
+            if step.abs() < 1e-17 {
+                break;
+            }
+        }
+        x
+    }
+
+    #[test]
+    fn extent_constants_are_the_roots_they_claim() {
+        let sx = newton(
+            |s| (20.0 * s * s * s - s * s / 4.0 - 1.0, 60.0 * s * s - s / 2.0),
+            0.4,
+        );
+        let sy = newton(
+            |s| (s * s * s - s * s / 4.0 - 1.0, 3.0 * s * s - s / 2.0),
+            1.0,
+        );
+        let sz = newton(
+            |s| {
+                (
+                    9.0 * s.powi(4) - 2.0 * s.powi(3) - 1.0,
+                    36.0 * s.powi(3) - 6.0 * s * s,
+                )
+            },
+            0.6,
+        );
+        assert!((sx - S_X).abs() < 4e-16, "{sx}");
+        assert!((sy - S_Y).abs() < 4e-16, "{sy}");
+        assert!((sz - S_Z).abs() < 4e-16, "{sz}");
+        assert!(((10.0 * S_X.powi(3)).sqrt() - EXTENTS.max.x).abs() < 4e-16);
+        assert!((S_Y.powf(1.5) - EXTENTS.max.y).abs() < 4e-16);
+        assert!((3.0 * S_Z * S_Z - EXTENTS.max.z).abs() < 4e-16);
+        // The extreme points are on the surface (both f and g vanish there to rounding).
+        let xs = [
+            DVec3::new(EXTENTS.max.x, 0.0, S_X / 2.0),
+            DVec3::new(0.0, EXTENTS.max.y, S_Y / 2.0),
+            DVec3::new(0.0, S_Z.powf(1.5), EXTENTS.max.z),
+            DVec3::new(0.0, 0.0, -1.0),
+        ];
+        for p in xs {
+            assert!(factor_g(p).abs() < 1e-15, "{p} {}", factor_g(p));
+        }
+    }
+
+    #[test]
+    fn g_has_the_sign_of_f() {
+        let mut n = 0;
+        for i in 0..40 {
+            for j in 0..40 {
+                for k in 0..40 {
+                    let p = DVec3::new(
+                        -0.8 + 1.6 * i as f64 / 39.0,
+                        -1.2 + 2.4 * j as f64 / 39.0,
+                        -1.1 + 2.4 * k as f64 / 39.0,
+                    );
+                    let (f, g) = (heart_fn(p), factor_g(p));
+                    if f.abs() > 1e-12 {
+                        assert_eq!(f > 0.0, g > 0.0, "{p}");
+                        n += 1;
+                    }
+                }
+            }
+        }
+        assert!(n > 60_000);
+    }
+
+    #[test]
+    fn g_slope_matches_difference_quotient() {
+        let p = DVec3::new(0.2, -0.6, 0.4);
+        let d = DVec3::new(0.3, 0.5, -0.8);
+        let h = 1e-6;
+        let (_, slope) = factor_g_with_slope(p, d);
+        let fd = (factor_g(p + h * d) - factor_g(p - h * d)) / (2.0 * h);
+        assert!((slope - fd).abs() < 1e-8, "{slope} {fd}");
+        // On the axis: the slope of A.
+        let (g, slope) = factor_g_with_slope(DVec3::new(0.0, 0.0, 0.5), DVec3::Z);
+        assert_eq!((g, slope), (0.25 - 1.0, 1.0));
+    }
+
+    #[test]
+    fn outward_direction_is_finite_everywhere_that_matters() {
+        assert_eq!(outward_direction(DVec3::new(0.0, 0.0, -1.0)), DVec3::NEG_Z);
+        assert_eq!(outward_direction(DVec3::new(0.0, 0.0, 1.0)), DVec3::Z);
+        assert_eq!(outward_direction(DVec3::ZERO), DVec3::Z);
+        assert_eq!(outward_direction(DVec3::splat(f64::NAN)), DVec3::Z);
+        // On the axis but off the surface: ∇f.
+        assert_eq!(outward_direction(DVec3::new(0.0, 0.0, 2.0)), DVec3::Z);
+        // Equator point (∇f = 0 there): ∇g ∝ (4X, 2Y, −∛B).
+        let p = DVec3::new(0.0, 1.0, 0.0);
+        assert_eq!(gradient_f(p), DVec3::ZERO);
+        let n = outward_direction(p).normalize();
+        assert!((n - DVec3::new(0.0, 2.0, -1.0).normalize()).length() < 1e-15);
+    }
+}

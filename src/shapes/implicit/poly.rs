@@ -1,0 +1,398 @@
+//! Multivariate polynomials in x, y, z: exact expansion of a syntax tree, then a compiled
+//! `f64` form for ray tracing (composition with a ray, value, gradient).
+
+use super::coef::Coef;
+use super::equation::{Expr, Node, Span};
+use super::{EquationError, MAX_DEGREE};
+use std::collections::BTreeMap;
+
+/// Exponents `[i, j, k]` of the monomial `xⁱ yʲ zᵏ`.
+pub type Exps = [u8; 3];
+
+/// A polynomial being expanded: monomial exponents → non-zero coefficient.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Poly {
+    /// The non-zero terms.
+    pub terms: BTreeMap<Exps, Coef>,
+}
+
+fn degree_of(e: &Exps) -> usize {
+    e.iter().map(|&k| k as usize).sum()
+}
+
+impl Poly {
+    /// The constant `c`.
+    pub fn constant(c: Coef) -> Poly {
+        let mut p = Poly::default();
+        if !c.is_zero() {
+            p.terms.insert([0, 0, 0], c);
+        }
+        p
+    }
+
+    /// The variable with index `v` (0 = x, 1 = y, 2 = z).
+    pub fn var(v: usize) -> Poly {
+        let mut e = [0u8; 3];
+        e[v] = 1;
+        let mut p = Poly::default();
+        p.terms.insert(e, Coef::ONE);
+        p
+    }
+
+    /// Total degree (0 for constants and for the zero polynomial).
+    pub fn degree(&self) -> usize {
+        self.terms.keys().map(degree_of).max().unwrap_or(0)
+    }
+
+    /// The constant value, if the polynomial has no x, y or z.
+    pub fn as_constant(&self) -> Option<Coef> {
+        match self.terms.len() {
+            0 => Some(Coef::ZERO),
+            1 => self.terms.get(&[0, 0, 0]).copied(),
+            _ => None,
+        }
+    }
+
+    fn add_term(&mut self, e: Exps, c: Coef) {
+        let sum = match self.terms.get(&e) {
+            Some(&old) => old.plus(c),
+            None => c,
+        };
+        if sum.is_zero() {
+            self.terms.remove(&e);
+        } else {
+            self.terms.insert(e, sum);
+        }
+    }
+
+    /// `self + sign·o`.
+    fn add(mut self, o: &Poly, negate: bool) -> Poly {
+        for (&e, &c) in &o.terms {
+            self.add_term(e, if negate { c.negated() } else { c });
+        }
+        self
+    }
+
+    /// `self · o` (the caller checks the degree first).
+    fn mul(&self, o: &Poly) -> Poly {
+        let mut r = Poly::default();
+        for (a, &ca) in &self.terms {
+            for (b, &cb) in &o.terms {
+                r.add_term([a[0] + b[0], a[1] + b[1], a[2] + b[2]], ca.times(cb));
+            }
+        }
+        r
+    }
+
+    fn scale(&self, c: Coef) -> Poly {
+        let mut r = Poly::default();
+        for (&e, &v) in &self.terms {
+            r.add_term(e, v.times(c));
+        }
+        r
+    }
+
+    /// Expands a syntax tree, checking every rule of the equation language on the way:
+    /// division only by constants, whole non-negative exponents, total degree ≤ 16 for every
+    /// sub-expression.
+    pub fn expand(e: &Expr) -> Result<Poly, EquationError> {
+        let too_high = |d: usize| {
+            e.span.error(format!(
+                "this part has degree {d}, above the maximum of {MAX_DEGREE}"
+            ))
+        };
+        Ok(match &e.node {
+            Node::Num(c) => Poly::constant(*c),
+            Node::Var(v) => Poly::var(*v),
+            Node::Neg(a) => Poly::default().add(&Poly::expand(a)?, true),
+            Node::Sum(terms) => {
+                let mut acc = Poly::default();
+                for (minus, t) in terms {
+                    acc = acc.add(&Poly::expand(t)?, *minus);
+                }
+                acc
+            }
+            Node::Product(factors) => {
+                let mut acc = Poly::constant(Coef::ONE);
+                let start = factors[0].1.span.start;
+                for (div, f) in factors {
+                    let pf = Poly::expand(f)?;
+                    if *div {
+                        let Some(c) = pf.as_constant() else {
+                            return Err(f.span.error(
+                                "division is only allowed by a constant (this contains x, y or z)",
+                            ));
+                        };
+                        if c.is_zero() {
+                            return Err(f.span.error("division by zero"));
+                        }
+                        acc = acc.scale(Coef::ONE.over(c));
+                    } else {
+                        let d = acc.degree() + pf.degree();
+                        if d > MAX_DEGREE && !acc.terms.is_empty() && !pf.terms.is_empty() {
+                            let span = Span {
+                                start,
+                                end: f.span.end,
+                            };
+                            return Err(span.error(format!(
+                                "this part has degree {d}, above the maximum of {MAX_DEGREE}"
+                            )));
+                        }
+                        acc = acc.mul(&pf);
+                    }
+                }
+                acc
+            }
+            Node::Pow(a, b) => {
+                let pa = Poly::expand(a)?;
+                let pb = Poly::expand(b)?;
+                let Some(c) = pb.as_constant() else {
+                    return Err(b.span.error(
+                        "the exponent must be a whole number, not an expression in x, y or z",
+                    ));
+                };
+                let Some(n) = c.as_integer() else {
+                    return Err(b.span.error(format!(
+                        "the exponent must be a whole number, not {}",
+                        c.to_f64()
+                    )));
+                };
+                if n < 0 {
+                    return Err(b
+                        .span
+                        .error(format!("the exponent must not be negative ({n})")));
+                }
+                if let Some(k) = pa.as_constant() {
+                    let n =
+                        u32::try_from(n).map_err(|_| b.span.error("this exponent is too large"))?;
+                    return Ok(Poly::constant(k.pow(n)));
+                }
+                let d = (pa.degree() as i128).saturating_mul(n);
+                if d > MAX_DEGREE as i128 {
+                    return Err(too_high(d as usize));
+                }
+                let mut r = Poly::constant(Coef::ONE);
+                for _ in 0..n {
+                    r = r.mul(&pa);
+                }
+                r
+            }
+        })
+    }
+
+    /// `∂/∂x_v` of the polynomial.
+    pub fn derivative(&self, v: usize) -> Poly {
+        let mut r = Poly::default();
+        for (&e, &c) in &self.terms {
+            if e[v] > 0 {
+                let mut f = e;
+                f[v] -= 1;
+                r.add_term(f, c.times(Coef::int(e[v] as i128)));
+            }
+        }
+        r
+    }
+}
+
+/// One term of a compiled polynomial.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Term {
+    /// Exponents of x, y, z.
+    pub e: Exps,
+    /// Coefficient.
+    pub c: f64,
+}
+
+/// A polynomial compiled for evaluation: `f64` terms sorted by descending x-exponent, then
+/// descending y-exponent, so a ray composition can run nested Horner schemes in x and y over
+/// precomputed powers of z.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Compiled {
+    /// The terms, sorted as described.
+    pub terms: Vec<Term>,
+    /// Total degree.
+    pub degree: usize,
+}
+
+/// Univariate coefficients (ascending) in fixed storage.
+pub type Uni = [f64; MAX_DEGREE + 1];
+
+/// `p ← p · (a + b·s)` for a polynomial of degree < `n` (result degree ≤ `n`).
+#[inline]
+fn mul_linear(p: &mut Uni, n: usize, a: f64, b: f64) {
+    let mut k = n;
+    while k > 0 {
+        p[k] = a * p[k] + b * p[k - 1];
+        k -= 1;
+    }
+    p[0] *= a;
+}
+
+impl Compiled {
+    /// Rounds the exact coefficients once and sorts the terms.
+    pub fn new(p: &Poly) -> Compiled {
+        let mut terms: Vec<Term> = p
+            .terms
+            .iter()
+            .map(|(&e, &c)| Term { e, c: c.to_f64() })
+            .filter(|t| t.c != 0.0)
+            .collect();
+        terms.sort_by(|a, b| (b.e[0], b.e[1], a.e[2]).cmp(&(a.e[0], a.e[1], b.e[2])));
+        Compiled {
+            terms,
+            degree: p.degree(),
+        }
+    }
+
+    /// The value at `p`.
+    #[inline]
+    pub fn eval(&self, p: [f64; 3]) -> f64 {
+        let mut pw = [[1.0; MAX_DEGREE + 1]; 3];
+        for (v, row) in pw.iter_mut().enumerate() {
+            for k in 1..=self.degree {
+                row[k] = row[k - 1] * p[v];
+            }
+        }
+        self.terms
+            .iter()
+            .map(|t| t.c * pw[0][t.e[0] as usize] * pw[1][t.e[1] as usize] * pw[2][t.e[2] as usize])
+            .sum()
+    }
+
+    /// The coefficients (ascending in `s`) of `f(o + s·e)`, computed without expanding any
+    /// symbol: powers of `Z(s) = o_z + s·e_z` once, then a Horner scheme in `Y(s)` inside a
+    /// Horner scheme in `X(s)`; every step is a multiplication by a linear polynomial, so the
+    /// cost is O(terms × degree) and nothing is allocated.
+    pub fn compose(&self, o: [f64; 3], e: [f64; 3]) -> Uni {
+        let n = self.degree;
+        let mut zp = [[0.0; MAX_DEGREE + 1]; MAX_DEGREE + 1];
+        zp[0][0] = 1.0;
+        for k in 1..=n {
+            let (prev, cur) = zp.split_at_mut(k);
+            cur[0] = prev[k - 1];
+            mul_linear(&mut cur[0], k, o[2], e[2]);
+        }
+        let mut fx: Uni = [0.0; MAX_DEGREE + 1];
+        let mut cur_i: Option<u8> = None;
+        let terms = &self.terms;
+        let mut t = 0;
+        while t < terms.len() {
+            let i = terms[t].e[0];
+            if let Some(ci) = cur_i {
+                for _ in i..ci {
+                    mul_linear(&mut fx, n, o[0], e[0]);
+                }
+            }
+            cur_i = Some(i);
+            // h_i(s) = Σ_j Y^j Σ_k c_ijk Z^k by Horner in Y.
+            let mut hy: Uni = [0.0; MAX_DEGREE + 1];
+            let mut cur_j: Option<u8> = None;
+            while t < terms.len() && terms[t].e[0] == i {
+                let j = terms[t].e[1];
+                if let Some(cj) = cur_j {
+                    for _ in j..cj {
+                        mul_linear(&mut hy, n, o[1], e[1]);
+                    }
+                }
+                cur_j = Some(j);
+                while t < terms.len() && terms[t].e[0] == i && terms[t].e[1] == j {
+                    let k = terms[t].e[2] as usize;
+                    let c = terms[t].c;
+                    for (h, z) in hy[..=k].iter_mut().zip(&zp[k][..=k]) {
+                        *h += c * z;
+                    }
+                    t += 1;
+                }
+            }
+            for _ in 0..cur_j.unwrap_or(0) {
+                mul_linear(&mut hy, n, o[1], e[1]);
+            }
+            for (f, h) in fx.iter_mut().zip(&hy) {
+                *f += h;
+            }
+        }
+        for _ in 0..cur_i.unwrap_or(0) {
+            mul_linear(&mut fx, n, o[0], e[0]);
+        }
+        fx
+    }
+}
+
+/// Largest `|value|` of the homogeneous part of degree `k` on the unit sphere, bounded above
+/// by the sum of its coefficients' magnitudes (|xⁱyʲzᵏ| ≤ 1 there).
+fn part_bound(c: &Compiled, k: usize) -> f64 {
+    c.terms
+        .iter()
+        .filter(|t| degree_of(&t.e) == k)
+        .map(|t| t.c.abs())
+        .sum()
+}
+
+/// A radius outside which `f` has no zeros, when one can be derived: the highest-degree part
+/// `f_n` must keep one sign on the unit sphere (checked on a dense set of directions, with a
+/// safety factor of 2 on its smallest magnitude `m`), and then `|f(r·u)| ≥ m rⁿ − Σ_k M_k rᵏ`
+/// is positive beyond the returned radius. `None` when the surface may be unbounded.
+pub fn derive_bound(c: &Compiled) -> Option<f64> {
+    let n = c.degree;
+    if n == 0 {
+        return None;
+    }
+    let top = Compiled {
+        terms: c
+            .terms
+            .iter()
+            .copied()
+            .filter(|t| degree_of(&t.e) == n)
+            .collect(),
+        degree: n,
+    };
+    // Fibonacci-sphere directions.
+    const SAMPLES: usize = 4000;
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for s in 0..SAMPLES {
+        let z = 1.0 - 2.0 * (s as f64 + 0.5) / SAMPLES as f64;
+        let r = (1.0 - z * z).sqrt();
+        let a = golden * s as f64;
+        let v = top.eval([r * a.cos(), r * a.sin(), z]);
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    let (m_min, m_max) = if lo > 0.0 {
+        (lo, hi)
+    } else if hi < 0.0 {
+        (-hi, -lo)
+    } else {
+        return None;
+    };
+    if m_min < 1e-3 * m_max {
+        return None;
+    }
+    let m = 0.5 * m_min;
+    let lower: Vec<f64> = (0..n).map(|k| part_bound(c, k)).collect();
+    // g(r) = m − Σ M_k r^(k−n) increases with r; find where it turns positive.
+    let g = |r: f64| {
+        m - lower
+            .iter()
+            .enumerate()
+            .map(|(k, mk)| mk * r.powi(k as i32 - n as i32))
+            .sum::<f64>()
+    };
+    let mut hi_r = 1.0;
+    while g(hi_r) <= 0.0 {
+        hi_r *= 2.0;
+        if hi_r > 1e12 {
+            return None;
+        }
+    }
+    let mut lo_r = 0.0;
+    for _ in 0..60 {
+        let mid = 0.5 * (lo_r + hi_r);
+        if g(mid) > 0.0 {
+            hi_r = mid;
+        } else {
+            lo_r = mid;
+        }
+    }
+    Some(hi_r * 1.01)
+}
