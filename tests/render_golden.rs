@@ -162,3 +162,21 @@ fn glass(size: u32) -> Scene {
     light(&mut s, DVec3::new(2.0, -1.0, 5.0), DVec3::ONE, 0.5);
     s
 }
+
+/// The built-in default scene (the paper's heart over a reflective floor, a soft shadow).
+#[test]
+fn golden_default_heart() {
+    golden("heart", default_heart);
+}
+
+fn default_heart(size: u32) -> Scene {
+    let mut s = kardia::scene::parse(
+        kardia::scene::DEFAULT_SCENE,
+        "heart.scene",
+        &kardia::scene::LoadOptions::default(),
+    )
+    .unwrap();
+    s.width = size;
+    s.height = size;
+    s
+}
