@@ -17,6 +17,7 @@
 //! No input makes these functions panic or loop without end (every loop is bounded); none
 //! allocates except [`sturm_roots`], for its result.
 
+mod bernstein;
 mod corpus;
 mod prep;
 mod sturm;
