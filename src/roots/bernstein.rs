@@ -27,7 +27,6 @@
 //! hit/miss the full method gives away from numerically multiple roots.
 
 use super::prep::{horner, Prepared};
-use super::sturm::false_position;
 
 /// Halvings after which a piece that still has more than one sign variation is left to the
 /// full method (a numerically multiple root or an unresolvable cluster).
@@ -49,18 +48,24 @@ pub(crate) enum Fast {
     Undecided,
 }
 
-/// `1 / C(n, k)` for `n ≤ 16`, computed on first use of each row (exact binomials, one
-/// rounding each).
-#[inline]
-fn inv_binomial(n: usize, k: usize) -> f64 {
-    let mut c = 1.0f64;
-    for j in 0..k {
-        c = c * (n - j) as f64 / (j + 1) as f64;
+/// `INV_BINOMIAL[n][k] = 1 / C(n, k)` for `n ≤ 16` (binomials exact, one rounding each).
+const INV_BINOMIAL: [[f64; 17]; 17] = {
+    let mut t = [[0.0; 17]; 17];
+    let mut n = 0;
+    while n < 17 {
+        let mut c = 1.0f64;
+        let mut k = 0;
+        while k <= n {
+            t[n][k] = 1.0 / c;
+            c = c * (n - k) as f64 / (k + 1) as f64;
+            k += 1;
+        }
+        n += 1;
     }
-    1.0 / c
-}
+    t
+};
 
-/// Number of sign variations of `b[..=n]`, or `None` when an interior coefficient is within
+/// Number of sign variations of `b`, or `None` when an interior coefficient is within
 /// `margin` of zero (its sign uncertain).
 #[inline]
 fn variations(b: &[f64], margin: f64) -> Option<u32> {
@@ -77,52 +82,105 @@ fn variations(b: &[f64], margin: f64) -> Option<u32> {
     Some(v)
 }
 
+/// De Casteljau in place: `b` (a piece `[0, 1]`) becomes the Bernstein coefficients of its
+/// part `[0, λ]`.
+#[inline]
+fn keep_left<const D: usize>(b: &mut [f64; D], lambda: f64) {
+    let n = D - 1;
+    for k in 1..=n {
+        for j in (k..=n).rev() {
+            b[j] = b[j - 1] + lambda * (b[j] - b[j - 1]);
+        }
+    }
+}
+
+/// De Casteljau in place: `b` (a piece `[0, 1]`) becomes the Bernstein coefficients of its
+/// part `[λ, 1]`.
+#[inline]
+fn keep_right<const D: usize>(b: &mut [f64; D], lambda: f64) {
+    let n = D - 1;
+    for k in 1..=n {
+        for j in 0..=n - k {
+            b[j] += lambda * (b[j + 1] - b[j]);
+        }
+    }
+}
+
 /// See the module documentation.
-pub(crate) fn first_root<const M: usize>(p: &Prepared) -> Fast {
-    let n = p.n;
-    let c = &p.c[..=n];
+pub(crate) fn first_root(p: &Prepared) -> Fast {
+    match p.n {
+        1 => search::<2>(p),
+        2 => search::<3>(p),
+        3 => search::<4>(p),
+        4 => search::<5>(p),
+        5 => search::<6>(p),
+        6 => search::<7>(p),
+        7 => search::<8>(p),
+        8 => search::<9>(p),
+        9 => search::<10>(p),
+        10 => search::<11>(p),
+        11 => search::<12>(p),
+        12 => search::<13>(p),
+        13 => search::<14>(p),
+        14 => search::<15>(p),
+        15 => search::<16>(p),
+        16 => search::<17>(p),
+        _ => Fast::Undecided,
+    }
+}
+
+/// The search for a polynomial of degree `D − 1` (a fixed size, so that the loops unroll and
+/// the coefficients stay in registers).
+fn search<const D: usize>(p: &Prepared) -> Fast {
+    let n = D - 1;
+    let c: &[f64; D] = p.c[..D].try_into().expect("degree D - 1");
     let (lo, hi) = (p.lo, p.hi);
     let w = hi - lo;
     // Taylor shift to `lo`, then scale by `w^k / C(n, k)`.
-    let mut b = [0.0; M];
-    b[..=n].copy_from_slice(c);
+    let mut root = *c;
     for i in 0..n {
         for j in (i..n).rev() {
-            b[j] += lo * b[j + 1];
+            root[j] += lo * root[j + 1];
         }
     }
     let mut wk = 1.0;
-    for (k, x) in b.iter_mut().enumerate().take(n + 1) {
-        *x *= wk * inv_binomial(n, k);
+    for (x, ib) in root.iter_mut().zip(&INV_BINOMIAL[n]) {
+        *x *= wk * ib;
         wk *= w;
     }
     // Binomial transform: bᵢ = Σₖ C(i, k)·dₖ.
     for i in 1..=n {
         for j in (i..=n).rev() {
-            b[j] += b[j - 1];
+            root[j] += root[j - 1];
         }
     }
     let r = lo.abs() + w;
     let size = c.iter().rev().fold(0.0, |s, a| s * r + a.abs());
     let unit = (n + 1) as f64 * f64::EPSILON * size;
-    if !unit.is_finite() || b[0].abs() <= 64.0 * unit || b[n].abs() <= 64.0 * unit {
+    if !unit.is_finite() || root[0].abs() <= 64.0 * unit || root[n].abs() <= 64.0 * unit {
         return Fast::Undecided;
     }
-    // Depth-first over pieces `[s0, s1]` of `[0, 1]`, left first; pending right halves wait
-    // on a stack.
-    let mut stack = [([0.0; M], 0.0f64, 0.0f64, 0usize); MAX_DEPTH];
+    // Depth-first over pieces `[s0, s1]` of `[0, 1]`, left first. A pending right half waits
+    // on the stack as its range only; its coefficients are cut from the root's when needed.
+    let mut stack = [(0.0f64, 0.0f64, 0u32); MAX_DEPTH];
     let mut top = 0;
-    let (mut s0, mut s1, mut depth) = (0.0f64, 1.0f64, 0usize);
+    let mut b = root;
+    let (mut s0, mut s1, mut depth) = (0.0f64, 1.0f64, 0u32);
     for _ in 0..MAX_NODES {
         let margin = (64.0 + 2.0 * depth as f64) * unit;
-        match variations(&b[..=n], margin) {
+        match variations(&b, margin) {
             Some(0) => {
                 // No root here: the next pending piece.
                 if top == 0 {
                     return Fast::NoRoot;
                 }
                 top -= 1;
-                (b, s0, s1, depth) = stack[top];
+                (s0, s1, depth) = stack[top];
+                b = root;
+                if s1 < 1.0 {
+                    keep_left(&mut b, s1);
+                }
+                keep_right(&mut b, s0 / s1);
                 continue;
             }
             Some(1) => {
@@ -135,33 +193,96 @@ pub(crate) fn first_root<const M: usize>(p: &Prepared) -> Fast {
                 if fa == 0.0 || (fa < 0.0) == (fb < 0.0) || (fa < 0.0) != (b[0] < 0.0) {
                     return Fast::Undecided;
                 }
-                return Fast::Root(false_position(c, ta, tb, fa, fb, 0.0) * p.scale);
+                return Fast::Root(newton(c, ta, tb, fa, fb) * p.scale);
             }
             _ => {}
         }
-        if depth + 1 >= MAX_DEPTH {
+        if depth as usize + 1 >= MAX_DEPTH {
             return Fast::Undecided;
         }
-        // de Casteljau at SPLIT: the left half is the first entry of each row of the
-        // triangle, the right half the last one.
-        let mut tri = b;
-        let mut right = [0.0; M];
-        right[n] = tri[n];
-        for k in 1..=n {
-            for j in 0..=n - k {
-                tri[j] += SPLIT * (tri[j + 1] - tri[j]);
-            }
-            b[k] = tri[0];
-            right[n - k] = tri[n - k];
-        }
         let sm = s0 + SPLIT * (s1 - s0);
+        keep_left(&mut b, SPLIT);
         if b[n].abs() <= margin || !(sm > s0 && sm < s1) {
             return Fast::Undecided;
         }
         depth += 1;
-        stack[top] = (right, sm, s1, depth);
+        stack[top] = (sm, s1, depth);
         top += 1;
         s1 = sm;
     }
     Fast::Undecided
+}
+
+/// Steps allowed to [`newton`] (bisection alone needs at most about 2100 of a `f64` range;
+/// Newton's quadratic convergence normally needs under ten).
+const MAX_ITER: usize = 2200;
+
+/// Multiple of `ε·Σ|cⱼ||x|ʲ` (a bound on the rounding error of evaluating `p(x)`) below
+/// which `p(x)` no longer tells where the root is.
+const NOISE: f64 = 4.0 * f64::EPSILON;
+
+/// `(p(x), p'(x), p''(x)/2, Σ|cⱼ||x|ʲ)` for ascending `c`.
+#[inline]
+fn eval3<const D: usize>(c: &[f64; D], x: f64) -> (f64, f64, f64, f64) {
+    let ax = x.abs();
+    let (mut v, mut d, mut h, mut s) = (0.0, 0.0, 0.0, 0.0);
+    for &a in c.iter().rev() {
+        h = h * x + d;
+        d = d * x + v;
+        v = v * x + a;
+        s = s * ax + a.abs();
+    }
+    (v, d, h, s)
+}
+
+/// The simple root of `c` in `[a, b]` (`fa`, `fb` of opposite signs, neither zero) by Newton
+/// steps kept inside the shrinking sign-change bracket: a step that leaves the bracket, or is
+/// more than half the step before last (slow progress), is replaced by a bisection. Stops
+/// when a step is below two ulps of the root, or the bracket cannot shrink.
+fn newton<const D: usize>(c: &[f64; D], mut a: f64, mut b: f64, fa: f64, fb: f64) -> f64 {
+    let neg_a = fa < 0.0;
+    // The secant of the bracket first: exact for a line, close on a short bracket.
+    let mut x = a - fa * ((b - a) / (fb - fa));
+    if !(x > a && x < b) {
+        x = 0.5 * (a + b);
+    }
+    let (mut step, mut step_before) = (b - a, b - a);
+    for _ in 0..MAX_ITER {
+        let (v, d, h, size) = eval3(c, x);
+        if v == 0.0 {
+            return x;
+        }
+        if v.abs() <= NOISE * size {
+            // `p(x)` is rounding noise: one last Newton step is as close as `p` allows.
+            let last = x - v / d;
+            return if last >= a && last <= b { last } else { x };
+        }
+        if (v < 0.0) == neg_a {
+            a = x;
+        } else {
+            b = x;
+        }
+        // Schröder's step (Newton on p/p'): quadratic even towards a cluster of roots, which
+        // is what the heart's f = A³ − B·Z³ looks like from afar; Newton's otherwise.
+        let den = d * d - 2.0 * v * h;
+        let mut next = if den > 0.0 {
+            x - v * d / den
+        } else {
+            x - v / d
+        };
+        let slow = (next - x).abs() > 0.5 * step_before;
+        if slow || !(next > a && next < b) {
+            next = 0.5 * (a + b);
+            if next <= a || next >= b {
+                return x;
+            }
+        }
+        step_before = step;
+        step = (next - x).abs();
+        if step <= 2.0 * f64::EPSILON * next.abs() {
+            return next;
+        }
+        x = next;
+    }
+    x
 }

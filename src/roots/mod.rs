@@ -104,3 +104,15 @@ impl std::str::FromStr for Solver {
             })
     }
 }
+
+#[doc(hidden)]
+pub fn debug_fast(coeffs: &[f64], lo: f64, hi: f64) -> u8 {
+    match prep::prepare(coeffs, lo, hi) {
+        None => 9,
+        Some(p) => match bernstein::first_root(&p) {
+            bernstein::Fast::NoRoot => 0,
+            bernstein::Fast::Root(_) => 1,
+            bernstein::Fast::Undecided => 2,
+        },
+    }
+}

@@ -216,7 +216,14 @@ fn split(a: f64, b: f64) -> f64 {
 /// Anderson–Björck false position for the root of `q` in `[a, b]`, where `fa`, `fb` have
 /// opposite signs (neither zero); a step that fails to halve the bracket is followed by a
 /// bisection step. Returns a point of the final bracket.
-pub(crate) fn false_position(q: &[f64], mut a: f64, mut b: f64, mut fa: f64, mut fb: f64, floor: f64) -> f64 {
+pub(crate) fn false_position(
+    q: &[f64],
+    mut a: f64,
+    mut b: f64,
+    mut fa: f64,
+    mut fb: f64,
+    floor: f64,
+) -> f64 {
     let a0 = a;
     // `side` is the end replaced last: -1 left, 1 right, 0 none yet.
     let mut side = 0;
@@ -505,18 +512,11 @@ fn pieces(p: &Prepared) -> impl Iterator<Item = Prepared> + '_ {
 
 /// See [`super::first_root`].
 pub(crate) fn first_root(p: &Prepared) -> Option<f64> {
-    pieces(p).find_map(|piece| {
-        let fast = if piece.n < 8 {
-            bernstein::first_root::<8>(&piece)
-        } else {
-            bernstein::first_root::<17>(&piece)
-        };
-        match fast {
-            Fast::NoRoot => None,
-            Fast::Root(t) => Some(t),
-            Fast::Undecided if piece.n < 8 => first_impl::<8>(&piece),
-            Fast::Undecided => first_impl::<17>(&piece),
-        }
+    pieces(p).find_map(|piece| match bernstein::first_root(&piece) {
+        Fast::NoRoot => None,
+        Fast::Root(t) => Some(t),
+        Fast::Undecided if piece.n < 8 => first_impl::<8>(&piece),
+        Fast::Undecided => first_impl::<17>(&piece),
     })
 }
 
