@@ -359,13 +359,6 @@ impl<const M: usize> Shifted<M> {
     /// rounding could exceed a few ulps of the root, and kept inside `(lo, hi]`; `None` when
     /// the root is `lo` itself, up to that rounding (the interval excludes `lo`).
     fn to_t(&self, p: &Prepared, u: f64) -> Option<f64> {
-        let t = self.to_t_unchecked(p, u)?;
-        let c = &p.c[..=p.n];
-        (horner(c, t).abs() <= SPURIOUS * f64::EPSILON * abs_horner(c, t.abs())).then_some(t)
-    }
-
-    /// [`Self::to_t`] without the final check on `P(t)`.
-    fn to_t_unchecked(&self, p: &Prepared, u: f64) -> Option<f64> {
         let t = (self.mid + self.half * u).clamp(p.lo, p.hi);
         // Rounding of the shift, in `T`: a few ulps of the interval's magnitude per degree.
         let slack = 4.0 * p.n as f64 * f64::EPSILON * self.mid.abs().max(self.half);
@@ -418,13 +411,6 @@ impl<const M: usize> Shifted<M> {
         Some(t)
     }
 }
-
-/// Largest `|P(t)|` at a reported root, in units of `ε·Σ|cⱼ||t|ʲ` (the rounding error of
-/// evaluating `P` there). A root of multiplicity `m` located to `k` times its theoretical
-/// resolution has `|P| ≈ kᵐ` such units; a wrong numerical gcd can make the square-free part's
-/// chain count a root where `P` is far from zero (at degree 8 and above, with several
-/// multiple roots): such a "root" is dropped.
-const SPURIOUS: f64 = 1e9;
 
 /// `Σ|cⱼ|·xʲ` for `x ≥ 0`: the scale of the rounding error in evaluating `c` at `±x`.
 #[inline]
