@@ -512,11 +512,27 @@ fn pieces(p: &Prepared) -> impl Iterator<Item = Prepared> + '_ {
 
 /// See [`super::first_root`].
 pub(crate) fn first_root(p: &Prepared) -> Option<f64> {
-    pieces(p).find_map(|piece| match bernstein::first_root(&piece) {
-        Fast::NoRoot => None,
-        Fast::Root(t) => Some(t),
-        Fast::Undecided if piece.n < 8 => first_impl::<8>(&piece),
-        Fast::Undecided => first_impl::<17>(&piece),
+    // The common case, a tight interval, in one piece: the Bernstein test on it first.
+    let single = (p.hi - p.lo) / (p.bound / 16.0) <= 1.0;
+    if single {
+        match bernstein::first_root(p) {
+            Fast::NoRoot => return None,
+            Fast::Root(t) => return Some(t),
+            Fast::Undecided => {}
+        }
+    }
+    pieces(p).find_map(|piece| {
+        let fast = if single {
+            Fast::Undecided // already tried on this very interval
+        } else {
+            bernstein::first_root(&piece)
+        };
+        match fast {
+            Fast::NoRoot => None,
+            Fast::Root(t) => Some(t),
+            Fast::Undecided if piece.n < 8 => first_impl::<8>(&piece),
+            Fast::Undecided => first_impl::<17>(&piece),
+        }
     })
 }
 
