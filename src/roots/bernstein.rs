@@ -289,3 +289,44 @@ fn newton<const D: usize>(c: &[f64; D], mut a: f64, mut b: f64, fa: f64, fb: f64
     }
     x
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::roots::prep::prepare;
+
+    fn fast(c: &[f64], lo: f64, hi: f64) -> Fast {
+        first_root(&prepare(c, lo, hi).expect("a polynomial"))
+    }
+
+    #[test]
+    fn answers_only_when_the_signs_are_certain() {
+        // (t − 1)(t − 2): the first root, to an ulp.
+        match fast(&[2.0, -3.0, 1.0], 0.0, 3.0) {
+            Fast::Root(t) => assert!((t - 1.0).abs() <= 2.0 * f64::EPSILON, "{t}"),
+            _ => panic!("expected a root"),
+        }
+        // (t − 1)² + 1e-3: no root.
+        assert!(matches!(fast(&[1.001, -2.0, 1.0], 0.0, 3.0), Fast::NoRoot));
+        // (t − 1)²: a double root has no certain sign pattern; the full method decides.
+        assert!(matches!(fast(&[1.0, -2.0, 1.0], 0.0, 3.0), Fast::Undecided));
+        // A root exactly at `lo` (excluded): the full method decides.
+        assert!(matches!(fast(&[2.0, -3.0, 1.0], 1.0, 3.0), Fast::Undecided));
+        // Degree 16 with 16 simple roots 1/4 apart: the first one.
+        let mut c = vec![1.0];
+        for k in 0..16 {
+            let r = -2.0 + 0.25 * f64::from(k);
+            let mut next = vec![0.0; c.len() + 1];
+            for (j, &a) in c.iter().enumerate() {
+                next[j + 1] += a;
+                next[j] -= r * a;
+            }
+            c = next;
+        }
+        match fast(&c, -2.1, 2.0) {
+            Fast::Root(t) => assert!((t + 2.0).abs() <= 1e-12, "{t}"),
+            Fast::NoRoot => panic!("expected a root"),
+            Fast::Undecided => {}
+        }
+    }
+}
