@@ -70,9 +70,9 @@ pub fn first_root_yuksel(coeffs: &[f64], lo: f64, hi: f64) -> Option<f64> {
 pub enum Solver {
     /// The paper's method: Sturm sequence isolation, false-position refinement, behind the
     /// shared Bernstein test. The default: on the heart ray corpus (see `benches/roots.rs`)
-    /// it measured as fast as [`Solver::Yuksel`] or slightly faster (the Bernstein test
-    /// answers for about 98% of the rays with both; the Sturm fallback is the cheaper of the
-    /// two) with the same hit/miss on every ray. A tight interval (the ray's span inside the
+    /// it measured as fast as [`Solver::Yuksel`], within the measurement noise (the Bernstein
+    /// test answers for about 98% of the rays with both; the rest costs about 1 µs with
+    /// either), with the same hit/miss on every ray. A tight interval (the ray's span inside the
     /// shape's bounding box) is best: a wide one is cut into up to 16 pieces, each with its
     /// own test and sequence, which costs more.
     #[default]
