@@ -35,6 +35,9 @@ pub(crate) fn exponent(x: f64) -> i32 {
 /// `x · 2^k`, exact unless the result under- or overflows, without intermediate overflow.
 #[inline]
 pub(crate) fn mul_pow2(mut x: f64, mut k: i32) -> f64 {
+    if (-1022..=1023).contains(&k) {
+        return x * f64::from_bits(((k + 1023) as u64) << 52);
+    }
     while k != 0 {
         let step = k.clamp(-1000, 1000);
         x *= f64::from_bits(((step + 1023) as u64) << 52);
@@ -112,8 +115,11 @@ pub(crate) fn prepare(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
         let ck = coeffs[n - k];
         if ck != 0.0 {
             let d = exponent(ck) - en + 1;
-            // ceil(d / k) for either sign of d
-            let q = d.div_euclid(k as i32) + i32::from(d.rem_euclid(k as i32) != 0);
+            // ceil(d / k) for either sign of d: |d| < 2^12 and k ≤ 16, so the quotient is
+            // either an exact integer or at least 1/16 away from one, and rounding cannot
+            // move it across an integer.
+            let x = f64::from(d) / k as f64;
+            let q = x as i32 + i32::from(x > f64::from(x as i32));
             e = e.max(q);
         }
     }

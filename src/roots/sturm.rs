@@ -31,6 +31,7 @@
 //! the sequence can vanish at once. When `P(hi)` is exactly zero, `hi` is reported and the
 //! count is taken just below it.
 
+use super::bernstein::{self, Fast};
 use super::prep::{horner, max_abs, Prepared};
 
 /// Relative size (against `1 + Σ|quotient|`, the members being scaled to a largest
@@ -215,7 +216,14 @@ fn split(a: f64, b: f64) -> f64 {
 /// Anderson–Björck false position for the root of `q` in `[a, b]`, where `fa`, `fb` have
 /// opposite signs (neither zero); a step that fails to halve the bracket is followed by a
 /// bisection step. Returns a point of the final bracket.
-fn false_position(q: &[f64], mut a: f64, mut b: f64, mut fa: f64, mut fb: f64, floor: f64) -> f64 {
+pub(crate) fn false_position(
+    q: &[f64],
+    mut a: f64,
+    mut b: f64,
+    mut fa: f64,
+    mut fb: f64,
+    floor: f64,
+) -> f64 {
     let a0 = a;
     // `side` is the end replaced last: -1 left, 1 right, 0 none yet.
     let mut side = 0;
@@ -504,11 +512,26 @@ fn pieces(p: &Prepared) -> impl Iterator<Item = Prepared> + '_ {
 
 /// See [`super::first_root`].
 pub(crate) fn first_root(p: &Prepared) -> Option<f64> {
+    // The common case, a tight interval, in one piece: the Bernstein test on it first.
+    let single = (p.hi - p.lo) / (p.bound / 16.0) <= 1.0;
+    if single {
+        match bernstein::first_root(p) {
+            Fast::NoRoot => return None,
+            Fast::Root(t) => return Some(t),
+            Fast::Undecided => {}
+        }
+    }
     pieces(p).find_map(|piece| {
-        if piece.n < 8 {
-            first_impl::<8>(&piece)
+        let fast = if single {
+            Fast::Undecided // already tried on this very interval
         } else {
-            first_impl::<17>(&piece)
+            bernstein::first_root(&piece)
+        };
+        match fast {
+            Fast::NoRoot => None,
+            Fast::Root(t) => Some(t),
+            Fast::Undecided if piece.n < 8 => first_impl::<8>(&piece),
+            Fast::Undecided => first_impl::<17>(&piece),
         }
     })
 }

@@ -1,0 +1,332 @@
+//! A cheap first-root search in the Bernstein basis, tried before any Sturm sequence or
+//! derivative splitting is built; it answers only when the answer is certain and otherwise
+//! hands the interval to the full method.
+//!
+//! # Method
+//!
+//! `P` on `[lo, hi]` is rewritten as `Σ bᵢ·C(n,i)·sⁱ(1−s)ⁿ⁻ⁱ` with `t = lo + (hi − lo)·s`
+//! (a Taylor shift, a scaling and a binomial transform: about `n²` flops). By Descartes' rule
+//! in this basis the number of sign variations `V` of `b₀ … bₙ` is at least the number of roots
+//! in `(lo, hi)`, counted with multiplicity, and has the same parity. `V = 0` means no root;
+//! `V = 1` means exactly one, simple, with `P(lo)` and `P(hi)` of opposite signs (`b₀ = P(lo)`,
+//! `bₙ = P(hi)`). Otherwise the interval is halved (de Casteljau, slightly off the middle so
+//! as not to land on dyadic roots) and the left half searched first: the first `V = 1` piece
+//! brackets the first root, which is refined by false position on `P` itself.
+//!
+//! # When it declines
+//!
+//! Every computed `bᵢ` carries a rounding error below `margin = (64 + 2·depth)·(n+1)·ε·S`,
+//! `S = Σ|cⱼ|·(|lo| + hi − lo)ʲ` (a bound on `|P|`'s coefficient sizes over the interval; the
+//! conversion only forms combinations with positive weights whose absolute sums are at most
+//! `S`). A coefficient within that margin of zero has an uncertain sign: an end coefficient so
+//! small (a root at or near an end of the interval or of a piece), a piece still ambiguous
+//! after `MAX_DEPTH` halvings (a double or multiple root, or roots closer than rounding can
+//! separate, which is where the full method's numerical gcd decides), or a bracket whose end
+//! values disagree with the expected signs all make it decline. Where it answers, the signs
+//! it used are exact for the given coefficients, so the answer is the exact one: the same
+//! hit/miss the full method gives away from numerically multiple roots.
+
+use super::prep::{horner, Prepared};
+
+/// Halvings after which a piece that still has more than one sign variation is left to the
+/// full method (a numerically multiple root or an unresolvable cluster).
+const MAX_DEPTH: usize = 40;
+
+/// Pieces examined at most (each costs one de Casteljau split).
+const MAX_NODES: usize = 256;
+
+/// Split ratio of a piece: off the middle, like the Sturm bisection.
+const SPLIT: f64 = 0.496_858_407_346_410_2;
+
+/// Outcome of the fast search.
+pub(crate) enum Fast {
+    /// Certainly no root in `(lo, hi]`.
+    NoRoot,
+    /// The first root, in `t` (already multiplied by the scale).
+    Root(f64),
+    /// The signs were not certain: use the full method.
+    Undecided,
+}
+
+/// `INV_BINOMIAL[n][k] = 1 / C(n, k)` for `n ≤ 16` (binomials exact, one rounding each).
+const INV_BINOMIAL: [[f64; 17]; 17] = {
+    let mut t = [[0.0; 17]; 17];
+    let mut n = 0;
+    while n < 17 {
+        let mut c = 1.0f64;
+        let mut k = 0;
+        while k <= n {
+            t[n][k] = 1.0 / c;
+            c = c * (n - k) as f64 / (k + 1) as f64;
+            k += 1;
+        }
+        n += 1;
+    }
+    t
+};
+
+/// Number of sign variations of `b`, or `None` when an interior coefficient is within
+/// `margin` of zero (its sign uncertain).
+#[inline]
+fn variations(b: &[f64], margin: f64) -> Option<u32> {
+    let mut v = 0;
+    let mut neg = b[0] < 0.0;
+    for &x in &b[1..] {
+        if x.abs() <= margin {
+            return None;
+        }
+        let xn = x < 0.0;
+        v += u32::from(xn != neg);
+        neg = xn;
+    }
+    Some(v)
+}
+
+/// De Casteljau in place: `b` (a piece `[0, 1]`) becomes the Bernstein coefficients of its
+/// part `[0, λ]`.
+#[inline]
+fn keep_left<const D: usize>(b: &mut [f64; D], lambda: f64) {
+    let n = D - 1;
+    for k in 1..=n {
+        for j in (k..=n).rev() {
+            b[j] = b[j - 1] + lambda * (b[j] - b[j - 1]);
+        }
+    }
+}
+
+/// De Casteljau in place: `b` (a piece `[0, 1]`) becomes the Bernstein coefficients of its
+/// part `[λ, 1]`.
+#[inline]
+fn keep_right<const D: usize>(b: &mut [f64; D], lambda: f64) {
+    let n = D - 1;
+    for k in 1..=n {
+        for j in 0..=n - k {
+            b[j] += lambda * (b[j + 1] - b[j]);
+        }
+    }
+}
+
+/// See the module documentation.
+pub(crate) fn first_root(p: &Prepared) -> Fast {
+    match p.n {
+        1 => search::<2>(p),
+        2 => search::<3>(p),
+        3 => search::<4>(p),
+        4 => search::<5>(p),
+        5 => search::<6>(p),
+        6 => search::<7>(p),
+        7 => search::<8>(p),
+        8 => search::<9>(p),
+        9 => search::<10>(p),
+        10 => search::<11>(p),
+        11 => search::<12>(p),
+        12 => search::<13>(p),
+        13 => search::<14>(p),
+        14 => search::<15>(p),
+        15 => search::<16>(p),
+        16 => search::<17>(p),
+        _ => Fast::Undecided,
+    }
+}
+
+/// The search for a polynomial of degree `D − 1` (a fixed size, so that the loops unroll and
+/// the coefficients stay in registers).
+fn search<const D: usize>(p: &Prepared) -> Fast {
+    let n = D - 1;
+    let c: &[f64; D] = p.c[..D].try_into().expect("degree D - 1");
+    let (lo, hi) = (p.lo, p.hi);
+    let w = hi - lo;
+    // Taylor shift to `lo`, then scale by `w^k / C(n, k)`.
+    let mut root = *c;
+    for i in 0..n {
+        for j in (i..n).rev() {
+            root[j] += lo * root[j + 1];
+        }
+    }
+    let mut wk = 1.0;
+    for (x, ib) in root.iter_mut().zip(&INV_BINOMIAL[n]) {
+        *x *= wk * ib;
+        wk *= w;
+    }
+    // Binomial transform: bᵢ = Σₖ C(i, k)·dₖ (written with fixed bounds so that it unrolls:
+    // for `j < i` the update is skipped).
+    for i in 1..D {
+        for j in (1..D).rev() {
+            if j >= i {
+                root[j] += root[j - 1];
+            }
+        }
+    }
+    let r = lo.abs() + w;
+    let size = c.iter().rev().fold(0.0, |s, a| s * r + a.abs());
+    let unit = (n + 1) as f64 * f64::EPSILON * size;
+    if !unit.is_finite() || root[0].abs() <= 64.0 * unit || root[n].abs() <= 64.0 * unit {
+        return Fast::Undecided;
+    }
+    // Depth-first over pieces `[s0, s1]` of `[0, 1]`, left first. A pending right half waits
+    // on the stack as its range only; its coefficients are cut from the root's when needed.
+    let mut stack = [(0.0f64, 0.0f64, 0u32); MAX_DEPTH];
+    let mut top = 0;
+    let mut b = root;
+    let (mut s0, mut s1, mut depth) = (0.0f64, 1.0f64, 0u32);
+    for _ in 0..MAX_NODES {
+        let margin = (64.0 + 2.0 * depth as f64) * unit;
+        match variations(&b, margin) {
+            Some(0) => {
+                // No root here: the next pending piece.
+                if top == 0 {
+                    return Fast::NoRoot;
+                }
+                top -= 1;
+                (s0, s1, depth) = stack[top];
+                b = root;
+                if s1 < 1.0 {
+                    keep_left(&mut b, s1);
+                }
+                keep_right(&mut b, s0 / s1);
+                continue;
+            }
+            Some(1) => {
+                let ta = if s0 == 0.0 { lo } else { lo + w * s0 };
+                let tb = if s1 == 1.0 { hi } else { lo + w * s1 };
+                let (fa, fb) = (horner(c, ta), horner(c, tb));
+                if fb == 0.0 {
+                    return Fast::Root(tb * p.scale);
+                }
+                if fa == 0.0 || (fa < 0.0) == (fb < 0.0) || (fa < 0.0) != (b[0] < 0.0) {
+                    return Fast::Undecided;
+                }
+                return Fast::Root(newton(c, ta, tb, fa, fb) * p.scale);
+            }
+            _ => {}
+        }
+        if depth as usize + 1 >= MAX_DEPTH {
+            return Fast::Undecided;
+        }
+        let sm = s0 + SPLIT * (s1 - s0);
+        keep_left(&mut b, SPLIT);
+        if b[n].abs() <= margin || !(sm > s0 && sm < s1) {
+            return Fast::Undecided;
+        }
+        depth += 1;
+        stack[top] = (sm, s1, depth);
+        top += 1;
+        s1 = sm;
+    }
+    Fast::Undecided
+}
+
+/// Steps allowed to [`newton`] (bisection alone needs at most about 2100 of a `f64` range;
+/// Newton's quadratic convergence normally needs under ten).
+const MAX_ITER: usize = 2200;
+
+/// Multiple of `ε·Σ|cⱼ||x|ʲ` (a bound on the rounding error of evaluating `p(x)`) below
+/// which `p(x)` no longer tells where the root is.
+const NOISE: f64 = 4.0 * f64::EPSILON;
+
+/// `(p(x), p'(x), p''(x)/2, Σ|cⱼ||x|ʲ)` for ascending `c`.
+#[inline]
+fn eval3<const D: usize>(c: &[f64; D], x: f64) -> (f64, f64, f64, f64) {
+    let ax = x.abs();
+    let (mut v, mut d, mut h, mut s) = (0.0, 0.0, 0.0, 0.0);
+    for &a in c.iter().rev() {
+        h = h * x + d;
+        d = d * x + v;
+        v = v * x + a;
+        s = s * ax + a.abs();
+    }
+    (v, d, h, s)
+}
+
+/// The simple root of `c` in `[a, b]` (`fa`, `fb` of opposite signs, neither zero) by Newton
+/// steps kept inside the shrinking sign-change bracket: a step that leaves the bracket, or is
+/// more than half the step before last (slow progress), is replaced by a bisection. Stops
+/// when a step is below two ulps of the root, or the bracket cannot shrink.
+fn newton<const D: usize>(c: &[f64; D], mut a: f64, mut b: f64, fa: f64, fb: f64) -> f64 {
+    let neg_a = fa < 0.0;
+    // The secant of the bracket first: exact for a line, close on a short bracket.
+    let mut x = a - fa * ((b - a) / (fb - fa));
+    if !(x > a && x < b) {
+        x = 0.5 * (a + b);
+    }
+    let (mut step, mut step_before) = (b - a, b - a);
+    for _ in 0..MAX_ITER {
+        let (v, d, h, size) = eval3(c, x);
+        if v == 0.0 {
+            return x;
+        }
+        if v.abs() <= NOISE * size {
+            // `p(x)` is rounding noise: one last Newton step is as close as `p` allows.
+            let last = x - v / d;
+            return if last >= a && last <= b { last } else { x };
+        }
+        if (v < 0.0) == neg_a {
+            a = x;
+        } else {
+            b = x;
+        }
+        // Schröder's step (Newton on p/p'): quadratic even towards a cluster of roots, which
+        // is what the heart's f = A³ − B·Z³ looks like from afar; Newton's otherwise.
+        let den = d * d - 2.0 * v * h;
+        let mut next = if den > 0.0 {
+            x - v * d / den
+        } else {
+            x - v / d
+        };
+        let slow = (next - x).abs() > 0.5 * step_before;
+        if slow || !(next > a && next < b) {
+            next = 0.5 * (a + b);
+            if next <= a || next >= b {
+                return x;
+            }
+        }
+        step_before = step;
+        step = (next - x).abs();
+        if step <= 2.0 * f64::EPSILON * next.abs() {
+            return next;
+        }
+        x = next;
+    }
+    x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::roots::prep::prepare;
+
+    fn fast(c: &[f64], lo: f64, hi: f64) -> Fast {
+        first_root(&prepare(c, lo, hi).expect("a polynomial"))
+    }
+
+    #[test]
+    fn answers_only_when_the_signs_are_certain() {
+        // (t − 1)(t − 2): the first root, to an ulp.
+        match fast(&[2.0, -3.0, 1.0], 0.0, 3.0) {
+            Fast::Root(t) => assert!((t - 1.0).abs() <= 2.0 * f64::EPSILON, "{t}"),
+            _ => panic!("expected a root"),
+        }
+        // (t − 1)² + 1e-3: no root.
+        assert!(matches!(fast(&[1.001, -2.0, 1.0], 0.0, 3.0), Fast::NoRoot));
+        // (t − 1)²: a double root has no certain sign pattern; the full method decides.
+        assert!(matches!(fast(&[1.0, -2.0, 1.0], 0.0, 3.0), Fast::Undecided));
+        // A root exactly at `lo` (excluded): the full method decides.
+        assert!(matches!(fast(&[2.0, -3.0, 1.0], 1.0, 3.0), Fast::Undecided));
+        // Degree 16 with 16 simple roots 1/4 apart: the first one.
+        let mut c = vec![1.0];
+        for k in 0..16 {
+            let r = -2.0 + 0.25 * f64::from(k);
+            let mut next = vec![0.0; c.len() + 1];
+            for (j, &a) in c.iter().enumerate() {
+                next[j + 1] += a;
+                next[j] -= r * a;
+            }
+            c = next;
+        }
+        match fast(&c, -2.1, 2.0) {
+            Fast::Root(t) => assert!((t + 2.0).abs() <= 1e-12, "{t}"),
+            Fast::NoRoot => panic!("expected a root"),
+            Fast::Undecided => {}
+        }
+    }
+}
