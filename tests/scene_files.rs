@@ -7,11 +7,10 @@ fn ok(text: &str) -> kardia::scene::Scene {
     parse(text, "t.scene", &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}\n{text}"))
 }
 
-#[test]
-fn every_scene_in_the_scenes_folder_parses() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let mut count = 0;
-    for entry in std::fs::read_dir(&dir).unwrap() {
+/// Parses every `.scene` file in `dir`; returns the scenes with their paths.
+fn scenes_in(dir: &std::path::Path) -> Vec<(std::path::PathBuf, kardia::scene::Scene)> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "scene") {
             let scene = parse_file(&path, &LoadOptions::default())
@@ -21,15 +20,48 @@ fn every_scene_in_the_scenes_folder_parses() {
                 "{} has no objects",
                 path.display()
             );
-            assert!(
-                scene.objects.iter().any(|o| o.keyword == "HEART"),
-                "{} has no heart",
-                path.display()
-            );
-            count += 1;
+            out.push((path, scene));
         }
     }
-    assert!(count >= 4, "only {count} scenes found in {}", dir.display());
+    out
+}
+
+#[test]
+fn every_scene_in_the_scenes_folder_parses() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let scenes = scenes_in(&dir);
+    for (path, scene) in &scenes {
+        assert!(
+            scene.objects.iter().any(|o| o.keyword == "HEART"),
+            "{} has no heart",
+            path.display()
+        );
+    }
+    assert!(
+        scenes.len() >= 4,
+        "only {} scenes found in {}",
+        scenes.len(),
+        dir.display()
+    );
+}
+
+#[test]
+fn every_implicit_gallery_scene_parses() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/implicit");
+    let scenes = scenes_in(&dir);
+    for (path, scene) in &scenes {
+        assert!(
+            scene.objects.iter().any(|o| o.keyword == "IMPLICIT"),
+            "{} has no implicit surface",
+            path.display()
+        );
+    }
+    assert!(
+        scenes.len() >= 7,
+        "only {} scenes found in {}",
+        scenes.len(),
+        dir.display()
+    );
 }
 
 #[test]
