@@ -56,18 +56,18 @@ rays_of() { # NAME LOG
   esac
 }
 
-# timed NAME: runs "${cmd[@]}" once under GNU time; appends "wall_s peak_kib rays" to
+# timed NAME: runs "${cmd[@]}" once under GNU time; appends "wall_s peak_kib rays cpu_s" to
 # $work/NAME.times. The renderer's own output (POV-Ray's progress and statistics, kardia's
 # summary) goes to $work/NAME.log.
 timed() {
   local name=$1 log="$work/$1.log" tf="$work/$1.time"
-  if ! /usr/bin/time -f "%e %M" -o "$tf" "${cmd[@]}" >"$log" 2>&1; then
+  if ! /usr/bin/time -f "%e %M %U %S" -o "$tf" "${cmd[@]}" >"$log" 2>&1; then
     echo "failed: ${cmd[*]}" >&2
     tail -n 20 "$log" >&2
     exit 1
   fi
-  read -r wall peak <"$tf"
-  echo "$wall $peak $(rays_of "$name" "$log")" >>"$work/$name.times"
+  read -r wall peak user sys <"$tf"
+  echo "$wall $peak $(rays_of "$name" "$log") $(awk -v u="$user" -v s="$sys" 'BEGIN {print u + s}')" >>"$work/$name.times"
 }
 
 SOLVERS=$("$KARDIA" render --help | sed -n 's/.*\[default: \([a-z]*\)\].*possible values: \([a-z, ]*\)\].*/\1 \2/p' | head -n 1 | tr -d ',')
@@ -95,9 +95,9 @@ median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (
 col() { awk -v c="$2" '{print $c}' "$work/$1.times" | median; }
 
 printf '\n%s×%s heart with shadows, 1 sample per pixel, %s runs each, medians of whole-process\n' "$SIZE" "$SIZE" "$RUNS"
-printf 'wall time (GNU time %%e) and peak resident memory (%%M)\n\n'
-printf '| renderer | threads | wall time (s) | POV-Ray time / this | rays | rays/s | peak memory (MiB) |\n'
-printf '|---|---|---|---|---|---|---|\n'
+printf 'wall time (GNU time %%e), CPU time (%%U + %%S) and peak resident memory (%%M)\n\n'
+printf '| renderer | threads | wall time (s) | POV-Ray time / this | CPU time (s) | rays | rays/s | peak memory (MiB) |\n'
+printf '|---|---|---|---|---|---|---|---|\n'
 for t in $THREAD_COUNTS; do
   base=$(col "pov-$t" 1)
   for name in "pov-$t" $(for s in $SOLVERS; do echo "kardia-$s-$t"; done); do
@@ -106,8 +106,8 @@ for t in $THREAD_COUNTS; do
       *) s=${name#kardia-}; s=${s%-*}; label="kardia --solver $s"; [ "$s" = "$DEFAULT" ] && label="$label (default)" ;;
     esac
     awk -v l="$label" -v t="$t" -v w="$(col "$name" 1)" -v b="$base" -v r="$(col "$name" 3)" \
-      -v p="$(col "$name" 2)" \
-      'BEGIN {printf "| %s | %s | %.2f | %.2f× | %.2f M | %.2f M | %.1f |\n", l, t, w, b / w, r / 1e6, r / w / 1e6, p / 1024}'
+      -v p="$(col "$name" 2)" -v c="$(col "$name" 4)" \
+      'BEGIN {printf "| %s | %s | %.2f | %.2f× | %.2f | %.2f M | %.2f M | %.1f |\n", l, t, w, b / w, c, r / 1e6, r / w / 1e6, p / 1024}'
   done
 done
 
