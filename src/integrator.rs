@@ -45,7 +45,8 @@ use std::time::{Duration, Instant};
 /// Relative self-intersection guard for secondary and shadow rays (see the module docs).
 pub const SELF_HIT_EPS: f64 = 1e-9;
 
-/// Side of the square image tiles rendered in parallel, in pixels.
+/// Side of the square image tiles, in pixels; each band of tiles one `TILE_SIZE` tall is one
+/// parallel work item, rendered straight into its rows of the image.
 pub const TILE_SIZE: u32 = 16;
 
 /// Most surfaces a shadow ray passes through before the light counts as blocked.
