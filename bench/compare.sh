@@ -1,95 +1,165 @@
 #!/usr/bin/env bash
-# Renders the same heart with POV-Ray 3.7 (polynomial + sturm) and with kardia, side by side,
-# and prints a table of median whole-process wall times, ratios, rays per second and peak
-# memory. Usage:
+# Renders the same heart with POV-Ray 3.7 (polynomial + sturm) and with kardia (every
+# solver), one thread and then all threads, and prints a table of median whole-process wall
+# times, ratios, rays per second and peak memory; then checks the targets of issue 5 and that
+# both renderers cover the same pixels. Usage:
 #
 #   bench/compare.sh [RUNS] [SIZE]        (defaults: 5 runs, 1600×1600)
 #
-# Installs povray, GNU time and (if needed) the release build. Each configuration runs RUNS
-# times, interleaved with the others so machine noise hits all alike; the median is reported.
+# Installs what it needs with apt-get (povray, GNU time) and builds the release binaries.
+# Each configuration runs RUNS times, interleaved with the others so that machine noise hits
+# all alike; medians are reported. Set KEEP=DIR to keep the last images and logs in DIR.
+# Exit status: 0 when the silhouettes agree (the timing targets are reported, not enforced).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RUNS=${1:-5}
 SIZE=${2:-1600}
 THREADS=$(nproc)
 
-need() { command -v "$1" >/dev/null 2>&1; }
 apt_install() {
-  local sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"
+  local sudo=""
+  [ "$(id -u)" -ne 0 ] && sudo="sudo"
+  echo "installing $* with apt-get…" >&2
   $sudo apt-get update -qq >/dev/null
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "$@" >/dev/null
 }
-need povray || apt_install povray
+command -v povray >/dev/null 2>&1 || apt_install povray
 [ -x /usr/bin/time ] || apt_install time
 
 cargo build --release --quiet --bin kardia --example imgcompare
 KARDIA=target/release/kardia
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+IMGCOMPARE=target/release/examples/imgcompare
+if [ -n "${KEEP:-}" ]; then
+  work=$KEEP
+  mkdir -p "$work"
+  rm -f "$work"/*.times
+else
+  work=$(mktemp -d)
+  trap 'rm -rf "$work"' EXIT
+fi
 
-# run NAME CMD…: one timed run; appends "wall_s peak_kib rays" to $work/NAME.
-run() {
-  local name=$1; shift
-  local log="$work/$name.log"
-  /usr/bin/time -f "TIME %e %M" "$@" >"$log" 2>&1 || { cat "$log" >&2; exit 1; }
-  local wall peak rays
-  wall=$(awk '/^TIME/ {print $2}' "$log")
-  peak=$(awk '/^TIME/ {print $3}' "$log")
-  rays=$(rays_of "$name" "$log")
-  echo "$wall $peak $rays" >>"$work/$name"
+# The command lines (arrays, so that /usr/bin/time runs the renderer itself).
+pov_cmd() { # THREADS OUT
+  cmd=(povray +Ibench/heart.pov +O"$2" +W"$SIZE" +H"$SIZE" +WT"$1" -D -V +FN)
+}
+kardia_cmd() { # THREADS SOLVER OUT [SEED]
+  cmd=("$KARDIA" render bench/heart.scene -o "$3" --width "$SIZE" --height "$SIZE" --spp 1
+    --threads "$1" --solver "$2" --seed "${4:-0}")
 }
 
-# Rays traced, as each renderer reports them: POV-Ray's camera rays plus shadow-ray tests;
-# kardia's summary line ("… N rays …").
-rays_of() {
+# Rays traced, as each renderer reports them: POV-Ray's camera rays plus its shadow-ray
+# tests (from its render statistics); kardia's summary line ("… N rays …": primary + shadow).
+rays_of() { # NAME LOG
   case $1 in
-    pov*) tr '\r' '\n' <"$2" | awk '/^Rays:/ {r=$2} /^Shadow Ray Tests:/ {s=$4} END {print r+s}' ;;
+    pov*) tr '\r' '\n' <"$2" | awk '/^Rays:/ {r = $2} /^Shadow Ray Tests:/ {s = $4} END {print r + s}' ;;
     *) tr '\r' '\n' <"$2" | sed -n 's/.* \([0-9][0-9]*\) rays.*/\1/p' | tail -n 1 ;;
   esac
 }
 
-pov() { # pov THREADS OUT
-  povray +Ibench/heart.pov +O"$2" +W"$SIZE" +H"$SIZE" +WT"$1" -D +FN -GA
-}
-kardia() { # kardia THREADS SOLVER OUT
-  "$KARDIA" render bench/heart.scene -o "$3" --width "$SIZE" --height "$SIZE" --spp 1 \
-    --threads "$1" --solver "$2"
+# timed NAME: runs "${cmd[@]}" once under GNU time; appends "wall_s peak_kib rays cpu_s" to
+# $work/NAME.times. The renderer's own output (POV-Ray's progress and statistics, kardia's
+# summary) goes to $work/NAME.log.
+timed() {
+  local name=$1 log="$work/$1.log" tf="$work/$1.time"
+  if ! /usr/bin/time -f "%e %M %U %S" -o "$tf" "${cmd[@]}" >"$log" 2>&1; then
+    echo "failed: ${cmd[*]}" >&2
+    tail -n 20 "$log" >&2
+    exit 1
+  fi
+  read -r wall peak user sys <"$tf"
+  echo "$wall $peak $(rays_of "$name" "$log") $(awk -v u="$user" -v s="$sys" 'BEGIN {print u + s}')" >>"$work/$name.times"
 }
 
-SOLVERS=$("$KARDIA" render --help | sed -n 's/.*possible values: \(.*\)\]/\1/p' | tr -d ',' | head -n 1)
-[ -n "$SOLVERS" ] || SOLVERS="sturm"
+SOLVERS=$("$KARDIA" render --help | sed -n 's/.*\[default: \([a-z]*\)\].*possible values: \([a-z, ]*\)\].*/\1 \2/p' | head -n 1 | tr -d ',')
+DEFAULT=${SOLVERS%% *}
+SOLVERS=$(echo "$SOLVERS" | tr ' ' '\n' | awk 'NF && !seen[$0]++' | tr '\n' ' ')
+[ -n "$DEFAULT" ] || { echo "cannot read the solvers from kardia render --help" >&2; exit 1; }
+THREAD_COUNTS=1
+[ "$THREADS" -gt 1 ] && THREAD_COUNTS="1 $THREADS"
 
+echo "$(povray --version 2>&1 | grep -m1 '^POV-Ray') | kardia $(git describe --always --dirty 2>/dev/null || echo '?')" >&2
+echo "$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'), $THREADS threads" >&2
 for i in $(seq "$RUNS"); do
   echo "run $i of $RUNS…" >&2
-  run pov-1 pov 1 "$work/pov.png"
-  for s in $SOLVERS; do run "kardia-$s-1" kardia 1 "$s" "$work/kardia-$s.png"; done
-  run "pov-$THREADS" pov "$THREADS" "$work/pov.png"
-  for s in $SOLVERS; do run "kardia-$s-$THREADS" kardia "$THREADS" "$s" "$work/kardia-$s.png"; done
-done
-
-median() { sort -n | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
-col() { awk -v c="$2" '{print $c}' "$work/$1" | median; }
-
-printf '\n%s×%s heart with shadows, %s runs each, median whole-process wall time\n\n' "$SIZE" "$SIZE" "$RUNS"
-printf '| renderer | threads | wall time (s) | POV-Ray time / this | rays/s | peak memory (MiB) |\n'
-printf '|---|---|---|---|---|---|\n'
-for t in 1 "$THREADS"; do
-  base=$(col "pov-$t" 1)
-  for name in "pov-$t" $(for s in $SOLVERS; do echo "kardia-$s-$t"; done); do
-    wall=$(col "$name" 1); peak=$(col "$name" 2); rays=$(col "$name" 3)
-    label=${name%-*}; label=${label/pov/POV-Ray 3.7 (sturm)}; label=${label/kardia-/kardia --solver }
-    awk -v l="$label" -v t="$t" -v w="$wall" -v b="$base" -v r="$rays" -v p="$peak" \
-      'BEGIN {printf "| %s | %s | %.2f | %.2f× | %.2f M | %.0f |\n", l, t, w, b/w, r/w/1e6, p/1024}'
+  for t in $THREAD_COUNTS; do
+    pov_cmd "$t" "$work/pov.png"
+    timed "pov-$t"
+    for s in $SOLVERS; do
+      kardia_cmd "$t" "$s" "$work/kardia-$s.png"
+      timed "kardia-$s-$t"
+    done
   done
 done
-for s in $SOLVERS; do
-  k1=$(col "kardia-$s-1" 1); kn=$(col "kardia-$s-$THREADS" 1)
-  awk -v s="$s" -v a="$k1" -v b="$kn" -v t="$THREADS" \
-    'BEGIN {printf "\nkardia --solver %s: %s threads are %.2f× faster than 1\n", s, t, a/b}'
+
+median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
+col() { awk -v c="$2" '{print $c}' "$work/$1.times" | median; }
+
+printf '\n%s×%s heart with shadows, 1 sample per pixel, %s runs each, medians of whole-process\n' "$SIZE" "$SIZE" "$RUNS"
+printf 'wall time (GNU time %%e), CPU time (%%U + %%S) and peak resident memory (%%M)\n\n'
+printf '| renderer | threads | wall time (s) | POV-Ray time / this | CPU time (s) | rays | rays/s | peak memory (MiB) |\n'
+printf '|---|---|---|---|---|---|---|---|\n'
+for t in $THREAD_COUNTS; do
+  base=$(col "pov-$t" 1)
+  for name in "pov-$t" $(for s in $SOLVERS; do echo "kardia-$s-$t"; done); do
+    case $name in
+      pov*) label="POV-Ray 3.7 (sturm)" ;;
+      *) s=${name#kardia-}; s=${s%-*}; label="kardia --solver $s"; [ "$s" = "$DEFAULT" ] && label="$label (default)" ;;
+    esac
+    awk -v l="$label" -v t="$t" -v w="$(col "$name" 1)" -v b="$base" -v r="$(col "$name" 3)" \
+      -v p="$(col "$name" 2)" -v c="$(col "$name" 4)" \
+      'BEGIN {printf "| %s | %s | %.2f | %.2f× | %.2f | %.2f M | %.2f M | %.1f |\n", l, t, w, b / w, c, r / 1e6, r / w / 1e6, p / 1024}'
+  done
 done
 
+# The targets of issue 5 (reported, not enforced: timings depend on the machine).
+verdict() { awk -v x="$1" -v goal="$2" 'BEGIN {print (x >= goal) ? "met" : "NOT met"}'; }
 echo
-echo "Same framing and specks (last renders):"
+echo "Targets (single thread unless stated):"
+pov1=$(col pov-1 1)
 for s in $SOLVERS; do
-  target/release/examples/imgcompare "$work/pov.png" "$work/kardia-$s.png"
+  k1=$(col "kardia-$s-1" 1)
+  r=$(awk -v a="$pov1" -v b="$k1" 'BEGIN {printf "%.2f", a / b}')
+  if [ "$s" = "$DEFAULT" ]; then
+    echo "  default solver ($s) ≥ 5× faster than POV-Ray: ${r}× — $(verdict "$r" 5)"
+  fi
+  if [ "$s" = sturm ]; then
+    echo "  --solver sturm no slower than POV-Ray: ${r}× — $(verdict "$r" 1)"
+  fi
 done
+if [ "$THREADS" -gt 1 ]; then
+  for s in $SOLVERS; do
+    r=$(awk -v a="$(col "kardia-$s-1" 1)" -v b="$(col "kardia-$s-$THREADS" 1)" 'BEGIN {printf "%.2f", a / b}')
+    goal=$(awk -v t="$THREADS" 'BEGIN {print 0.9 * t}')
+    echo "  kardia --solver $s, $THREADS threads ≥ ${goal}× faster than 1: ${r}× — $(verdict "$r" "$goal")"
+  done
+  r=$(awk -v a="$pov1" -v b="$(col "pov-$THREADS" 1)" 'BEGIN {printf "%.2f", a / b}')
+  echo "  (POV-Ray, $THREADS threads against 1: ${r}×)"
+fi
+
+# Same framing: kardia jitters its one sample inside each pixel where POV-Ray takes the
+# centre, so edge pixels disagree at random along the whole outline. Two kardia renders with
+# different seeds measure that noise; a framing off by half a pixel or more would make POV-Ray
+# and kardia disagree on more pixels than that (about half the outline instead of a quarter
+# to a third), and on the silhouette's area.
+echo
+echo "Same framing (the last renders; object = more than 8 levels from the black background):"
+"$KARDIA" render bench/heart.scene -o "$work/kardia-seed1.png" --width "$SIZE" --height "$SIZE" \
+  --spp 1 --seed 1 --quiet
+status=0
+noise=$("$IMGCOMPARE" "$work/kardia-$DEFAULT.png" "$work/kardia-seed1.png" | sed -n 's/^silhouettes differ on \([0-9]*\) pixels.*/\1/p')
+echo "  kardia seed 0 against seed 1 (the jitter noise): $noise pixels differ"
+for s in $SOLVERS; do
+  out=$("$IMGCOMPARE" "$work/pov.png" "$work/kardia-$s.png")
+  echo "$out" | sed 's/^/  /; s#'"$work"'/##g'
+  pov_area=$(echo "$out" | sed -n '1s/.*: \([0-9]*\) object pixels.*/\1/p')
+  k_area=$(echo "$out" | sed -n '2s/.*: \([0-9]*\) object pixels.*/\1/p')
+  differ=$(echo "$out" | sed -n 's/^silhouettes differ on \([0-9]*\) pixels.*/\1/p')
+  if awk -v d="$differ" -v n="$noise" -v a="$pov_area" -v b="$k_area" \
+    'BEGIN {e = (a > b) ? a - b : b - a; exit !(a > 0 && d <= n && e <= 0.002 * a)}'; then
+    echo "  PASS: POV-Ray and kardia --solver $s cover the same pixels ($differ differ, within the jitter noise of $noise; areas within 0.2%)"
+  else
+    echo "  FAIL: POV-Ray and kardia --solver $s do not cover the same pixels ($differ differ, jitter noise $noise; areas $pov_area and $k_area)"
+    status=1
+  fi
+done
+exit $status

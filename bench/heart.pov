@@ -24,7 +24,7 @@ polynomial {
   xyz(0,2,4): 3, xyz(0,2,2): -6, xyz(0,2,0): 3,
   xyz(0,0,6): 1, xyz(0,0,4): -3, xyz(0,0,2): 3, xyz(0,0,0): -1
   sturm
-  bounded_by { box { <-0.72, -1.0, -1.14>, <0.72, 1.24, 1.14> } }
+  bounded_by { box { <-0.72, -1.01, -1.14>, <0.72, 1.24, 1.14> } }
   texture {
     pigment { rgb <0.8, 0.1, 0.1> }
     finish { ambient 0.1 diffuse 1 phong 0.4 phong_size 40 }

@@ -45,7 +45,8 @@ use std::time::{Duration, Instant};
 /// Relative self-intersection guard for secondary and shadow rays (see the module docs).
 pub const SELF_HIT_EPS: f64 = 1e-9;
 
-/// Side of the square image tiles rendered in parallel, in pixels.
+/// Side of the square image tiles, in pixels; each band of tiles one `TILE_SIZE` tall is one
+/// parallel work item, rendered straight into its rows of the image.
 pub const TILE_SIZE: u32 = 16;
 
 /// Most surfaces a shadow ray passes through before the light counts as blocked.
@@ -115,34 +116,40 @@ pub fn render_with_progress(
     let start = Instant::now();
     let (width, height) = (scene.width.max(1), scene.height.max(1));
     let tracer = Tracer::new(scene, settings);
-    let tiles: Vec<Tile> = tiles(width, height).collect();
-    let work = || {
-        tiles
-            .par_iter()
-            .map(|tile| {
-                let out = tracer.render_tile(tile, width, height);
-                progress(out.pixels.len() as u64);
-                out
+    let mut image = Image::new(width, height);
+    // Each band of TILE_SIZE rows is a disjoint slice of the image, filled in place tile by
+    // tile: no per-tile buffers, so the film exists once.
+    let band_len = width as usize * TILE_SIZE as usize;
+    let pixels = &mut image.pixels;
+    let mut work = || {
+        pixels
+            .par_chunks_mut(band_len)
+            .enumerate()
+            .map(|(band, out)| {
+                let y0 = band as u32 * TILE_SIZE;
+                let y1 = (y0 + TILE_SIZE).min(height);
+                let mut rays = 0;
+                for x0 in (0..width).step_by(TILE_SIZE as usize) {
+                    let tile = Tile {
+                        x0,
+                        y0,
+                        x1: (x0 + TILE_SIZE).min(width),
+                        y1,
+                    };
+                    rays += tracer.render_tile(&tile, width, height, out);
+                    progress(((tile.x1 - tile.x0) * (y1 - y0)) as u64);
+                }
+                rays
             })
-            .collect::<Vec<TileOutput>>()
+            .sum::<u64>()
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)
         .build();
-    let (outputs, threads) = match pool {
+    let (rays, threads) = match pool {
         Ok(pool) => (pool.install(work), pool.current_num_threads()),
         Err(_) => (work(), rayon::current_num_threads()),
     };
-    let mut image = Image::new(width, height);
-    let mut rays = 0;
-    for (tile, out) in tiles.iter().zip(outputs) {
-        rays += out.rays;
-        let tw = (tile.x1 - tile.x0) as usize;
-        for (row, chunk) in out.pixels.chunks_exact(tw).enumerate() {
-            let start = (tile.y0 as usize + row) * width as usize + tile.x0 as usize;
-            image.pixels[start..start + tw].copy_from_slice(chunk);
-        }
-    }
     let stats = RenderStats {
         rays,
         elapsed: start.elapsed(),
@@ -190,23 +197,6 @@ struct Tile {
     y0: u32,
     x1: u32,
     y1: u32,
-}
-
-fn tiles(width: u32, height: u32) -> impl Iterator<Item = Tile> {
-    (0..height.div_ceil(TILE_SIZE)).flat_map(move |ty| {
-        (0..width.div_ceil(TILE_SIZE)).map(move |tx| Tile {
-            x0: tx * TILE_SIZE,
-            y0: ty * TILE_SIZE,
-            x1: ((tx + 1) * TILE_SIZE).min(width),
-            y1: ((ty + 1) * TILE_SIZE).min(height),
-        })
-    })
-}
-
-/// A finished tile: its pixels row-major, and the rays it took.
-struct TileOutput {
-    pixels: Vec<DVec3>,
-    rays: u64,
 }
 
 /// splitmix64: a strong 64-bit mixer used to derive per-pixel seeds.
@@ -340,8 +330,9 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    fn render_tile(&self, tile: &Tile, width: u32, height: u32) -> TileOutput {
-        let mut pixels = Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
+    /// Renders `tile` into `band`, the image rows from `tile.y0` on (full width); returns the
+    /// rays traced.
+    fn render_tile(&self, tile: &Tile, width: u32, height: u32, band: &mut [DVec3]) -> u64 {
         let mut rays = 0;
         let inv = 1.0 / self.spp as f64;
         for y in tile.y0..tile.y1 {
@@ -360,10 +351,10 @@ impl<'a> Tracer<'a> {
                     sum += self.radiance(&ray, 0.0, 0, &mut state);
                 }
                 rays += state.rays;
-                pixels.push(sum * inv);
+                band[((y - tile.y0) * width + x) as usize] = sum * inv;
             }
         }
-        TileOutput { pixels, rays }
+        rays
     }
 
     /// The colour arriving along `ray` from its first hit beyond `t_min`.
