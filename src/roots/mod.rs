@@ -27,6 +27,7 @@
 //! allocates except [`sturm_roots`], for its result.
 
 mod bernstein;
+mod cluster;
 mod corpus;
 mod prep;
 mod sturm;

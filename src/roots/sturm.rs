@@ -512,41 +512,25 @@ fn pieces(p: &Prepared) -> impl Iterator<Item = Prepared> + '_ {
 
 /// See [`super::first_root`].
 pub(crate) fn first_root(p: &Prepared) -> Option<f64> {
-    // The common case, a tight interval, in one piece: the Bernstein test on it first.
-    let single = (p.hi - p.lo) / (p.bound / 16.0) <= 1.0;
-    if single {
-        match bernstein::first_root(p) {
-            Fast::NoRoot => return None,
-            Fast::Root(t) => return Some(t),
-            Fast::Undecided => {}
-        }
+    match bernstein::first_root(p) {
+        Fast::NoRoot => return None,
+        Fast::Root(t) => return Some(t),
+        Fast::Undecided => {}
     }
-    pieces(p).find_map(|piece| {
-        let fast = if single {
-            Fast::Undecided // already tried on this very interval
-        } else {
-            bernstein::first_root(&piece)
-        };
-        match fast {
-            Fast::NoRoot => None,
-            Fast::Root(t) => Some(t),
-            Fast::Undecided if piece.n < 8 => first_impl::<8>(&piece),
-            Fast::Undecided => first_impl::<17>(&piece),
-        }
-    })
+    let mut first = None;
+    super::cluster::roots(p, &mut |t| {
+        first = Some(t * p.scale);
+        false
+    });
+    first
 }
 
 /// See [`super::sturm_roots`].
 pub(crate) fn all_roots(p: &Prepared) -> Vec<f64> {
     let mut out = Vec::new();
-    for piece in pieces(p) {
-        if piece.n < 8 {
-            all_impl::<8>(&piece, &mut out);
-        } else {
-            all_impl::<17>(&piece, &mut out);
-        }
-    }
-    // Roots from neighbouring brackets can only coincide by rounding at a shared end.
-    out.dedup();
+    super::cluster::roots(p, &mut |t| {
+        out.push(t * p.scale);
+        true
+    });
     out
 }
