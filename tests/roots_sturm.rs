@@ -2,6 +2,15 @@
 //! issue 2. Tolerances (see `tol_for`): a simple root to `1e-12` relative, or to its condition
 //! number when the multiplied-out coefficients were rounded; a root of multiplicity `m` to
 //! 16 times the theoretical `(m!·δ/|p⁽ᵐ⁾(r)|)^(1/m)`, i.e. about `eps^(1/m)` relative.
+//!
+//! Random root sets of every degree up to 16 (`random_root_sets`): the expected distinct roots
+//! are the chosen ones, merged exactly when the rounding cannot tell them apart. With the
+//! solvers' rounding bound `δ(t) = 8·(n+1)·ε·Σ|cⱼ||t|ʲ`, a root `rᵢ` of multiplicity `mᵢ` has
+//! the resolution radius `ρᵢ = (δ·mᵢ!/|p⁽ᵐⁱ⁾(rᵢ)|)^(1/mᵢ)` (`|P| ≤ δ` within it), and two
+//! isolated neighbours are merged precisely when `|rᵢ − rⱼ| < ρᵢ + ρⱼ`; the test measures this
+//! as the hump `max |P|/δ` between neighbours (the same condition for isolated roots, and
+//! right also inside clusters of several roots), with a border band of a factor `BAND = 4`
+//! either way where both answers are accepted.
 
 use kardia::roots::{first_root, first_root_yuksel, sturm_roots};
 use proptest::prelude::*;

@@ -37,6 +37,7 @@
 //! reflected past that end, and reported only when its point lies in `(lo, hi]`; `P(lo) = 0`
 //! exactly excludes it, `P(hi) = 0` exactly reports `hi`.
 
+use super::bernstein::INV_BINOMIAL;
 use super::prep::{horner, Prepared, MAX_COEFFS};
 
 /// Halvings after which a piece counts as a zero piece.
@@ -74,42 +75,58 @@ pub(crate) fn bound(c: &[f64], x: f64) -> f64 {
     4.0 * c.len() as f64 * f64::EPSILON * abs_horner(c, x)
 }
 
-/// `1 / C(n, k)` for `n ≤ 16`.
-fn inv_binomial(n: usize, k: usize) -> f64 {
-    let mut b = 1.0f64;
-    for i in 0..k {
-        b = b * (n - i) as f64 / (i + 1) as f64;
-    }
-    1.0 / b
-}
-
 /// Bernstein coefficients of `c` on `[a, b]` (`b[0] = P(a)`, `b[n] = P(b)`) and their error
 /// bound: a Taylor shift to the end nearer to zero, a scaling and a binomial transform.
 fn bernstein(c: &[f64], a: f64, b: f64) -> (Coeffs, f64) {
     let n = c.len() - 1;
+    let mut full = [0.0; MAX_COEFFS];
+    full[..=n].copy_from_slice(c);
+    macro_rules! fixed {
+        ($($d:literal)*) => {
+            match n + 1 {
+                $($d => {
+                    let cd: [f64; $d] = full[..$d].try_into().expect("size");
+                    let (bz, m) = bernstein_fixed::<$d>(&cd, a, b);
+                    full[..$d].copy_from_slice(&bz);
+                    (full, m)
+                })*
+                _ => (full, f64::INFINITY),
+            }
+        };
+    }
+    fixed!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17)
+}
+
+/// [`bernstein`] for a polynomial of degree `D − 1` (a fixed size, so that the loops unroll).
+#[inline(always)]
+fn bernstein_fixed<const D: usize>(c: &[f64; D], a: f64, b: f64) -> ([f64; D], f64) {
+    let n = D - 1;
     let reversed = b.abs() < a.abs();
     let (x0, h) = if reversed { (b, a - b) } else { (a, b - a) };
-    let mut d = [0.0; MAX_COEFFS];
-    d[..=n].copy_from_slice(c);
+    let mut d = *c;
     for i in 0..n {
         for j in (i..n).rev() {
             d[j] += x0 * d[j + 1];
         }
     }
     let mut hk = 1.0;
-    for (k, x) in d.iter_mut().enumerate().take(n + 1) {
-        *x *= hk * inv_binomial(n, k);
+    for (x, ib) in d.iter_mut().zip(&INV_BINOMIAL[n]) {
+        *x *= hk * ib;
         hk *= h;
     }
-    for i in 1..=n {
-        for j in (i..=n).rev() {
-            d[j] += d[j - 1];
+    for i in 1..D {
+        for j in (1..D).rev() {
+            if j >= i {
+                d[j] += d[j - 1];
+            }
         }
     }
     if reversed {
-        d[..=n].reverse();
+        d.reverse();
     }
-    (d, bound(c, x0.abs() + h.abs()))
+    let x = x0.abs() + h.abs();
+    let size = c.iter().rev().fold(0.0, |s, a| s * x + a.abs());
+    (d, 4.0 * D as f64 * f64::EPSILON * size)
 }
 
 /// Most sign variations of `b` over every choice of sign for its coefficients within `m` of
