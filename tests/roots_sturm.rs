@@ -381,7 +381,7 @@ fn root_sets() -> impl Strategy<Value = Vec<(f64, usize)>> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 1000, ..ProptestConfig::default() })]
 
     /// Roots are merged exactly when their resolution radii overlap (up to [`BAND`]), whatever
     /// the scale of the variable.

@@ -368,3 +368,58 @@ pub(crate) fn roots(p: &Prepared, emit: &mut dyn FnMut(f64) -> bool) {
         close(span, emit);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::roots::prep::prepare;
+
+    fn all(c: &[f64], lo: f64, hi: f64) -> Vec<f64> {
+        let p = prepare(c, lo, hi).expect("a polynomial");
+        let mut out = Vec::new();
+        roots(&p, &mut |t| {
+            out.push(t * p.scale);
+            true
+        });
+        out
+    }
+
+    #[test]
+    fn pieces_are_classified_by_certain_signs() {
+        // (t − 1)(t − 2) on [0, 1.5]: one certain sign change, clean ends.
+        let c = [2.0, -3.0, 1.0];
+        let (b, m) = bernstein(&c, 0.0, 1.5);
+        assert_eq!(classify(&c, 0.0, 1.5, &b[..3], m), Kind::Simple);
+        // On [2.5, 3]: no root.
+        let (b, m) = bernstein(&c, 2.5, 3.0);
+        assert_eq!(classify(&c, 2.5, 3.0, &b[..3], m), Kind::Empty);
+        // (t − 1)² on a tiny piece around 1: indistinguishable from zero.
+        let c = [1.0, -2.0, 1.0];
+        let (b, m) = bernstein(&c, 1.0 - 1e-9, 1.0 + 1e-9);
+        assert_eq!(classify(&c, 1.0 - 1e-9, 1.0 + 1e-9, &b[..3], m), Kind::Zero);
+        // ... and undecided on a larger one.
+        let (b, m) = bernstein(&c, 0.5, 1.5);
+        assert_eq!(classify(&c, 0.5, 1.5, &b[..3], m), Kind::Split);
+        assert_eq!(max_variations(&[1.0, 0.0, 1.0], 0.5), 2);
+        assert_eq!(max_variations(&[1.0, 0.0, -1.0], 0.5), 1);
+        assert_eq!(max_variations(&[0.0, 1.0, 1.0], 0.5), 1);
+    }
+
+    #[test]
+    fn zero_regions_are_one_root_at_the_multiple_root() {
+        // (t − 1)³(t − 2): the triple root once, located on P''.
+        let c = [-2.0, 7.0, -9.0, 5.0, -1.0];
+        let r = all(&c, 0.0, 3.0);
+        assert_eq!(r.len(), 2, "{r:?}");
+        assert!((r[0] - 1.0).abs() <= 1e-12, "{r:?}");
+        assert!((r[1] - 2.0).abs() <= 1e-14, "{r:?}");
+        // (t − 1)² + 1e-20 is (t − 1)² up to rounding: one root.
+        let r = all(&[1.0 + 1e-20, -2.0, 1.0], 0.0, 3.0);
+        assert_eq!(r.len(), 1, "{r:?}");
+        // (t − 1)² + 1e-3 is not.
+        assert!(all(&[1.001, -2.0, 1.0], 0.0, 3.0).is_empty());
+        // A multiple root at lo is excluded, at hi included.
+        assert_eq!(all(&c, 1.0, 1.5), Vec::<f64>::new());
+        assert_eq!(all(&c, 0.5, 1.0), vec![1.0]);
+    }
+}
