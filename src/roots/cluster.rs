@@ -130,28 +130,29 @@ fn bernstein_fixed<const D: usize>(c: &[f64; D], a: f64, b: f64) -> ([f64; D], f
 }
 
 /// Most sign variations of `b` over every choice of sign for its coefficients within `m` of
-/// zero (those are uncertain).
+/// zero (those are uncertain): a run of `f` uncertain coefficients between two certain ones
+/// allows up to `f + 1` variations of the right parity, at either end up to `f`.
 fn max_variations(b: &[f64], m: f64) -> u32 {
     let mut v = 0;
     let mut last: Option<bool> = None;
-    let mut free = false;
+    let mut free = 0u32;
     for &x in b {
         if x.abs() <= m {
-            free = true;
+            free += 1;
             continue;
         }
         let neg = x < 0.0;
-        match last {
-            None => v += u32::from(free),
-            Some(l) if l != neg => v += 1,
-            Some(_) => v += 2 * u32::from(free),
-        }
+        v += match last {
+            None => free,
+            Some(l) if l != neg => 2 * (free / 2) + 1,
+            Some(_) => 2 * free.div_ceil(2),
+        };
         last = Some(neg);
-        free = false;
+        free = 0;
     }
     match last {
         None => u32::MAX,
-        Some(_) => v + u32::from(free),
+        Some(_) => v + free,
     }
 }
 
@@ -403,6 +404,9 @@ mod tests {
         assert_eq!(max_variations(&[1.0, 0.0, 1.0], 0.5), 2);
         assert_eq!(max_variations(&[1.0, 0.0, -1.0], 0.5), 1);
         assert_eq!(max_variations(&[0.0, 1.0, 1.0], 0.5), 1);
+        assert_eq!(max_variations(&[-1.0, 0.0, 0.0, 1.0], 0.5), 3);
+        assert_eq!(max_variations(&[-1.0, 0.0, 0.0, -1.0], 0.5), 2);
+        assert_eq!(max_variations(&[0.0, 0.0, 1.0], 0.5), 2);
     }
 
     #[test]
