@@ -50,24 +50,24 @@ const MAX_ITER: usize = 2200;
 /// before the roots' separation, certain by then, is resolved).
 const MAX_COUNTS: usize = 4096;
 
-/// A certain Sturm sequence of `Q` (at most 17 members).
-struct Chain {
-    p: [[f64; MAX_COEFFS]; MAX_COEFFS],
-    deg: [usize; MAX_COEFFS],
+/// A certain Sturm sequence of `Q` (at most `M` members of degree below `M`).
+struct Chain<const M: usize> {
+    p: [[f64; M]; M],
+    deg: [usize; M],
     /// Bound on each member's coefficient errors.
-    err: [f64; MAX_COEFFS],
+    err: [f64; M],
     len: usize,
 }
 
-impl Chain {
+impl<const M: usize> Chain<M> {
     /// The sequence of `q` (degree `n ≥ 1`) whose coefficients carry absolute errors up to
     /// `input_err`, or `None` when it is not certain (see the module documentation).
     fn build(q: &[f64], input_err: f64) -> Option<Self> {
         let n = q.len() - 1;
         let mut ch = Chain {
-            p: [[0.0; MAX_COEFFS]; MAX_COEFFS],
-            deg: [0; MAX_COEFFS],
-            err: [0.0; MAX_COEFFS],
+            p: [[0.0; M]; M],
+            deg: [0; M],
+            err: [0.0; M],
             len: 2,
         };
         let s = 1.0 / max_abs(q);
@@ -123,8 +123,8 @@ impl Chain {
     /// certain.
     fn changes(&self, x: f64) -> Option<i32> {
         let ax = x.abs();
-        let mut vals = [0.0f64; MAX_COEFFS];
-        let mut sure = [false; MAX_COEFFS];
+        let mut vals = [0.0f64; M];
+        let mut sure = [false; M];
         for k in 0..self.len {
             let c = &self.p[k][..=self.deg[k]];
             let v = horner(c, x);
@@ -289,9 +289,22 @@ fn checked_root(c: &[f64], a: f64, b: f64) -> Option<f64> {
 /// (ascending; only the first when `first_only`): their number, or `None` when some sign it
 /// needs is not certain.
 fn isolate(p: &Prepared, first_only: bool, out: &mut [f64; MAX_COEFFS]) -> Option<usize> {
+    if p.n < 8 {
+        isolate_in::<8>(p, first_only, out)
+    } else {
+        isolate_in::<MAX_COEFFS>(p, first_only, out)
+    }
+}
+
+/// [`isolate`] with a sequence of at most `M` members.
+fn isolate_in<const M: usize>(
+    p: &Prepared,
+    first_only: bool,
+    out: &mut [f64; MAX_COEFFS],
+) -> Option<usize> {
     let c = &p.c[..=p.n];
     let sh = Shifted::new(p);
-    let ch = Chain::build(&sh.q[..=p.n], sh.err)?;
+    let ch = Chain::<M>::build(&sh.q[..=p.n], sh.err)?;
     let (va, vb) = (ch.changes(-1.0)?, ch.changes(1.0)?);
     let mut found = 0;
     // Depth-first, left half first, so roots come out ascending.
