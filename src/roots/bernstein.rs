@@ -21,7 +21,7 @@
 //! `S`). A coefficient within that margin of zero has an uncertain sign: an end coefficient so
 //! small (a root at or near an end of the interval or of a piece), a piece still ambiguous
 //! after `MAX_DEPTH` halvings (a double or multiple root, or roots closer than rounding can
-//! separate, which is where the full method's numerical gcd decides), or a bracket whose end
+//! separate, which is where the full method's zero regions decide), or a bracket whose end
 //! values disagree with the expected signs all make it decline. Where it answers, the signs
 //! it used are exact for the given coefficients, so the answer is the exact one: the same
 //! hit/miss the full method gives away from numerically multiple roots.
@@ -49,7 +49,7 @@ pub(crate) enum Fast {
 }
 
 /// `INV_BINOMIAL[n][k] = 1 / C(n, k)` for `n ≤ 16` (binomials exact, one rounding each).
-const INV_BINOMIAL: [[f64; 17]; 17] = {
+pub(crate) const INV_BINOMIAL: [[f64; 17]; 17] = {
     let mut t = [[0.0; 17]; 17];
     let mut n = 0;
     while n < 17 {

@@ -8,25 +8,36 @@
 //! the interval; an infinite interval trims exact zeros only); the variable is rescaled by a
 //! power of two (exactly) so that the interval, or the roots if smaller, has size about one.
 //!
-//! A multiple root is reported once, at its location; what "distinct" means numerically is
-//! set out in the `sturm` module (a numerical gcd of `P` and `P'` with an error bound, checked
-//! by division). Simple roots are refined to a few ulps of their magnitude; a root of
-//! multiplicity `m` is only determined by rounded coefficients to about `ε^(1/m)` relative,
-//! and is located through a derivative of `P` where that does better.
+//! A multiple root is reported once, at its location. What "distinct" means numerically is
+//! set by the rounding bound `δ(t) = 4·(n+1)·ε·Σ|cⱼ||t|ʲ` (the `cluster` module): where `|P|`
+//! stays within about `2δ` (a *zero region*), `P` is indistinguishable from zero, and all the
+//! roots in one zero region are one root. For a root `r` of multiplicity `m` that region has
+//! the radius `ρ = (2δ·m!/|P⁽ᵐ⁾(r)|)^(1/m)`: roots are merged when their radii overlap
+//! (within a border band of a factor of a few), whatever the degree, the scale of the
+//! variable or an overall factor of the coefficients (`δ` scales with them). No numerical gcd
+//! is taken. Simple roots are refined to a few ulps of their magnitude; a root of
+//! multiplicity `m` is located as the simple root of `P⁽ᵐ⁻¹⁾` in its zero region.
+//!
+//! [`sturm_roots`] and [`first_root`] (the paper's method) isolate by a Sturm sequence and
+//! refine by false position wherever every sign the sequence needs is certain (`sturm`
+//! module: `P` then square-free beyond rounding); otherwise the interval goes to the
+//! certain-sign Bernstein subdivision with zero regions (`cluster`), which gives the same
+//! answer where both apply.
 //!
 //! Both first-root queries start with the same cheap test (`bernstein`): the polynomial on
 //! the interval in the Bernstein basis, where Descartes' rule of signs (with halving) either
 //! proves there is no root, or isolates the first one as a simple root in a sign-change
 //! bracket (refined by a safeguarded Newton/Schröder iteration on `P` itself); it answers only
-//! when every sign it used is certain (beyond a rounding-error bound), and otherwise leaves
-//! the interval to the strategy's own isolation. On the heart corpus it answers for about 98%
-//! of the rays; the rest (roots at or near multiple roots, or at the ends) go to the full
-//! method.
+//! when every sign it used is certain (beyond a rounding-error bound larger than the zero
+//! regions'), and otherwise leaves the interval to the strategy's own isolation. On the heart
+//! corpus it answers for about 98% of the rays; the rest (roots at or near multiple roots, or
+//! at the ends) go to the full method.
 //!
 //! No input makes these functions panic or loop without end (every loop is bounded); none
 //! allocates except [`sturm_roots`], for its result.
 
 mod bernstein;
+mod cluster;
 mod corpus;
 mod prep;
 mod sturm;
@@ -69,12 +80,12 @@ pub fn first_root_yuksel(coeffs: &[f64], lo: f64, hi: f64) -> Option<f64> {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Solver {
     /// The paper's method: Sturm sequence isolation, false-position refinement, behind the
-    /// shared Bernstein test. The default: on the heart ray corpus (see `benches/roots.rs`)
-    /// it measured as fast as [`Solver::Yuksel`], within the measurement noise (the Bernstein
-    /// test answers for about 98% of the rays with both; the rest costs about 1 µs with
-    /// either), with the same hit/miss on every ray. A tight interval (the ray's span inside the
-    /// shape's bounding box) is best: a wide one is cut into up to 16 pieces, each with its
-    /// own test and sequence, which costs more.
+    /// shared Bernstein test; where the sequence's signs are not certain (multiple or
+    /// clustered roots), the zero-region Bernstein subdivision (see the module
+    /// documentation). The default: on the heart ray corpus (see `benches/roots.rs`) it
+    /// measured about as fast as [`Solver::Yuksel`] (the Bernstein test answers for about 98%
+    /// of the rays with both), with the same hit/miss on every ray. A tight interval (the
+    /// ray's span inside the shape's bounding box) is best.
     #[default]
     Sturm,
     /// Yuksel 2022: split at the derivative's roots (recursively) into monotonic pieces,

@@ -22,8 +22,6 @@ pub(crate) struct Prepared {
     pub lo: f64,
     /// Upper end of the interval in `T` (included), finite, `> lo`.
     pub hi: f64,
-    /// Every root has `|T|` below this (Fujiwara's bound, a power of two).
-    pub bound: f64,
 }
 
 /// The binary exponent of a finite non-zero `x` (`floor(log2 |x|)`, clamped for subnormals).
@@ -155,7 +153,6 @@ pub(crate) fn prepare(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
         scale,
         lo,
         hi,
-        bound: fujiwara,
     })
 }
 

@@ -1,0 +1,429 @@
+//! Robust isolation of every distinct root by certain-sign Bernstein subdivision, with
+//! numerically multiple roots and unresolvable clusters detected as *zero regions*.
+//!
+//! # The rounding bound
+//!
+//! The coefficients of `P` are only known to a relative rounding error, so `P(t)` is only
+//! known up to `δ(t) = 4·(n+1)·ε·A(|t|)`, `A(x) = Σ|cⱼ|·xʲ`: this is the rounding bound, and
+//! it also bounds the error of every Bernstein coefficient computed here (each piece's
+//! coefficients are computed from `P` itself, by a Taylor shift to the piece's end nearer to
+//! zero, so the bound on a piece `[a, b]` is `δ` at `min(|a|, |b|) + (b − a)`, about `δ` at
+//! the piece).
+//!
+//! # The decisions
+//!
+//! A piece is halved (slightly off the middle) until one of these holds, with `M` its bound:
+//!
+//! * every Bernstein coefficient is at most `2M` in magnitude: `P` is indistinguishable from
+//!   zero on the piece, a *zero piece*;
+//! * every coefficient exceeds `M` in magnitude with no sign variation: no root (Descartes);
+//! * at most one sign variation whatever the signs of the uncertain coefficients, and both
+//!   end values (`P` at the piece's ends) beyond `3M`: exactly one simple root, with a sign
+//!   change of `P` to refine it (the `3M` keeps such a piece from touching a zero piece);
+//! * the piece can no longer be halved usefully: it counts as a zero piece.
+//!
+//! Pieces come out left to right; consecutive zero pieces form one *cluster*, reported as one
+//! root. So two roots are merged exactly when their zero regions `{|P| ≤ ~2δ}` touch: for a
+//! root `r` of multiplicity `m` that region has radius `ρ = (2δ·m!/|P⁽ᵐ⁾(r)|)^(1/m)`, and two
+//! roots merge when `|rᵢ − rⱼ|` is below about `ρᵢ + ρⱼ` (the bounds `M`, `2M`, `3M` make the
+//! border a band of a factor of a few, not a line).
+//!
+//! # Locating a cluster
+//!
+//! A root of multiplicity `m` is a simple root of `P⁽ᵐ⁻¹⁾`, which locates it far better than
+//! `P` can: the first derivative with exactly one certain sign change over the cluster gives
+//! the point (refined on that derivative). Failing that, a sign change of `P` over the
+//! cluster, else its middle. A cluster at an end of the interval is examined on a span
+//! reflected past that end, and reported only when its point lies in `(lo, hi]`; `P(lo) = 0`
+//! exactly excludes it, `P(hi) = 0` exactly reports `hi`.
+
+use super::bernstein::INV_BINOMIAL;
+use super::prep::{horner, Prepared, MAX_COEFFS};
+
+/// Halvings after which a piece counts as a zero piece.
+const MAX_DEPTH: usize = 100;
+
+/// Pieces examined at most; what is left after that counts as zero pieces.
+const MAX_NODES: usize = 40_000;
+
+/// Split ratio of a piece: off the middle, so that dyadic roots are not hit exactly.
+const SPLIT: f64 = 0.496_858_407_346_410_2;
+
+/// Steps allowed to the refinement (bisection of a `f64` range needs at most about 2100).
+const MAX_ITER: usize = 2200;
+
+type Coeffs = [f64; MAX_COEFFS];
+
+/// What a piece holds, as far as the rounding bound lets one tell.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Empty,
+    Simple,
+    Zero,
+    Split,
+}
+
+/// `A(x) = Σ|cⱼ|·xʲ` for `x ≥ 0`.
+#[inline]
+pub(crate) fn abs_horner(c: &[f64], x: f64) -> f64 {
+    c.iter().rev().fold(0.0, |s, a| s * x + a.abs())
+}
+
+/// The rounding bound `δ` of `c` (degree `c.len() − 1`) at `|t| = x`.
+#[inline]
+pub(crate) fn bound(c: &[f64], x: f64) -> f64 {
+    4.0 * c.len() as f64 * f64::EPSILON * abs_horner(c, x)
+}
+
+/// Bernstein coefficients of `c` on `[a, b]` (`b[0] = P(a)`, `b[n] = P(b)`) and their error
+/// bound: a Taylor shift to the end nearer to zero, a scaling and a binomial transform.
+fn bernstein(c: &[f64], a: f64, b: f64) -> (Coeffs, f64) {
+    let n = c.len() - 1;
+    let mut full = [0.0; MAX_COEFFS];
+    full[..=n].copy_from_slice(c);
+    macro_rules! fixed {
+        ($($d:literal)*) => {
+            match n + 1 {
+                $($d => {
+                    let cd: [f64; $d] = full[..$d].try_into().expect("size");
+                    let (bz, m) = bernstein_fixed::<$d>(&cd, a, b);
+                    full[..$d].copy_from_slice(&bz);
+                    (full, m)
+                })*
+                _ => (full, f64::INFINITY),
+            }
+        };
+    }
+    fixed!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17)
+}
+
+/// [`bernstein`] for a polynomial of degree `D − 1` (a fixed size, so that the loops unroll).
+#[inline(always)]
+fn bernstein_fixed<const D: usize>(c: &[f64; D], a: f64, b: f64) -> ([f64; D], f64) {
+    let n = D - 1;
+    let reversed = b.abs() < a.abs();
+    let (x0, h) = if reversed { (b, a - b) } else { (a, b - a) };
+    let mut d = *c;
+    for i in 0..n {
+        for j in (i..n).rev() {
+            d[j] += x0 * d[j + 1];
+        }
+    }
+    let mut hk = 1.0;
+    for (x, ib) in d.iter_mut().zip(&INV_BINOMIAL[n]) {
+        *x *= hk * ib;
+        hk *= h;
+    }
+    for i in 1..D {
+        for j in (1..D).rev() {
+            if j >= i {
+                d[j] += d[j - 1];
+            }
+        }
+    }
+    if reversed {
+        d.reverse();
+    }
+    let x = x0.abs() + h.abs();
+    let size = c.iter().rev().fold(0.0, |s, a| s * x + a.abs());
+    (d, 4.0 * D as f64 * f64::EPSILON * size)
+}
+
+/// Most sign variations of `b` over every choice of sign for its coefficients within `m` of
+/// zero (those are uncertain): a run of `f` uncertain coefficients between two certain ones
+/// allows up to `f + 1` variations of the right parity, at either end up to `f`.
+fn max_variations(b: &[f64], m: f64) -> u32 {
+    let mut v = 0;
+    let mut last: Option<bool> = None;
+    let mut free = 0u32;
+    for &x in b {
+        if x.abs() <= m {
+            free += 1;
+            continue;
+        }
+        let neg = x < 0.0;
+        v += match last {
+            None => free,
+            Some(l) if l != neg => 2 * (free / 2) + 1,
+            Some(_) => 2 * free.div_ceil(2),
+        };
+        last = Some(neg);
+        free = 0;
+    }
+    match last {
+        None => u32::MAX,
+        Some(_) => v + free,
+    }
+}
+
+/// The decision for the piece `[a, b]` of `c` with Bernstein coefficients `bz` and bound `m`.
+/// A zero piece needs each `|bᵢ|` below `2δ` at its own abscissa `a + (b − a)·i/n` (where
+/// the control polygon approximates `P`), not only below `2m`: on a long piece `m` is `δ` at
+/// its far end, larger than `δ` inside.
+fn classify(c: &[f64], a: f64, b: f64, bz: &[f64], m: f64) -> Kind {
+    let n = bz.len() - 1;
+    if bz.iter().all(|x| x.abs() <= 2.0 * m) {
+        let step = (b - a) / n as f64;
+        let zero = bz.iter().enumerate().all(|(i, x)| {
+            let t = if i == n { b } else { a + step * i as f64 };
+            x.abs() <= 2.0 * bound(c, t.abs())
+        });
+        if zero {
+            return Kind::Zero;
+        }
+    }
+    let b = bz;
+    match max_variations(b, m) {
+        0 => Kind::Empty,
+        1 if b[0].abs() > 3.0 * m && b[n].abs() > 3.0 * m => Kind::Simple,
+        _ => Kind::Split,
+    }
+}
+
+/// Coefficients of `P⁽ᵏ⁾` (a positive multiple of it is not needed: exact factors `j!/(j−k)!`).
+fn derivative(c: &[f64], k: usize) -> (Coeffs, usize) {
+    let n = c.len() - 1;
+    let mut d = [0.0; MAX_COEFFS];
+    d[..=n].copy_from_slice(c);
+    for step in 0..k {
+        for j in 0..n - step {
+            d[j] = d[j + 1] * (j + 1) as f64;
+        }
+        d[n - step] = 0.0;
+    }
+    (d, n - k)
+}
+
+/// `(p(x), p'(x), p''(x)/2, A(|x|))` for ascending `c`.
+#[inline]
+fn eval3(c: &[f64], x: f64) -> (f64, f64, f64, f64) {
+    let ax = x.abs();
+    let (mut v, mut d, mut h, mut s) = (0.0, 0.0, 0.0, 0.0);
+    for &a in c.iter().rev() {
+        h = h * x + d;
+        d = d * x + v;
+        v = v * x + a;
+        s = s * ax + a.abs();
+    }
+    (v, d, h, s)
+}
+
+/// The root of `c` in `[a, b]`, where `fa = c(a)` and `fb = c(b)` have opposite signs (neither
+/// zero): safeguarded Newton/Schröder steps inside the shrinking sign-change bracket, a
+/// bisection whenever a step leaves it or makes slow progress. To a few ulps of the root.
+pub(crate) fn refine(c: &[f64], mut a: f64, mut b: f64, fa: f64, fb: f64) -> f64 {
+    let neg_a = fa < 0.0;
+    let mut x = a - fa * ((b - a) / (fb - fa));
+    if !(x > a && x < b) {
+        x = 0.5 * (a + b);
+    }
+    let (mut step, mut step_before) = (b - a, b - a);
+    for _ in 0..MAX_ITER {
+        let (v, d, h, size) = eval3(c, x);
+        if v == 0.0 {
+            return x;
+        }
+        if v.abs() <= 4.0 * f64::EPSILON * size {
+            // `p(x)` is rounding noise: one last Newton step is as close as `p` allows.
+            let last = x - v / d;
+            return if last >= a && last <= b { last } else { x };
+        }
+        if (v < 0.0) == neg_a {
+            a = x;
+        } else {
+            b = x;
+        }
+        let den = d * d - 2.0 * v * h;
+        let mut next = if den > 0.0 {
+            x - v * d / den
+        } else {
+            x - v / d
+        };
+        if (next - x).abs() > 0.5 * step_before || !(next > a && next < b) {
+            next = 0.5 * (a + b);
+            if next <= a || next >= b {
+                return x;
+            }
+        }
+        step_before = step;
+        step = (next - x).abs();
+        if step <= 2.0 * f64::EPSILON * next.abs() {
+            return next;
+        }
+        x = next;
+    }
+    x
+}
+
+/// The simple root of `c` in the certain-sign bracket `[a, b]`.
+fn simple_root(c: &[f64], a: f64, b: f64) -> f64 {
+    let (fa, fb) = (horner(c, a), horner(c, b));
+    if fa == 0.0 {
+        return a;
+    }
+    if fb == 0.0 || (fa < 0.0) == (fb < 0.0) {
+        return b;
+    }
+    refine(c, a, b, fa, fb)
+}
+
+/// The point of a cluster spanning `[a, b]`: see the module documentation.
+fn locate(c: &[f64], a: f64, b: f64) -> f64 {
+    let n = c.len() - 1;
+    for k in 1..n {
+        let (d, dn) = derivative(c, k);
+        let d = &d[..=dn];
+        let (bz, m) = bernstein(d, a, b);
+        let bz = &bz[..=dn];
+        match max_variations(bz, m) {
+            0 => break,
+            1 if bz[0].abs() > m && bz[dn].abs() > m => return simple_root(d, a, b),
+            _ => {}
+        }
+    }
+    let (fa, fb) = (horner(c, a), horner(c, b));
+    if fa != 0.0 && fb != 0.0 && (fa < 0.0) != (fb < 0.0) {
+        return refine(c, a, b, fa, fb);
+    }
+    0.5 * (a + b)
+}
+
+/// Every distinct root of `P` in `(lo, hi]`, ascending, in `T` (unscaled), passed to `emit`
+/// until it returns `false`.
+pub(crate) fn roots(p: &Prepared, emit: &mut dyn FnMut(f64) -> bool) {
+    let c = &p.c[..=p.n];
+    let (lo, hi) = (p.lo, p.hi);
+    let p_lo_zero = horner(c, lo) == 0.0;
+    let p_hi_zero = horner(c, hi) == 0.0;
+    // An open cluster: its span.
+    let mut open: Option<(f64, f64)> = None;
+    // Closes the open cluster; false when `emit` asks to stop.
+    let close = |span: (f64, f64), emit: &mut dyn FnMut(f64) -> bool| -> bool {
+        let (a, b) = span;
+        let at_lo = a <= lo;
+        let at_hi = b >= hi;
+        if at_lo && p_lo_zero {
+            return true; // the root is lo, which is excluded
+        }
+        if at_hi && p_hi_zero {
+            return emit(hi);
+        }
+        let w = b - a;
+        let (sa, sb) = (if at_lo { a - w } else { a }, if at_hi { b + w } else { b });
+        let r = locate(c, sa, sb);
+        if r > lo && r <= hi {
+            emit(r)
+        } else {
+            true
+        }
+    };
+    let mut stack = [(0.0f64, 0.0f64, 0usize); MAX_DEPTH + 1];
+    let mut top = 0;
+    let (mut a, mut b, mut depth) = (lo, hi, 0usize);
+    let mut nodes = 0usize;
+    loop {
+        nodes += 1;
+        let (bz, m) = bernstein(c, a, b);
+        let mut kind = classify(c, a, b, &bz[..=p.n], m);
+        let mid = a + SPLIT * (b - a);
+        if kind == Kind::Split
+            && (depth >= MAX_DEPTH
+                || nodes >= MAX_NODES
+                || !(mid > a && mid < b)
+                || b - a <= 4.0 * f64::EPSILON * a.abs().max(b.abs()))
+        {
+            kind = Kind::Zero;
+        }
+        match kind {
+            Kind::Split => {
+                stack[top] = (mid, b, depth + 1);
+                top += 1;
+                b = mid;
+                depth += 1;
+                continue;
+            }
+            Kind::Zero => {
+                open = Some(match open {
+                    Some((s, _)) => (s, b),
+                    None => (a, b),
+                });
+            }
+            Kind::Empty | Kind::Simple => {
+                if let Some(span) = open.take() {
+                    if !close(span, emit) {
+                        return;
+                    }
+                }
+                if kind == Kind::Simple && !emit(simple_root(c, a, b)) {
+                    return;
+                }
+            }
+        }
+        if top == 0 {
+            break;
+        }
+        top -= 1;
+        (a, b, depth) = stack[top];
+    }
+    if let Some(span) = open {
+        close(span, emit);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::roots::prep::prepare;
+
+    fn all(c: &[f64], lo: f64, hi: f64) -> Vec<f64> {
+        let p = prepare(c, lo, hi).expect("a polynomial");
+        let mut out = Vec::new();
+        roots(&p, &mut |t| {
+            out.push(t * p.scale);
+            true
+        });
+        out
+    }
+
+    #[test]
+    fn pieces_are_classified_by_certain_signs() {
+        // (t − 1)(t − 2) on [0, 1.5]: one certain sign change, clean ends.
+        let c = [2.0, -3.0, 1.0];
+        let (b, m) = bernstein(&c, 0.0, 1.5);
+        assert_eq!(classify(&c, 0.0, 1.5, &b[..3], m), Kind::Simple);
+        // On [2.5, 3]: no root.
+        let (b, m) = bernstein(&c, 2.5, 3.0);
+        assert_eq!(classify(&c, 2.5, 3.0, &b[..3], m), Kind::Empty);
+        // (t − 1)² on a tiny piece around 1: indistinguishable from zero.
+        let c = [1.0, -2.0, 1.0];
+        let (b, m) = bernstein(&c, 1.0 - 1e-9, 1.0 + 1e-9);
+        assert_eq!(classify(&c, 1.0 - 1e-9, 1.0 + 1e-9, &b[..3], m), Kind::Zero);
+        // ... and undecided on a larger one.
+        let (b, m) = bernstein(&c, 0.5, 1.5);
+        assert_eq!(classify(&c, 0.5, 1.5, &b[..3], m), Kind::Split);
+        assert_eq!(max_variations(&[1.0, 0.0, 1.0], 0.5), 2);
+        assert_eq!(max_variations(&[1.0, 0.0, -1.0], 0.5), 1);
+        assert_eq!(max_variations(&[0.0, 1.0, 1.0], 0.5), 1);
+        assert_eq!(max_variations(&[-1.0, 0.0, 0.0, 1.0], 0.5), 3);
+        assert_eq!(max_variations(&[-1.0, 0.0, 0.0, -1.0], 0.5), 2);
+        assert_eq!(max_variations(&[0.0, 0.0, 1.0], 0.5), 2);
+    }
+
+    #[test]
+    fn zero_regions_are_one_root_at_the_multiple_root() {
+        // (t − 1)³(t − 2): the triple root once, located on P''.
+        let c = [-2.0, 7.0, -9.0, 5.0, -1.0];
+        let r = all(&c, 0.0, 3.0);
+        assert_eq!(r.len(), 2, "{r:?}");
+        assert!((r[0] - 1.0).abs() <= 1e-12, "{r:?}");
+        assert!((r[1] - 2.0).abs() <= 1e-14, "{r:?}");
+        // (t − 1)² + 1e-20 is (t − 1)² up to rounding: one root.
+        let r = all(&[1.0 + 1e-20, -2.0, 1.0], 0.0, 3.0);
+        assert_eq!(r.len(), 1, "{r:?}");
+        // (t − 1)² + 1e-3 is not.
+        assert!(all(&[1.001, -2.0, 1.0], 0.0, 3.0).is_empty());
+        // A multiple root at lo is excluded, at hi included.
+        assert_eq!(all(&c, 1.0, 1.5), Vec::<f64>::new());
+        assert_eq!(all(&c, 0.5, 1.0), vec![1.0]);
+    }
+}
