@@ -172,18 +172,8 @@ fn reference_hits(shape: &Implicit, ray: &Ray) -> bool {
 #[test]
 fn degree_16_chmutov_has_no_nan_and_no_specks() {
     for &(solver, _) in Solver::ALL {
-        if solver != Solver::Sturm {
-            chmutov_16_is_clean(solver);
-        }
+        chmutov_16_is_clean(solver);
     }
-}
-
-/// Known failure of the Sturm solver at degree 16 (about 6 % of the hits of this view miss
-/// their first root; see the implicit work's report). Run with `--ignored`.
-#[test]
-#[ignore]
-fn degree_16_chmutov_has_no_specks_with_sturm() {
-    chmutov_16_is_clean(Solver::Sturm);
 }
 
 fn chmutov_16_is_clean(solver: Solver) {
