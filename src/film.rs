@@ -41,11 +41,19 @@ impl Image {
     /// The image as 8-bit sRGB bytes (`R, G, B` per pixel, row-major), each linear channel
     /// clamped to `[0, 1]`, sRGB-encoded and rounded to the nearest step. NaN becomes 0.
     pub fn to_srgb8(&self) -> Vec<u8> {
-        self.pixels
-            .iter()
-            .flat_map(|p| [p.x, p.y, p.z])
-            .map(linear_to_srgb8)
-            .collect()
+        use rayon::prelude::*;
+        let mut bytes = vec![0u8; self.pixels.len() * 3];
+        bytes
+            .par_chunks_mut(3 * 4096)
+            .zip(self.pixels.par_chunks(4096))
+            .for_each(|(out, px)| {
+                for (o, p) in out.chunks_exact_mut(3).zip(px) {
+                    o[0] = linear_to_srgb8(p.x);
+                    o[1] = linear_to_srgb8(p.y);
+                    o[2] = linear_to_srgb8(p.z);
+                }
+            });
+        bytes
     }
 }
 
