@@ -129,6 +129,40 @@ pub(crate) fn first_root(p: &Prepared) -> Fast {
     }
 }
 
+/// The Bernstein coefficients on `[a, b]` of a polynomial of degree `D − 1` (a fixed size, so
+/// that the loops unroll), expanded from the end nearer zero (smaller rounding), and a bound
+/// on their rounding error.
+#[inline(always)]
+pub(super) fn bernstein_fixed<const D: usize>(c: &[f64; D], a: f64, b: f64) -> ([f64; D], f64) {
+    let n = D - 1;
+    let reversed = b.abs() < a.abs();
+    let (x0, h) = if reversed { (b, a - b) } else { (a, b - a) };
+    let mut d = *c;
+    for i in 0..n {
+        for j in (i..n).rev() {
+            d[j] += x0 * d[j + 1];
+        }
+    }
+    let mut hk = 1.0;
+    for (x, ib) in d.iter_mut().zip(&INV_BINOMIAL[n]) {
+        *x *= hk * ib;
+        hk *= h;
+    }
+    for i in 1..D {
+        for j in (1..D).rev() {
+            if j >= i {
+                d[j] += d[j - 1];
+            }
+        }
+    }
+    if reversed {
+        d.reverse();
+    }
+    let x = x0.abs() + h.abs();
+    let size = c.iter().rev().fold(0.0, |s, a| s * x + a.abs());
+    (d, 4.0 * D as f64 * f64::EPSILON * size)
+}
+
 /// The search for a polynomial of degree `D − 1` (a fixed size, so that the loops unroll and
 /// the coefficients stay in registers).
 fn search<const D: usize>(p: &Prepared) -> Fast {
@@ -136,27 +170,8 @@ fn search<const D: usize>(p: &Prepared) -> Fast {
     let c: &[f64; D] = p.c[..D].try_into().expect("degree D - 1");
     let (lo, hi) = (p.lo, p.hi);
     let w = hi - lo;
-    // Taylor shift to `lo`, then scale by `w^k / C(n, k)`.
-    let mut root = *c;
-    for i in 0..n {
-        for j in (i..n).rev() {
-            root[j] += lo * root[j + 1];
-        }
-    }
-    let mut wk = 1.0;
-    for (x, ib) in root.iter_mut().zip(&INV_BINOMIAL[n]) {
-        *x *= wk * ib;
-        wk *= w;
-    }
-    // Binomial transform: bᵢ = Σₖ C(i, k)·dₖ (written with fixed bounds so that it unrolls:
-    // for `j < i` the update is skipped).
-    for i in 1..D {
-        for j in (1..D).rev() {
-            if j >= i {
-                root[j] += root[j - 1];
-            }
-        }
-    }
+    // On [lo, hi]; the rounding bound below (from |lo| + w) covers either expansion end.
+    let (root, _) = bernstein_fixed(c, lo, hi);
     let r = lo.abs() + w;
     let size = c.iter().rev().fold(0.0, |s, a| s * r + a.abs());
     let unit = (n + 1) as f64 * f64::EPSILON * size;

@@ -37,7 +37,7 @@
 //! reflected past that end, and reported only when its point lies in `(lo, hi]`; `P(lo) = 0`
 //! exactly excludes it, `P(hi) = 0` exactly reports `hi`.
 
-use super::bernstein::INV_BINOMIAL;
+use super::bernstein::bernstein_fixed;
 use super::prep::{horner, Prepared, MAX_COEFFS};
 
 /// Halvings after which a piece counts as a zero piece.
@@ -95,38 +95,6 @@ fn bernstein(c: &[f64], a: f64, b: f64) -> (Coeffs, f64) {
         };
     }
     fixed!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17)
-}
-
-/// [`bernstein`] for a polynomial of degree `D − 1` (a fixed size, so that the loops unroll).
-#[inline(always)]
-fn bernstein_fixed<const D: usize>(c: &[f64; D], a: f64, b: f64) -> ([f64; D], f64) {
-    let n = D - 1;
-    let reversed = b.abs() < a.abs();
-    let (x0, h) = if reversed { (b, a - b) } else { (a, b - a) };
-    let mut d = *c;
-    for i in 0..n {
-        for j in (i..n).rev() {
-            d[j] += x0 * d[j + 1];
-        }
-    }
-    let mut hk = 1.0;
-    for (x, ib) in d.iter_mut().zip(&INV_BINOMIAL[n]) {
-        *x *= hk * ib;
-        hk *= h;
-    }
-    for i in 1..D {
-        for j in (1..D).rev() {
-            if j >= i {
-                d[j] += d[j - 1];
-            }
-        }
-    }
-    if reversed {
-        d.reverse();
-    }
-    let x = x0.abs() + h.abs();
-    let size = c.iter().rev().fold(0.0, |s, a| s * x + a.abs());
-    (d, 4.0 * D as f64 * f64::EPSILON * size)
 }
 
 /// Most sign variations of `b` over every choice of sign for its coefficients within `m` of
