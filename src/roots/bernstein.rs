@@ -26,6 +26,7 @@
 //! it used are exact for the given coefficients, so the answer is the exact one: the same
 //! hit/miss the full method gives away from numerically multiple roots.
 
+use super::cluster::refine;
 use super::prep::{horner, Prepared};
 
 /// Halvings after which a piece that still has more than one sign variation is left to the
@@ -211,7 +212,7 @@ fn search<const D: usize>(p: &Prepared) -> Fast {
                 if fa == 0.0 || (fa < 0.0) == (fb < 0.0) || (fa < 0.0) != (b[0] < 0.0) {
                     return Fast::Undecided;
                 }
-                return Fast::Root(newton(c, ta, tb, fa, fb) * p.scale);
+                return Fast::Root(refine(c, ta, tb, fa, fb) * p.scale);
             }
             _ => {}
         }
@@ -229,80 +230,6 @@ fn search<const D: usize>(p: &Prepared) -> Fast {
         s1 = sm;
     }
     Fast::Undecided
-}
-
-/// Steps allowed to [`newton`] (bisection alone needs at most about 2100 of a `f64` range;
-/// Newton's quadratic convergence normally needs under ten).
-const MAX_ITER: usize = 2200;
-
-/// Multiple of `ε·Σ|cⱼ||x|ʲ` (a bound on the rounding error of evaluating `p(x)`) below
-/// which `p(x)` no longer tells where the root is.
-const NOISE: f64 = 4.0 * f64::EPSILON;
-
-/// `(p(x), p'(x), p''(x)/2, Σ|cⱼ||x|ʲ)` for ascending `c`.
-#[inline]
-fn eval3<const D: usize>(c: &[f64; D], x: f64) -> (f64, f64, f64, f64) {
-    let ax = x.abs();
-    let (mut v, mut d, mut h, mut s) = (0.0, 0.0, 0.0, 0.0);
-    for &a in c.iter().rev() {
-        h = h * x + d;
-        d = d * x + v;
-        v = v * x + a;
-        s = s * ax + a.abs();
-    }
-    (v, d, h, s)
-}
-
-/// The simple root of `c` in `[a, b]` (`fa`, `fb` of opposite signs, neither zero) by Newton
-/// steps kept inside the shrinking sign-change bracket: a step that leaves the bracket, or is
-/// more than half the step before last (slow progress), is replaced by a bisection. Stops
-/// when a step is below two ulps of the root, or the bracket cannot shrink.
-fn newton<const D: usize>(c: &[f64; D], mut a: f64, mut b: f64, fa: f64, fb: f64) -> f64 {
-    let neg_a = fa < 0.0;
-    // The secant of the bracket first: exact for a line, close on a short bracket.
-    let mut x = a - fa * ((b - a) / (fb - fa));
-    if !(x > a && x < b) {
-        x = 0.5 * (a + b);
-    }
-    let (mut step, mut step_before) = (b - a, b - a);
-    for _ in 0..MAX_ITER {
-        let (v, d, h, size) = eval3(c, x);
-        if v == 0.0 {
-            return x;
-        }
-        if v.abs() <= NOISE * size {
-            // `p(x)` is rounding noise: one last Newton step is as close as `p` allows.
-            let last = x - v / d;
-            return if last >= a && last <= b { last } else { x };
-        }
-        if (v < 0.0) == neg_a {
-            a = x;
-        } else {
-            b = x;
-        }
-        // Schröder's step (Newton on p/p'): quadratic even towards a cluster of roots, which
-        // is what the heart's f = A³ − B·Z³ looks like from afar; Newton's otherwise.
-        let den = d * d - 2.0 * v * h;
-        let mut next = if den > 0.0 {
-            x - v * d / den
-        } else {
-            x - v / d
-        };
-        let slow = (next - x).abs() > 0.5 * step_before;
-        if slow || !(next > a && next < b) {
-            next = 0.5 * (a + b);
-            if next <= a || next >= b {
-                return x;
-            }
-        }
-        step_before = step;
-        step = (next - x).abs();
-        if step <= 2.0 * f64::EPSILON * next.abs() {
-            return next;
-        }
-        x = next;
-    }
-    x
 }
 
 #[cfg(test)]

@@ -163,7 +163,7 @@ fn derivative(c: &[f64], k: usize) -> (Coeffs, usize) {
 }
 
 /// `(p(x), p'(x), p''(x)/2, A(|x|))` for ascending `c`.
-#[inline]
+#[inline(always)]
 fn eval3(c: &[f64], x: f64) -> (f64, f64, f64, f64) {
     let ax = x.abs();
     let (mut v, mut d, mut h, mut s) = (0.0, 0.0, 0.0, 0.0);
@@ -179,6 +179,10 @@ fn eval3(c: &[f64], x: f64) -> (f64, f64, f64, f64) {
 /// The root of `c` in `[a, b]`, where `fa = c(a)` and `fb = c(b)` have opposite signs (neither
 /// zero): safeguarded Newton/Schröder steps inside the shrinking sign-change bracket, a
 /// bisection whenever a step leaves it or makes slow progress. To a few ulps of the root.
+/// Schröder's step (Newton on p/p') stays quadratic towards a cluster of roots, which is what
+/// the heart's f = A³ − B·Z³ looks like from afar. Inlined, so a fixed-size caller (the
+/// Bernstein fast path) gets its loops unrolled.
+#[inline(always)]
 pub(crate) fn refine(c: &[f64], mut a: f64, mut b: f64, fa: f64, fb: f64) -> f64 {
     let neg_a = fa < 0.0;
     let mut x = a - fa * ((b - a) / (fb - fa));
