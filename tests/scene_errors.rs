@@ -705,13 +705,7 @@ fn report_shows_the_line_and_a_caret() {
 fn equation_errors_point_inside_the_quotes() {
     let text =
         format!("{CAM}IMPLICIT \"x^2 + * y^2 = 1\" (0,0,0) (1,0,0) (0,1,0) (0,0,1) (1,0,0)\n");
-    match parse(&text, "t.scene", &LoadOptions::default()) {
-        // Accepted only while the implicit-surface module does not parse equations yet.
-        Ok(_) => {}
-        Err(e) => {
-            check_text(&text, 2, "*", "invalid equation: ");
-            let shown = format!("{:?}", miette::Report::new(e));
-            assert!(shown.contains("here"), "{shown}");
-        }
-    }
+    let e = check_text(&text, 2, "*", "invalid equation: ");
+    let shown = format!("{:?}", miette::Report::new(e));
+    assert!(shown.contains("here"), "{shown}");
 }

@@ -189,12 +189,8 @@ fn the_examples_in_the_format_documentation_parse() {
             }
         }
         text.push_str(block);
-        match parse(&text, "doc.scene", &LoadOptions::default()) {
-            Ok(_) => {}
-            // Presets are expanded by the implicit-surface module; while it does not know a
-            // preset yet, its message (prefixed `preset <name>:`) is the only acceptable error.
-            Err(e) if e.message().starts_with("preset ") => {}
-            Err(e) => panic!("{:?}", miette::Report::new(e)),
+        if let Err(e) = parse(&text, "doc.scene", &LoadOptions::default()) {
+            panic!("{:?}", miette::Report::new(e));
         }
         blocks += 1;
     }
