@@ -60,6 +60,62 @@ impl Image {
 /// One linear channel value as an 8-bit sRGB code: clamped to `[0, 1]` (NaN → 0), encoded
 /// with the sRGB transfer curve, rounded to nearest.
 pub fn linear_to_srgb8(v: f64) -> u8 {
+    // Same answer as `srgb8_by_formula` for every input (tested), without a `powf` per
+    // channel: the bucket of `v` gives the code at the bucket's lower edge, and one
+    // comparison with the next code's first value says whether `v` has reached it.
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    let table = srgb8_table();
+    let code = table.bucket_code[(v * SRGB_BUCKETS as f64) as usize];
+    if code < 255 && v >= table.first_linear[code as usize + 1] {
+        code + 1
+    } else {
+        code
+    }
+}
+
+/// Buckets of equal width over `[0, 1]`; narrower than the closest pair of code
+/// boundaries (1 / (12.92·255) near black), so no bucket holds two of them.
+const SRGB_BUCKETS: usize = 4096;
+
+/// Look-up tables for [`linear_to_srgb8`].
+struct Srgb8Table {
+    /// `first_linear[c]`: the smallest linear value whose code is `c` (index 0 unused).
+    first_linear: [f64; 256],
+    /// The code of each bucket's lower edge, plus one entry for 1.0 itself.
+    bucket_code: [u8; SRGB_BUCKETS + 1],
+}
+
+fn srgb8_table() -> &'static Srgb8Table {
+    static TABLE: std::sync::OnceLock<Srgb8Table> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        let mut first_linear = [0.0; 256];
+        for (code, first) in first_linear.iter_mut().enumerate().skip(1) {
+            // Non-negative doubles order like their bit patterns: bisect on the bits for
+            // the first value the formula maps to `code` or above.
+            let (mut lo, mut hi) = (0u64, 1f64.to_bits());
+            while lo < hi {
+                let mid = lo + (hi - lo) / 2;
+                if srgb8_by_formula(f64::from_bits(mid)) as usize >= code {
+                    hi = mid;
+                } else {
+                    lo = mid + 1;
+                }
+            }
+            *first = f64::from_bits(lo);
+        }
+        let mut bucket_code = [0; SRGB_BUCKETS + 1];
+        for (i, code) in bucket_code.iter_mut().enumerate() {
+            *code = srgb8_by_formula(i as f64 / SRGB_BUCKETS as f64);
+        }
+        Srgb8Table {
+            first_linear,
+            bucket_code,
+        }
+    })
+}
+
+/// The sRGB transfer curve evaluated directly; the definition [`linear_to_srgb8`] follows.
+fn srgb8_by_formula(v: f64) -> u8 {
     let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
     let s = if v <= 0.003_130_8 {
         12.92 * v
@@ -317,6 +373,35 @@ mod tests {
         assert_eq!(linear_to_srgb8(f64::NAN), 0);
         assert_eq!(linear_to_srgb8(7.0), 255);
         assert_eq!(linear_to_srgb8(0.5), 188);
+    }
+
+    #[test]
+    fn table_matches_the_formula() {
+        let table = srgb8_table();
+        for i in 0..SRGB_BUCKETS {
+            let (lo, hi) = (table.bucket_code[i], table.bucket_code[i + 1]);
+            assert!(hi - lo <= 1, "bucket {i} spans codes {lo}..={hi}");
+        }
+        for code in 1..=255usize {
+            let first = table.first_linear[code];
+            let before = f64::from_bits(first.to_bits() - 1);
+            assert_eq!(linear_to_srgb8(first) as usize, code);
+            assert_eq!(linear_to_srgb8(before) as usize, code - 1);
+            assert_eq!(srgb8_by_formula(before) as usize, code - 1);
+        }
+        // A dense sweep plus pseudo-random values, including outside [0, 1].
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        for i in 0..2_000_000u64 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let v = if i % 2 == 0 {
+                i as f64 / 1_000_000.0 - 0.5
+            } else {
+                (x >> 11) as f64 / (1u64 << 53) as f64
+            };
+            assert_eq!(linear_to_srgb8(v), srgb8_by_formula(v), "at {v:e}");
+        }
     }
 
     #[test]

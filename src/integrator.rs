@@ -124,6 +124,7 @@ pub fn render_with_progress(
     let mut work = || {
         pixels
             .par_chunks_mut(band_len)
+            .with_max_len(1)
             .enumerate()
             .map(|(band, out)| {
                 let y0 = band as u32 * TILE_SIZE;
