@@ -85,13 +85,17 @@ fn variations(b: &[f64], margin: f64) -> Option<u32> {
 
 /// De Casteljau in place: `b` (a piece `[0, 1]`) becomes the Bernstein coefficients of its
 /// part `[0, λ]`.
-#[inline]
+#[inline(always)]
 fn keep_left<const D: usize>(b: &mut [f64; D], lambda: f64) {
-    let n = D - 1;
-    for k in 1..=n {
-        for j in (k..=n).rev() {
-            b[j] = b[j - 1] + lambda * (b[j] - b[j - 1]);
+    // Row k of the triangle shrinks by one each level; its first entry is the left part's
+    // k-th coefficient. Working on a copy with fixed bounds lets the loops unroll into
+    // registers.
+    let mut row = *b;
+    for k in 1..D {
+        for j in 0..D - k {
+            row[j] += lambda * (row[j + 1] - row[j]);
         }
+        b[k] = row[0];
     }
 }
 

@@ -44,6 +44,12 @@ pub(crate) fn mul_pow2(mut x: f64, mut k: i32) -> f64 {
     x
 }
 
+/// `⌈d / k⌉` for `k > 0`, exact for either sign of `d`.
+#[inline(always)]
+fn ceil_div(d: i32, k: i32) -> i32 {
+    -(-d).div_euclid(k)
+}
+
 /// `p(x)` by Horner's rule for ascending coefficients.
 #[inline]
 pub(crate) fn horner(c: &[f64], x: f64) -> f64 {
@@ -73,6 +79,17 @@ pub(crate) fn max_abs(c: &[f64]) -> f64 {
 /// already does. The rule is repeated on the new leading coefficient. An infinite interval
 /// trims only exact zeros (a tiny `cₙ` then means a huge but real root).
 pub(crate) fn prepare(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
+    // The sextic (the heart's ray polynomial) gets its own copy with every loop bound fixed,
+    // so that the loops unroll and the divisions by `k` become multiplications.
+    match <&[f64; 7]>::try_from(coeffs) {
+        Ok(sextic) => prepare_in(sextic, lo, hi),
+        Err(_) => prepare_in(coeffs, lo, hi),
+    }
+}
+
+/// [`prepare`]'s body, inlined into each caller so that a fixed-size `coeffs` fixes its loops.
+#[inline(always)]
+fn prepare_in(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
     // `!(lo < hi)` also rejects NaN bounds.
     if lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less)
         || coeffs.iter().any(|c| !c.is_finite())
@@ -106,6 +123,17 @@ pub(crate) fn prepare(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
     if n == 0 {
         return None;
     }
+    // The usual case, nothing trimmed from a sextic: a constant degree unrolls what follows.
+    if coeffs.len() == 7 && n == 6 {
+        return scale(&coeffs[..7], 6, r, lo, hi);
+    }
+    scale(coeffs, n, r, lo, hi)
+}
+
+/// The rest of [`prepare`] once the degree `n` is known (`coeffs[n] ≠ 0`, `n ≥ 1`; `r` is
+/// `max(|lo|, |hi|)`): the power-of-two rescaling and the root bounds.
+#[inline(always)]
+fn scale(coeffs: &[f64], n: usize, r: f64, lo: f64, hi: f64) -> Option<Prepared> {
     // Fujiwara-style root-size estimate, in binary exponents only: 2^e ≳ max |c_{n-k}/c_n|^(1/k).
     let en = exponent(coeffs[n]);
     let mut e = i32::MIN;
@@ -113,12 +141,7 @@ pub(crate) fn prepare(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
         let ck = coeffs[n - k];
         if ck != 0.0 {
             let d = exponent(ck) - en + 1;
-            // ceil(d / k) for either sign of d: |d| < 2^12 and k ≤ 16, so the quotient is
-            // either an exact integer or at least 1/16 away from one, and rounding cannot
-            // move it across an integer.
-            let x = f64::from(d) / k as f64;
-            let q = x as i32 + i32::from(x > f64::from(x as i32));
-            e = e.max(q);
+            e = e.max(ceil_div(d, k as i32));
         }
     }
     if e == i32::MIN {
@@ -133,8 +156,18 @@ pub(crate) fn prepare(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
     }
     let e = e.clamp(-1000, 1000);
     let mut c = [0.0; MAX_COEFFS];
-    for (j, cj) in c.iter_mut().enumerate().take(n + 1) {
-        *cj = mul_pow2(coeffs[j], j as i32 * e - n as i32 * e - en);
+    // c_j = coeffs_j · 2^(j·e − n·e − en); the exponent moves linearly in j, so when both
+    // ends are normal exponents every factor is a plain power of two.
+    let (first, last) = (-(n as i32) * e - en, -en);
+    if (-1022..=1023).contains(&first) && (-1022..=1023).contains(&last) {
+        for (j, cj) in c.iter_mut().enumerate().take(n + 1) {
+            let k = j as i32 * e + first;
+            *cj = coeffs[j] * f64::from_bits(((k + 1023) as u64) << 52);
+        }
+    } else {
+        for (j, cj) in c.iter_mut().enumerate().take(n + 1) {
+            *cj = mul_pow2(coeffs[j], j as i32 * e + first);
+        }
     }
     let scale = mul_pow2(1.0, e);
     let mut lo = lo / scale;
@@ -170,6 +203,15 @@ mod tests {
         assert_eq!(exponent(1.0), 0);
         assert_eq!(exponent(-3.0), 1);
         assert_eq!(exponent(0.75), -1);
+    }
+
+    #[test]
+    fn ceil_div_rounds_up_for_both_signs() {
+        for d in -40..=40 {
+            for k in 1..=16 {
+                assert_eq!(ceil_div(d, k), (f64::from(d) / f64::from(k)).ceil() as i32);
+            }
+        }
     }
 
     #[test]
