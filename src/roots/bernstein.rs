@@ -91,11 +91,11 @@ fn keep_left<const D: usize>(b: &mut [f64; D], lambda: f64) {
     // k-th coefficient. Working on a copy with fixed bounds lets the loops unroll into
     // registers.
     let mut row = *b;
-    for k in 1..D {
+    for (k, out) in b.iter_mut().enumerate().skip(1) {
         for j in 0..D - k {
             row[j] += lambda * (row[j + 1] - row[j]);
         }
-        b[k] = row[0];
+        *out = row[0];
     }
 }
 
