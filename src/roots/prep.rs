@@ -10,7 +10,7 @@ const TRIM_EPS: f64 = f64::EPSILON;
 
 /// A validated, trimmed, rescaled polynomial `P(T) = p(scale·T) / norm` with the interval
 /// `(lo, hi]` expressed in `T` (exactly: `scale` is a power of two).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Prepared {
     /// Coefficients of `P`, ascending; `c[n]` is the leading one, in `[1, 2)` in magnitude.
     pub c: [f64; MAX_COEFFS],
@@ -134,6 +134,38 @@ fn prepare_in(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
 /// `max(|lo|, |hi|)`): the power-of-two rescaling and the root bounds.
 #[inline(always)]
 fn scale(coeffs: &[f64], n: usize, r: f64, lo: f64, hi: f64) -> Option<Prepared> {
+    // The common case on a bounded interval: some root may lie as far out as the interval
+    // reaches (Fujiwara's exponent e_F is at least the interval's e_R = exponent(r) + 1). Then
+    // e = e_R, and neither bound can clip: |lo|, |hi| < 2^e_R, while in T the Fujiwara bound
+    // is at least 2 and Cauchy's at least 1. Testing ⌈d/k⌉ ≥ e_R as d > k·(e_R − 1) needs no
+    // division. The result is the one `scale_general` gives (tested).
+    if r.is_finite() {
+        let er = exponent(r) + 1;
+        if (-1000..=999).contains(&er) {
+            let en = exponent(coeffs[n]);
+            let mut reaches = false;
+            for k in 1..=n {
+                let ck = coeffs[n - k];
+                reaches |= ck != 0.0 && exponent(ck) - en + 1 > k as i32 * (er - 1);
+            }
+            if reaches {
+                let (c, scale) = rescale(coeffs, n, en, er);
+                return Some(Prepared {
+                    c,
+                    n,
+                    scale,
+                    lo: lo / scale,
+                    hi: hi / scale,
+                });
+            }
+        }
+    }
+    scale_general(coeffs, n, r, lo, hi)
+}
+
+/// [`scale`] for every input: Fujiwara's estimate of the roots' size and both root bounds.
+#[inline(always)]
+fn scale_general(coeffs: &[f64], n: usize, r: f64, lo: f64, hi: f64) -> Option<Prepared> {
     // Fujiwara-style root-size estimate, in binary exponents only: 2^e ≳ max |c_{n-k}/c_n|^(1/k).
     let en = exponent(coeffs[n]);
     let mut e = i32::MIN;
@@ -155,21 +187,7 @@ fn scale(coeffs: &[f64], n: usize, r: f64, lo: f64, hi: f64) -> Option<Prepared>
         e = e.min(exponent(r) + 1);
     }
     let e = e.clamp(-1000, 1000);
-    let mut c = [0.0; MAX_COEFFS];
-    // c_j = coeffs_j · 2^(j·e − n·e − en); the exponent moves linearly in j, so when both
-    // ends are normal exponents every factor is a plain power of two.
-    let (first, last) = (-(n as i32) * e - en, -en);
-    if (-1022..=1023).contains(&first) && (-1022..=1023).contains(&last) {
-        for (j, cj) in c.iter_mut().enumerate().take(n + 1) {
-            let k = j as i32 * e + first;
-            *cj = coeffs[j] * f64::from_bits(((k + 1023) as u64) << 52);
-        }
-    } else {
-        for (j, cj) in c.iter_mut().enumerate().take(n + 1) {
-            *cj = mul_pow2(coeffs[j], j as i32 * e + first);
-        }
-    }
-    let scale = mul_pow2(1.0, e);
+    let (c, scale) = rescale(coeffs, n, en, e);
     let mut lo = lo / scale;
     let mut hi = hi / scale;
     // Cauchy's and Fujiwara's bounds: every root has |T| below both.
@@ -187,6 +205,27 @@ fn scale(coeffs: &[f64], n: usize, r: f64, lo: f64, hi: f64) -> Option<Prepared>
         lo,
         hi,
     })
+}
+
+/// The coefficients of `p(2^e·T) / 2^en` (`en` the exponent of `coeffs[n]`, so the leading
+/// one lands in `[1, 2)` in magnitude) and `2^e`; exact powers of two throughout.
+#[inline(always)]
+fn rescale(coeffs: &[f64], n: usize, en: i32, e: i32) -> ([f64; MAX_COEFFS], f64) {
+    let mut c = [0.0; MAX_COEFFS];
+    // c_j = coeffs_j · 2^(j·e − n·e − en); the exponent moves linearly in j, so when both
+    // ends are normal exponents every factor is a plain power of two.
+    let (first, last) = (-(n as i32) * e - en, -en);
+    if (-1022..=1023).contains(&first) && (-1022..=1023).contains(&last) {
+        for (j, cj) in c.iter_mut().enumerate().take(n + 1) {
+            let k = j as i32 * e + first;
+            *cj = coeffs[j] * f64::from_bits(((k + 1023) as u64) << 52);
+        }
+    } else {
+        for (j, cj) in c.iter_mut().enumerate().take(n + 1) {
+            *cj = mul_pow2(coeffs[j], j as i32 * e + first);
+        }
+    }
+    (c, mul_pow2(1.0, e))
 }
 
 #[cfg(test)]
@@ -212,6 +251,46 @@ mod tests {
                 assert_eq!(ceil_div(d, k), (f64::from(d) / f64::from(k)).ceil() as i32);
             }
         }
+    }
+
+    #[test]
+    fn shortcut_agrees_with_the_general_scaling() {
+        // Random polynomials of random degree, coefficient sizes and intervals (some holding
+        // all the roots, some far smaller or larger than the roots' scale).
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut answered = 0;
+        for _ in 0..20_000 {
+            let n = 1 + (next() * 16.0) as usize;
+            let mut c = [0.0; MAX_COEFFS];
+            for cj in c.iter_mut().take(n + 1) {
+                let size = 2f64.powi((next() * 40.0) as i32 - 20);
+                *cj = if next() < 0.1 {
+                    0.0
+                } else {
+                    (next() - 0.5) * size
+                };
+            }
+            c[n] = if c[n] == 0.0 { 1.0 } else { c[n] };
+            let lo = (next() - 0.7) * 2f64.powi((next() * 30.0) as i32 - 15);
+            let hi = lo + next() * 2f64.powi((next() * 30.0) as i32 - 15);
+            if lo >= hi {
+                continue;
+            }
+            let r = lo.abs().max(hi.abs());
+            let (fast, general) = (
+                scale(&c[..=n], n, r, lo, hi),
+                scale_general(&c[..=n], n, r, lo, hi),
+            );
+            assert_eq!(fast, general, "{:?} on ({lo}, {hi}]", &c[..=n]);
+            answered += usize::from(fast.is_some());
+        }
+        assert!(answered > 1000);
     }
 
     #[test]
