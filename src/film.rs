@@ -1,25 +1,33 @@
 //! The film (a linear-RGB pixel buffer) and writing it to PNG or OpenEXR.
 //!
+//! The film stores each channel as an `f32` (12 bytes a pixel): shading is done in `f64`, and
+//! each pixel's final value is rounded once, by [`to_film`], when it is written. That rounding
+//! keeps every pixel's 8-bit sRGB code exactly what the `f64` value gives, so PNG output is
+//! unaffected by the narrower film; EXR output is `f32` or `f16` anyway.
+//!
 //! Writing is atomic: the image goes to a temporary file in the target's directory, is
 //! flushed to disk, and is then renamed over the target. A failed write removes the temporary
 //! file and leaves any existing target untouched; [`install_interrupt_cleanup`] extends that
 //! promise to Ctrl-C.
 
 use crate::geometry::DVec3;
+use glam::Vec3;
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-/// A rendered image: `width × height` linear-RGB pixels, row-major, top row first.
+/// A rendered image: `width × height` linear-RGB pixels, row-major, top row first, each
+/// channel stored as an `f32` (see [`to_film`] for how `f64` values are stored).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Image {
     /// Width in pixels.
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// Pixels, `width·height` of them, row-major from the top-left.
-    pub pixels: Vec<DVec3>,
+    /// Pixels, `width·height` of them, row-major from the top-left; linear RGB in `f32`,
+    /// unclamped (values above 1, negative values and NaN are kept as rendered).
+    pub pixels: Vec<Vec3>,
 }
 
 impl Image {
@@ -28,14 +36,22 @@ impl Image {
         Self {
             width,
             height,
-            pixels: vec![DVec3::ZERO; width as usize * height as usize],
+            pixels: vec![Vec3::ZERO; width as usize * height as usize],
         }
     }
 
-    /// The pixel at column `x`, row `y` (row 0 at the top). Panics outside the image.
+    /// The pixel at column `x`, row `y` (row 0 at the top), widened exactly from the stored
+    /// `f32`s. Panics outside the image.
     pub fn get(&self, x: u32, y: u32) -> DVec3 {
         assert!(x < self.width && y < self.height, "pixel out of range");
-        self.pixels[y as usize * self.width as usize + x as usize]
+        self.pixels[y as usize * self.width as usize + x as usize].as_dvec3()
+    }
+
+    /// Stores `value` (linear RGB) at column `x`, row `y`, rounded by [`to_film`]. Panics
+    /// outside the image.
+    pub fn set(&mut self, x: u32, y: u32, value: DVec3) {
+        assert!(x < self.width && y < self.height, "pixel out of range");
+        self.pixels[y as usize * self.width as usize + x as usize] = to_film(value);
     }
 
     /// The image as 8-bit sRGB bytes (`R, G, B` per pixel, row-major), each linear channel
@@ -48,13 +64,44 @@ impl Image {
             .zip(self.pixels.par_chunks(4096))
             .for_each(|(out, px)| {
                 for (o, p) in out.chunks_exact_mut(3).zip(px) {
-                    o[0] = linear_to_srgb8(p.x);
-                    o[1] = linear_to_srgb8(p.y);
-                    o[2] = linear_to_srgb8(p.z);
+                    o[0] = linear_to_srgb8(p.x as f64);
+                    o[1] = linear_to_srgb8(p.y as f64);
+                    o[2] = linear_to_srgb8(p.z as f64);
                 }
             });
         bytes
     }
+}
+
+/// A linear-RGB value as the film stores it: each channel rounded to the nearest `f32`,
+/// except where that would move it across an 8-bit sRGB code boundary, in which case it is
+/// the neighbouring `f32` on the value's side (at most one `f32` step from the value). So
+/// `linear_to_srgb8(to_film(v).x as f64) == linear_to_srgb8(v.x)` for every `v`, and likewise
+/// for `y` and `z`. Values outside `[0, 1]` and NaN are kept (up to `f32` range: beyond
+/// it they become infinite).
+#[inline]
+pub fn to_film(v: DVec3) -> Vec3 {
+    Vec3::new(film_channel(v.x), film_channel(v.y), film_channel(v.z))
+}
+
+/// One channel of [`to_film`].
+#[inline]
+fn film_channel(v: f64) -> f32 {
+    let x = v as f32;
+    let code = linear_to_srgb8(v);
+    if linear_to_srgb8(x as f64) == code {
+        return x;
+    }
+    // A code boundary lies between `v` and its nearest f32 `x`. Both clamp alike outside
+    // [0, 1], so `x` is positive and finite; the next f32 toward `v` lies past `v`, and no
+    // other boundary is within one f32 step (they are more than 3·10⁻⁴ apart).
+    let toward = if (x as f64) < v {
+        x.next_up()
+    } else {
+        x.next_down()
+    };
+    debug_assert_eq!(linear_to_srgb8(toward as f64), code);
+    toward
 }
 
 /// One linear channel value as an 8-bit sRGB code: clamped to `[0, 1]` (NaN → 0), encoded
@@ -286,7 +333,7 @@ fn encode(image: &Image, format: ImageFormat, file: File) -> Result<(), String> 
             use exr::prelude::*;
             let px = |v: Vec2<usize>| {
                 let p = image.pixels[v.y() * w + v.x()];
-                (p.x as f32, p.y as f32, p.z as f32)
+                (p.x, p.y, p.z)
             };
             Image::from_channels((w, h), SpecificChannels::rgb(px))
                 .write()
@@ -297,7 +344,7 @@ fn encode(image: &Image, format: ImageFormat, file: File) -> Result<(), String> 
             use exr::prelude::*;
             let px = |v: Vec2<usize>| {
                 let p = image.pixels[v.y() * w + v.x()];
-                (f16::from_f64(p.x), f16::from_f64(p.y), f16::from_f64(p.z))
+                (f16::from_f32(p.x), f16::from_f32(p.y), f16::from_f32(p.z))
             };
             Image::from_channels((w, h), SpecificChannels::rgb(px))
                 .write()
@@ -405,6 +452,44 @@ mod tests {
     }
 
     #[test]
+    fn film_rounding_keeps_the_srgb_code() {
+        // Right at and beside every code boundary, where plain rounding to f32 can cross it.
+        let table = srgb8_table();
+        let mut nudged = 0;
+        for code in 1..=255usize {
+            let first = table.first_linear[code];
+            for k in -40i64..=40 {
+                let v = f64::from_bits(first.to_bits().wrapping_add_signed(k * 1_000_000));
+                let nearest = v as f32;
+                let stored = to_film(DVec3::splat(v)).x;
+                assert_eq!(
+                    linear_to_srgb8(stored as f64),
+                    linear_to_srgb8(v),
+                    "at {v:e}"
+                );
+                if stored != nearest {
+                    let toward = if (nearest as f64) < v {
+                        nearest.next_up()
+                    } else {
+                        nearest.next_down()
+                    };
+                    assert_eq!(stored, toward, "at {v:e}");
+                    nudged += 1;
+                }
+            }
+        }
+        assert!(nudged > 1000, "only {nudged} values needed the nudge");
+        // Elsewhere it is plain rounding, and values outside [0, 1] are kept.
+        assert_eq!(
+            to_film(DVec3::new(0.5, 2.0, -1.0)),
+            Vec3::new(0.5, 2.0, -1.0)
+        );
+        assert_eq!(to_film(DVec3::splat(0.1)).x, 0.1f32);
+        assert!(to_film(DVec3::splat(f64::NAN)).x.is_nan());
+        assert_eq!(to_film(DVec3::splat(1e300)).x, f32::INFINITY);
+    }
+
+    #[test]
     fn format_from_extension() {
         assert_eq!(
             ImageFormat::from_path(Path::new("a/b.PNG")).unwrap(),
@@ -440,8 +525,8 @@ mod tests {
     fn writes_png_and_exr_and_leaves_no_temporary() {
         let dir = tempfile::tempdir().unwrap();
         let mut img = Image::new(3, 2);
-        img.pixels[1] = DVec3::new(1.0, 0.5, 0.0);
-        img.pixels[5] = DVec3::new(2.0, 0.25, 0.125);
+        img.set(1, 0, DVec3::new(1.0, 0.5, 0.0));
+        img.set(2, 1, DVec3::new(2.0, 0.25, 0.125));
         let png = dir.path().join("a.png");
         write_image(&img, &png).unwrap();
         let decoded = image::open(&png).unwrap().to_rgb8();
@@ -475,7 +560,7 @@ mod tests {
         let bad = Image {
             width: 2,
             height: 2,
-            pixels: vec![DVec3::ZERO; 3],
+            pixels: vec![Vec3::ZERO; 3],
         };
         assert!(write_image(&bad, &target).is_err());
         assert_eq!(std::fs::read(&target).unwrap(), b"old");
