@@ -11,7 +11,8 @@
 //! promise to Ctrl-C.
 
 use crate::geometry::DVec3;
-use glam::Vec3;
+/// The film's pixel type: linear RGB, one `f32` a channel.
+pub use glam::Vec3;
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -81,26 +82,43 @@ impl Image {
 /// it they become infinite).
 #[inline]
 pub fn to_film(v: DVec3) -> Vec3 {
-    Vec3::new(film_channel(v.x), film_channel(v.y), film_channel(v.z))
+    let table = srgb8_table();
+    Vec3::new(
+        film_channel(v.x, table),
+        film_channel(v.y, table),
+        film_channel(v.z, table),
+    )
 }
 
 /// One channel of [`to_film`].
 #[inline]
-fn film_channel(v: f64) -> f32 {
+fn film_channel(v: f64, table: &Srgb8Table) -> f32 {
     let x = v as f32;
-    let code = linear_to_srgb8(v);
-    if linear_to_srgb8(x as f64) == code {
+    // min/max rather than a branch: which side `x` falls on is a coin toss.
+    let (lo, hi) = ((x as f64).min(v), (x as f64).max(v));
+    // Codes only change inside (0, 1) (NaN fails the test too), and there by one at each
+    // `first_linear` boundary, at most one per bucket: `v` and `x` share their code unless
+    // the first boundary above the lower one is reached by the higher one.
+    if !(lo > 0.0 && hi < 1.0) {
         return x;
     }
-    // A code boundary lies between `v` and its nearest f32 `x`. Both clamp alike outside
-    // [0, 1], so `x` is positive and finite; the next f32 toward `v` lies past `v`, and no
-    // other boundary is within one f32 step (they are more than 3·10⁻⁴ apart).
+    let code = table.bucket_code[(lo * SRGB_BUCKETS as f64) as usize] as usize;
+    let code = if code < 255 && lo >= table.first_linear[code + 1] {
+        code + 1
+    } else {
+        code
+    };
+    if code == 255 || hi < table.first_linear[code + 1] {
+        return x;
+    }
+    // A boundary lies between `v` and its nearest f32 `x`; the next f32 toward `v` lies past
+    // `v`, and no other boundary is within one f32 step (they are more than 3·10⁻⁴ apart).
     let toward = if (x as f64) < v {
         x.next_up()
     } else {
         x.next_down()
     };
-    debug_assert_eq!(linear_to_srgb8(toward as f64), code);
+    debug_assert_eq!(linear_to_srgb8(toward as f64), linear_to_srgb8(v));
     toward
 }
 
@@ -274,6 +292,36 @@ pub fn write_image(image: &Image, path: &Path) -> Result<(), OutputError> {
 /// target holds the complete image; on failure the target is as it was before and no
 /// temporary file is left.
 pub fn write_image_as(image: &Image, path: &Path, format: ImageFormat) -> Result<(), OutputError> {
+    write_atomically(path, |file| encode(image, format, file))
+}
+
+/// Does what [`write_image_as`] does, consuming the image: a PNG's 8-bit bytes are then made
+/// in the film's own memory instead of a second buffer, so the peak memory of writing is the
+/// film alone (plus the compressed data). The output is byte for byte the same.
+pub fn write_image_owned(
+    mut image: Image,
+    path: &Path,
+    format: ImageFormat,
+) -> Result<(), OutputError> {
+    write_atomically(path, |file| match format {
+        ImageFormat::Png => {
+            check_size(&image)?;
+            let (width, height) = (image.width, image.height);
+            let bytes = srgb8_in_place(&mut image.pixels);
+            let mut out = BufWriter::new(file);
+            encode_png(bytes, width, height, &mut out)?;
+            finish(out)
+        }
+        _ => encode(&image, format, file),
+    })
+}
+
+/// Runs `encode` on a fresh temporary file beside `path` and renames it over `path` when it
+/// succeeds; on failure removes it and leaves `path` as it was.
+fn write_atomically(
+    path: &Path,
+    encode: impl FnOnce(File) -> Result<(), String>,
+) -> Result<(), OutputError> {
     let err = |reason: String| OutputError::Write {
         path: path.display().to_string(),
         reason,
@@ -283,7 +331,7 @@ pub fn write_image_as(image: &Image, path: &Path, format: ImageFormat) -> Result
     }
     let (tmp_path, file) = create_temp_beside(path).map_err(|e| err(e.to_string()))?;
     register_temp(Some(tmp_path.clone()));
-    let result = encode(image, format, file);
+    let result = encode(file);
     let result = result.and_then(|()| {
         // Rename while holding the registry lock, so an interrupt either sees the temporary
         // file (and removes it) or sees nothing (the rename is done).
@@ -304,8 +352,53 @@ pub fn write_image_as(image: &Image, path: &Path, format: ImageFormat) -> Result
     Ok(())
 }
 
-/// Encodes the image into the (temporary) file and flushes it to disk.
-fn encode(image: &Image, format: ImageFormat, file: File) -> Result<(), String> {
+/// Pixels converted per parallel work item by [`srgb8_in_place`].
+const IN_PLACE_BLOCK: usize = 4096;
+
+/// Overwrites the film with its 8-bit sRGB bytes (as [`Image::to_srgb8`] gives them) and
+/// returns them: the first `3·pixels.len()` bytes of the film's memory. The pixels are
+/// meaningless afterwards.
+fn srgb8_in_place(pixels: &mut [Vec3]) -> &[u8] {
+    use rayon::prelude::*;
+    let n = pixels.len();
+    let bytes = pixels_as_bytes_mut(pixels);
+    // Each block of pixels writes its bytes to the front of its own memory, in parallel:
+    // pixel i of a block is read (bytes 12i..12i+12) before its bytes 3i..3i+3 are written,
+    // and those lie below 12i for i ≥ 1, so no unread pixel is overwritten.
+    bytes.par_chunks_mut(12 * IN_PLACE_BLOCK).for_each(|block| {
+        for i in 0..block.len() / 12 {
+            let channel = |c: usize| {
+                let at = 12 * i + 4 * c;
+                f32::from_ne_bytes([block[at], block[at + 1], block[at + 2], block[at + 3]])
+            };
+            let rgb = [channel(0), channel(1), channel(2)];
+            for (c, v) in rgb.into_iter().enumerate() {
+                block[3 * i + c] = linear_to_srgb8(v as f64);
+            }
+        }
+    });
+    // Then the blocks' bytes are moved together, in order (each destination lies below its
+    // source and above everything already placed).
+    for start in (IN_PLACE_BLOCK..n).step_by(IN_PLACE_BLOCK) {
+        let len = 3 * IN_PLACE_BLOCK.min(n - start);
+        bytes.copy_within(12 * start..12 * start + len, 3 * start);
+    }
+    &bytes[..3 * n]
+}
+
+/// The film's memory as bytes.
+fn pixels_as_bytes_mut(pixels: &mut [Vec3]) -> &mut [u8] {
+    const _: () = assert!(std::mem::size_of::<Vec3>() == 12 && std::mem::align_of::<Vec3>() == 4);
+    let len = std::mem::size_of_val(pixels);
+    // SAFETY: `Vec3` is `#[repr(C)]` with three `f32` fields and no padding (size 12,
+    // checked above), so the slice is `len` initialised bytes; `u8` needs no alignment; the
+    // borrow of `pixels` is held for the lifetime of the result, so nothing else aliases it;
+    // and every byte pattern is a valid `f32`, so the pixels stay valid whatever is written.
+    unsafe { std::slice::from_raw_parts_mut(pixels.as_mut_ptr().cast::<u8>(), len) }
+}
+
+/// An error unless the image holds `width·height ≥ 1` pixels.
+fn check_size(image: &Image) -> Result<(), String> {
     let (w, h) = (image.width as usize, image.height as usize);
     if w == 0 || h == 0 || image.pixels.len() != w * h {
         return Err(format!(
@@ -315,20 +408,31 @@ fn encode(image: &Image, format: ImageFormat, file: File) -> Result<(), String> 
             image.pixels.len()
         ));
     }
+    Ok(())
+}
+
+/// Encodes 8-bit sRGB bytes (`R, G, B` per pixel, row-major) as PNG into `out`.
+fn encode_png(bytes: &[u8], width: u32, height: u32, out: &mut impl Write) -> Result<(), String> {
+    use image::ImageEncoder;
+    image::codecs::png::PngEncoder::new(out)
+        .write_image(bytes, width, height, image::ExtendedColorType::Rgb8)
+        .map_err(|e| e.to_string())
+}
+
+/// Flushes the buffered file and syncs it to disk.
+fn finish(mut out: BufWriter<File>) -> Result<(), String> {
+    out.flush().map_err(|e| e.to_string())?;
+    let file = out.into_inner().map_err(|e| e.error().to_string())?;
+    file.sync_all().map_err(|e| e.to_string())
+}
+
+/// Encodes the image into the (temporary) file and flushes it to disk.
+fn encode(image: &Image, format: ImageFormat, file: File) -> Result<(), String> {
+    check_size(image)?;
+    let (w, h) = (image.width as usize, image.height as usize);
     let mut out = BufWriter::new(file);
     match format {
-        ImageFormat::Png => {
-            use image::ImageEncoder;
-            let bytes = image.to_srgb8();
-            image::codecs::png::PngEncoder::new(&mut out)
-                .write_image(
-                    &bytes,
-                    image.width,
-                    image.height,
-                    image::ExtendedColorType::Rgb8,
-                )
-                .map_err(|e| e.to_string())?;
-        }
+        ImageFormat::Png => encode_png(&image.to_srgb8(), image.width, image.height, &mut out)?,
         ImageFormat::ExrFloat => {
             use exr::prelude::*;
             let px = |v: Vec2<usize>| {
@@ -352,9 +456,7 @@ fn encode(image: &Image, format: ImageFormat, file: File) -> Result<(), String> 
                 .map_err(|e| e.to_string())?;
         }
     }
-    out.flush().map_err(|e| e.to_string())?;
-    let file = out.into_inner().map_err(|e| e.error().to_string())?;
-    file.sync_all().map_err(|e| e.to_string())
+    finish(out)
 }
 
 /// Creates a fresh temporary file in the target's directory, named after the target
@@ -479,6 +581,21 @@ mod tests {
             }
         }
         assert!(nudged > 1000, "only {nudged} values needed the nudge");
+        // And anywhere in and around [0, 1].
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        for _ in 0..200_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let v = (x >> 11) as f64 / (1u64 << 53) as f64 * 1.2 - 0.1;
+            let stored = to_film(DVec3::splat(v)).x;
+            assert_eq!(
+                linear_to_srgb8(stored as f64),
+                linear_to_srgb8(v),
+                "at {v:e}"
+            );
+            assert!((stored as f64 - v).abs() <= 2.0 * f32::EPSILON as f64 * v.abs());
+        }
         // Elsewhere it is plain rounding, and values outside [0, 1] are kept.
         assert_eq!(
             to_film(DVec3::new(0.5, 2.0, -1.0)),
@@ -550,6 +667,40 @@ mod tests {
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .collect();
         assert_eq!(names.len(), 3, "{names:?}");
+    }
+
+    #[test]
+    fn owned_png_is_the_same_file() {
+        let dir = tempfile::tempdir().unwrap();
+        // Sizes below, at and above one in-place block, and not a multiple of it.
+        for (w, h) in [(1, 1), (5, 3), (64, 64), (97, 131)] {
+            let mut img = Image::new(w, h);
+            let mut x = 0x2545_f491_4f6c_dd1du64;
+            for p in &mut img.pixels {
+                let mut next = || {
+                    x ^= x << 13;
+                    x ^= x >> 7;
+                    x ^= x << 17;
+                    (x >> 40) as f64 / (1u64 << 24) as f64 * 1.2 - 0.1
+                };
+                *p = to_film(DVec3::new(next(), next(), next()));
+            }
+            let (a, b) = (dir.path().join("a.png"), dir.path().join("b.png"));
+            write_image(&img, &a).unwrap();
+            let bytes = img.to_srgb8();
+            write_image_owned(img, &b, ImageFormat::Png).unwrap();
+            assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+            let decoded = image::open(&b).unwrap().to_rgb8();
+            assert_eq!(decoded.into_raw(), bytes, "{w}×{h}");
+        }
+        let bad = Image {
+            width: 2,
+            height: 2,
+            pixels: vec![Vec3::ZERO; 3],
+        };
+        let target = dir.path().join("bad.png");
+        assert!(write_image_owned(bad, &target, ImageFormat::Png).is_err());
+        assert!(!target.exists());
     }
 
     #[test]
