@@ -34,7 +34,7 @@
 //! and of the incoming ray's origin, and the incoming segment's length). The guard thus
 //! follows the scene's scale: a heart 10⁻³ across and one 10³ across are treated alike.
 
-use crate::film::{self, Image};
+use crate::film::Image;
 use crate::geometry::{DVec3, Ray};
 use crate::lights::Light;
 use crate::scene::Scene;
@@ -333,7 +333,7 @@ impl<'a> Tracer<'a> {
     }
 
     /// Renders `tile` into `band`, the image rows from `tile.y0` on (full width), each pixel's
-    /// `f64` mean stored through [`film::to_film`]; returns the rays traced.
+    /// `f64` mean rounded to `f32`; returns the rays traced.
     fn render_tile(&self, tile: &Tile, width: u32, height: u32, band: &mut [Vec3]) -> u64 {
         let mut rays = 0;
         let inv = 1.0 / self.spp as f64;
@@ -353,7 +353,7 @@ impl<'a> Tracer<'a> {
                     sum += self.radiance(&ray, 0.0, 0, &mut state);
                 }
                 rays += state.rays;
-                band[((y - tile.y0) * width + x) as usize] = film::to_film(sum * inv);
+                band[((y - tile.y0) * width + x) as usize] = (sum * inv).as_vec3();
             }
         }
         rays

@@ -175,7 +175,7 @@ fn background8() -> [u8; 3] {
     pixels(&Image {
         width: 1,
         height: 1,
-        pixels: vec![kardia::film::to_film(BACKGROUND)],
+        pixels: vec![BACKGROUND.as_vec3()],
     })[0]
 }
 

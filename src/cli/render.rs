@@ -162,7 +162,7 @@ pub fn run(args: RenderArgs) -> i32 {
     let (image, stats) = integrator::render_with_progress(&scene, &settings, &|n| bar.inc(n));
     bar.finish_and_clear();
 
-    if let Err(e) = film::write_image_owned(image, &args.output, format) {
+    if let Err(e) = film::write_image_as(&image, &args.output, format) {
         report(e);
         return 1;
     }
