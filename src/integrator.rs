@@ -38,6 +38,7 @@ use crate::film::Image;
 use crate::geometry::{DVec3, Ray};
 use crate::lights::Light;
 use crate::scene::Scene;
+use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -331,9 +332,9 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    /// Renders `tile` into `band`, the image rows from `tile.y0` on (full width); returns the
-    /// rays traced.
-    fn render_tile(&self, tile: &Tile, width: u32, height: u32, band: &mut [DVec3]) -> u64 {
+    /// Renders `tile` into `band`, the image rows from `tile.y0` on (full width), each pixel's
+    /// `f64` mean rounded to `f32`; returns the rays traced.
+    fn render_tile(&self, tile: &Tile, width: u32, height: u32, band: &mut [Vec3]) -> u64 {
         let mut rays = 0;
         let inv = 1.0 / self.spp as f64;
         for y in tile.y0..tile.y1 {
@@ -352,7 +353,7 @@ impl<'a> Tracer<'a> {
                     sum += self.radiance(&ray, 0.0, 0, &mut state);
                 }
                 rays += state.rays;
-                band[((y - tile.y0) * width + x) as usize] = sum * inv;
+                band[((y - tile.y0) * width + x) as usize] = (sum * inv).as_vec3();
             }
         }
         rays

@@ -411,7 +411,7 @@ fn scale_invariant_rendering() {
         .enumerate()
     {
         assert!(
-            close(*a, *c, 1e-6) && close(*b, *c, 1e-6),
+            close(a.as_dvec3(), c.as_dvec3(), 1e-6) && close(b.as_dvec3(), c.as_dvec3(), 1e-6),
             "pixel {i}: {a} {b} {c}"
         );
     }

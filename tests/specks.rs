@@ -175,7 +175,7 @@ fn background8() -> [u8; 3] {
     pixels(&Image {
         width: 1,
         height: 1,
-        pixels: vec![BACKGROUND],
+        pixels: vec![BACKGROUND.as_vec3()],
     })[0]
 }
 
@@ -187,7 +187,7 @@ fn centre_sampled(scene: &Scene, settings: &RenderSettings) -> Image {
             let ray = scene
                 .camera
                 .ray(x as f64 + 0.5, y as f64 + 0.5, scene.width, scene.height);
-            image.pixels[(y * scene.width + x) as usize] = trace_ray(scene, settings, &ray);
+            image.set(x, y, trace_ray(scene, settings, &ray));
         }
     }
     image
