@@ -11,7 +11,8 @@
 //! `V = 1` means exactly one, simple, with `P(lo)` and `P(hi)` of opposite signs (`b₀ = P(lo)`,
 //! `bₙ = P(hi)`). Otherwise the interval is halved (de Casteljau, slightly off the middle so
 //! as not to land on dyadic roots) and the left half searched first: the first `V = 1` piece
-//! brackets the first root, which is refined by false position on `P` itself.
+//! brackets the first root, which is refined on `P` itself by Halley steps kept inside the
+//! bracket, starting where the piece's control polygon crosses zero.
 //!
 //! # When it declines
 //!
@@ -26,7 +27,7 @@
 //! it used are exact for the given coefficients, so the answer is the exact one: the same
 //! hit/miss the full method gives away from numerically multiple roots.
 
-use super::cluster::refine;
+use super::cluster::refine_simple;
 use super::prep::{horner, Prepared};
 
 /// Halvings after which a piece that still has more than one sign variation is left to the
@@ -216,7 +217,15 @@ fn search<const D: usize>(p: &Prepared) -> Fast {
                 if fa == 0.0 || (fa < 0.0) == (fb < 0.0) || (fa < 0.0) != (b[0] < 0.0) {
                     return Fast::Undecided;
                 }
-                return Fast::Root(refine(c, ta, tb, fa, fb) * p.scale);
+                // Start where the piece's control polygon crosses zero: on a piece with
+                // one sign variation it is close to the root, closer than false position
+                // on the end values.
+                let i = (0..n)
+                    .find(|&i| (b[i] < 0.0) != (b[i + 1] < 0.0))
+                    .unwrap_or(0);
+                let s = (i as f64 + b[i] / (b[i] - b[i + 1])) / n as f64;
+                let start = ta + (tb - ta) * s;
+                return Fast::Root(refine_simple(c, ta, tb, fa, start) * p.scale);
             }
             _ => {}
         }

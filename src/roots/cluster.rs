@@ -177,15 +177,30 @@ fn eval3(c: &[f64], x: f64) -> (f64, f64, f64, f64) {
 }
 
 /// The root of `c` in `[a, b]`, where `fa = c(a)` and `fb = c(b)` have opposite signs (neither
-/// zero): safeguarded Newton/Schröder steps inside the shrinking sign-change bracket, a
-/// bisection whenever a step leaves it or makes slow progress. To a few ulps of the root.
-/// Schröder's step (Newton on p/p') stays quadratic towards a cluster of roots, which is what
-/// the heart's f = A³ − B·Z³ looks like from afar. Inlined, so a fixed-size caller (the
-/// Bernstein fast path) gets its loops unrolled.
+/// zero): safeguarded Newton/Schröder steps inside the shrinking sign-change bracket, starting
+/// from false position, a bisection whenever a step leaves it or makes slow progress. To a few
+/// ulps of the root. Schröder's step (Newton on p/p') stays quadratic towards a multiple root
+/// or a cluster of roots, which is what the heart's f = A³ − B·Z³ looks like from afar.
+/// Inlined, so a fixed-size caller gets its loops unrolled.
 #[inline(always)]
-pub(crate) fn refine(c: &[f64], mut a: f64, mut b: f64, fa: f64, fb: f64) -> f64 {
+pub(crate) fn refine(c: &[f64], a: f64, b: f64, fa: f64, fb: f64) -> f64 {
+    let start = a - fa * ((b - a) / (fb - fa));
+    refine_with::<false>(c, a, b, fa, start)
+}
+
+/// [`refine`] for a bracket known to hold exactly one root, a simple one (the Bernstein fast
+/// path's certain single sign variation), from the caller's starting point `start`: Halley's
+/// step, cubically convergent at a simple root, where Schröder's is only quadratic.
+#[inline(always)]
+pub(crate) fn refine_simple(c: &[f64], a: f64, b: f64, fa: f64, start: f64) -> f64 {
+    refine_with::<true>(c, a, b, fa, start)
+}
+
+/// The iteration behind [`refine`] (`HALLEY = false`) and [`refine_simple`].
+#[inline(always)]
+fn refine_with<const HALLEY: bool>(c: &[f64], mut a: f64, mut b: f64, fa: f64, start: f64) -> f64 {
     let neg_a = fa < 0.0;
-    let mut x = a - fa * ((b - a) / (fb - fa));
+    let mut x = start;
     if !(x > a && x < b) {
         x = 0.5 * (a + b);
     }
@@ -205,7 +220,12 @@ pub(crate) fn refine(c: &[f64], mut a: f64, mut b: f64, fa: f64, fb: f64) -> f64
         } else {
             b = x;
         }
-        let den = d * d - 2.0 * v * h;
+        // Halley: x − p·p' / (p'² − p·p''/2); Schröder: x − p·p' / (p'² − p·p'').
+        let den = if HALLEY {
+            d * d - v * h
+        } else {
+            d * d - 2.0 * v * h
+        };
         let mut next = if den > 0.0 {
             x - v * d / den
         } else {
