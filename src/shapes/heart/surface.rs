@@ -47,6 +47,25 @@ fn b_of(p: DVec3) -> f64 {
     0.1 * p.x * p.x + p.y * p.y
 }
 
+/// `∛x`, within one ulp of the correctly rounded cube root (tested), for the `∛B` that `g`
+/// and `∇g` need on every hit: about three times as fast as `f64::cbrt` here. Zero,
+/// subnormal, negative and non-finite inputs are left to `f64::cbrt`.
+#[inline]
+fn cbrt(x: f64) -> f64 {
+    if !(x >= f64::MIN_POSITIVE && x < f64::INFINITY) {
+        return x.cbrt();
+    }
+    // A first guess from the bit pattern (a third of the exponent, roughly, good to a few
+    // percent), two Halley steps (cubic: to ~1e-14), a last Newton step on y³ − x.
+    let mut y = f64::from_bits(x.to_bits() / 3 + 0x2a9f_7893_782d_a1ce);
+    for _ in 0..2 {
+        let y3 = y * y * y;
+        y *= (y3 + 2.0 * x) / (2.0 * y3 + x);
+    }
+    let y2 = y * y;
+    y - (y2 * y - x) / (3.0 * y2)
+}
+
 /// The heart function `f = A³ − B·Z³` at an object-space point: negative inside, positive
 /// outside, zero on the surface.
 #[inline]
@@ -61,7 +80,7 @@ pub fn heart_fn(p: DVec3) -> f64 {
 /// Continuous everywhere; smooth wherever `B > 0` (off the Z axis).
 #[inline]
 pub fn factor_g(p: DVec3) -> f64 {
-    a_of(p) - b_of(p).cbrt() * p.z
+    a_of(p) - cbrt(b_of(p)) * p.z
 }
 
 /// `g` at `p` and its directional derivative `∇g·d`. On (or so near that `∛B²` underflows) the
@@ -69,7 +88,7 @@ pub fn factor_g(p: DVec3) -> f64 {
 #[inline]
 pub fn factor_g_with_slope(p: DVec3, d: DVec3) -> (f64, f64) {
     let b = b_of(p);
-    let s = b.cbrt();
+    let s = cbrt(b);
     let g = a_of(p) - s * p.z;
     let da = 4.0 * p.x * d.x + 2.0 * p.y * d.y + 2.0 * p.z * d.z;
     let db = 0.2 * p.x * d.x + 2.0 * p.y * d.y;
@@ -98,7 +117,7 @@ pub fn gradient_f(p: DVec3) -> DVec3 {
 /// wherever `∇f ≠ 0`, and well-conditioned across the equator curve. Zero on the Z axis.
 #[inline]
 pub fn scaled_gradient_g(p: DVec3) -> DVec3 {
-    let s = b_of(p).cbrt();
+    let s = cbrt(b_of(p));
     let s2 = s * s;
     DVec3::new(
         p.x * (12.0 * s2 - 0.2 * p.z),
@@ -191,6 +210,36 @@ pub const BOUNDS: Aabb = Aabb {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn cube_root_within_one_ulp() {
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut exact = 0;
+        let n = 2_000_000;
+        for i in 0..n {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            // Values of B's size, and any positive double.
+            let v = if i % 2 == 0 {
+                (x >> 11) as f64 / (1u64 << 53) as f64 * 4.0
+            } else {
+                f64::from_bits((x >> 2) & 0x7fef_ffff_ffff_ffff)
+            };
+            let (got, want) = (cbrt(v), v.cbrt());
+            let ulps = (got.to_bits() as i64 - want.to_bits() as i64).abs();
+            assert!(ulps <= 1, "cbrt({v:e}) = {got:e}, want {want:e}");
+            exact += usize::from(ulps == 0);
+        }
+        assert!(exact > n * 8 / 10, "only {exact} of {n} exact");
+        for v in [0.0, -0.0, 1e-310, -8.0, f64::INFINITY, 1.0, 8.0, 0.001] {
+            let (got, want) = (cbrt(v), v.cbrt());
+            assert!(
+                got == want || (got - want).abs() <= f64::EPSILON * want.abs(),
+                "{v}"
+            );
+        }
+    }
 
     /// Newton on a polynomial (descending closure) from `x`, to convergence.
     fn newton(p: impl Fn(f64) -> (f64, f64), mut x: f64) -> f64 {
