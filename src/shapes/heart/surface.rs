@@ -52,7 +52,7 @@ fn b_of(p: DVec3) -> f64 {
 /// subnormal, negative and non-finite inputs are left to `f64::cbrt`.
 #[inline]
 fn cbrt(x: f64) -> f64 {
-    if !(x >= f64::MIN_POSITIVE && x < f64::INFINITY) {
+    if !(f64::MIN_POSITIVE..f64::INFINITY).contains(&x) {
         return x.cbrt();
     }
     // A first guess from the bit pattern (a third of the exponent, roughly, good to a few
