@@ -67,7 +67,7 @@ impl Coef {
         match self {
             Coef::Approx(v) => Dd::from_f64(v),
             Coef::Exact(n, 1) => Dd::from_i128(n),
-            Coef::Exact(n, d) => Dd::from_i128(n).div(Dd::from_i128(d)),
+            Coef::Exact(n, d) => Dd::from_i128(n) / Dd::from_i128(d),
         }
     }
 

@@ -8,7 +8,7 @@
 //! the magnitudes of the operands (not of the result), which is what the rounding bounds of
 //! the callers assume.
 
-use std::ops::{Add, Mul, Neg, Sub};
+use std::ops::{Add, Div, Mul, Neg, Sub};
 
 /// `hi + lo`, normalised so that `hi` is the nearest `f64` to the sum.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -55,26 +55,13 @@ impl Dd {
     pub fn from_i128(n: i128) -> Dd {
         let hi = n as f64;
         // `hi` rounds `n` to 53 bits; the remainder is exact in i128 unless `hi` is 2¹²⁷.
-        let lo = match i128::try_from(hi as i128)
-            .ok()
-            .filter(|_| hi.abs() < 1.7e38)
-        {
-            Some(h) => n.wrapping_sub(h) as f64,
-            None => 0.0,
+        let lo = if hi.abs() < 1.7e38 {
+            n.wrapping_sub(hi as i128) as f64
+        } else {
+            0.0
         };
         let (hi, lo) = quick_two_sum(hi, lo);
         Dd { hi, lo }
-    }
-
-    /// `self / o` to about 106 bits (`o ≠ 0`).
-    pub fn div(self, o: Dd) -> Dd {
-        let q1 = self.hi / o.hi;
-        let r = self - o * Dd::from_f64(q1);
-        let q2 = r.hi / o.hi;
-        let r = r - o * Dd::from_f64(q2);
-        let q3 = r.hi / o.hi;
-        let (hi, lo) = quick_two_sum(q1, q2);
-        Dd { hi, lo } + Dd::from_f64(q3)
     }
 
     /// The value rounded to `f64`.
@@ -103,6 +90,20 @@ impl Add for Dd {
         let (s, e) = quick_two_sum(s, e + t);
         let (hi, lo) = quick_two_sum(s, e + f);
         Dd { hi, lo }
+    }
+}
+
+impl Div for Dd {
+    type Output = Dd;
+    /// `self / o` to about 106 bits (`o ≠ 0`).
+    fn div(self, o: Dd) -> Dd {
+        let q1 = self.hi / o.hi;
+        let r = self - o * Dd::from_f64(q1);
+        let q2 = r.hi / o.hi;
+        let r = r - o * Dd::from_f64(q2);
+        let q3 = r.hi / o.hi;
+        let (hi, lo) = quick_two_sum(q1, q2);
+        Dd { hi, lo } + Dd::from_f64(q3)
     }
 }
 
@@ -143,7 +144,7 @@ mod tests {
     #[test]
     fn arithmetic_keeps_about_106_bits() {
         // 1/3 · 3 − 1 vanishes far below f64's rounding.
-        let third = Dd::from_f64(1.0).div(Dd::from_f64(3.0));
+        let third = Dd::from_f64(1.0) / Dd::from_f64(3.0);
         let r = third * Dd::from_f64(3.0) - Dd::from_f64(1.0);
         assert!(r.to_f64().abs() < 1e-31, "{r:?}");
         // (1 + 2⁻³⁰)² − 1 − 2⁻²⁹ = 2⁻⁶⁰, lost by the f64 product.
@@ -155,7 +156,7 @@ mod tests {
         let n = (1i128 << 80) + 12345;
         let d = Dd::from_i128(n);
         assert_eq!(d.hi as i128 + d.lo as i128, n);
-        let tenth = Dd::from_i128(1).div(Dd::from_i128(10));
+        let tenth = Dd::from_i128(1) / Dd::from_i128(10);
         let back = tenth * Dd::from_f64(10.0) - Dd::from_f64(1.0);
         assert!(back.to_f64().abs() < 1e-31);
         assert_eq!(tenth.hi, 0.1);

@@ -600,7 +600,7 @@ fn local_root(
     lo: f64,
     hi: f64,
 ) -> Option<f64> {
-    if !(lo < hi) {
+    if lo >= hi || lo.is_nan() || hi.is_nan() {
         return None;
     }
     let p = [0, 1, 2].map(|i| Dd::from_f64(mid[i] + root * e[i]));
