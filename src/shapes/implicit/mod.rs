@@ -17,6 +17,7 @@
 pub mod coef;
 pub mod dd;
 pub mod equation;
+pub mod extent;
 pub mod poly;
 pub mod presets;
 
@@ -91,6 +92,9 @@ fn is_root(c: &[f64], s: f64) -> bool {
 struct Surface {
     f: Compiled,
     grad: [Compiled; 3],
+    /// Object-space box holding the surface's part inside the clip sphere
+    /// ([`extent::zero_set_box`]); `None` when there is none.
+    object_box: Option<Aabb>,
 }
 
 impl Surface {
@@ -320,11 +324,17 @@ impl Implicit {
             })?,
         };
         let grad = [0, 1, 2].map(|v| Compiled::new(&poly.derivative(v)));
+        let object_box = extent::zero_set_box(&f, bound)
+            .map(|(lo, hi)| Aabb::new(DVec3::from_array(lo), DVec3::from_array(hi)));
         Ok(Self {
             frame,
             solver: Solver::default(),
             bound,
-            kind: Kind::Generic(Box::new(Surface { f, grad })),
+            kind: Kind::Generic(Box::new(Surface {
+                f,
+                grad,
+                object_box,
+            })),
         })
     }
 
@@ -454,6 +464,13 @@ impl Implicit {
         let lo_t = guard.max(t_mid - t_half);
         let hi_t = t_max.min(t_mid + t_half);
         if lo_t.is_nan() || hi_t.is_nan() || lo_t >= hi_t {
+            return None;
+        }
+        // Only the span inside the box that holds the surface needs searching.
+        let (lo_t, hi_t) = s
+            .object_box?
+            .clip(&self.frame.ray_to_object(ray), lo_t, hi_t)?;
+        if lo_t >= hi_t {
             return None;
         }
         let (mid, e) = (mid.to_array(), e.to_array());
@@ -684,7 +701,13 @@ impl Shape for Implicit {
                 let hb = h.bounds();
                 Aabb::new(hb.min.max(sphere.min), hb.max.min(sphere.max))
             }
-            Kind::Generic(_) => sphere,
+            Kind::Generic(s) => match &s.object_box {
+                Some(b) => {
+                    let wb = self.frame.bounds_to_world(b).padded(1e-9);
+                    Aabb::new(wb.min.max(sphere.min), wb.max.min(sphere.max))
+                }
+                None => Aabb::new(sphere.min, sphere.min),
+            },
         }
     }
 }
