@@ -41,7 +41,7 @@ fn split(b: &[f64], m: usize, axis: usize) -> (Vec<f64>, Vec<f64>) {
     let mut line = vec![0.0; m];
     for base in 0..b.len() {
         // Visit each line once, from its first element.
-        if (base / stride) % m != 0 {
+        if !(base / stride).is_multiple_of(m) {
             continue;
         }
         for (q, v) in line.iter_mut().enumerate() {
