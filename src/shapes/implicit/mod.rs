@@ -6,8 +6,14 @@
 //! result is compiled to `f64` terms plus its three symbolic partial derivatives. Per ray,
 //! the ray is re-parametrised over the chord it cuts from the clip sphere (`s ∈ [−1, 1]`,
 //! origin at the chord's midpoint), the univariate polynomial in `s` is formed by nested
-//! Horner composition (O(terms × degree), no allocation), its first root is found by the
-//! scene's [`Solver`], and `s` is mapped back to the caller's `t`.
+//! Horner composition (O(terms × degree), no allocation) over the ray's span inside a box
+//! that holds the surface ([`extent`], found once at load time), its first root is found by
+//! the scene's [`Solver`], and `s` is mapped back to the caller's `t`. A root that `f64`
+//! cannot resolve (a multiple root or a cluster: `N/|p′|` large, `N` the rounding of `p`) is
+//! found again on the polynomial recentred at it and composed in double-double arithmetic
+//! ([`dd`]) with the exact coefficients; where `∇f` is near its rounding, the normal is the
+//! plane that separates the signs of `f` on a small sphere about the point (see
+//! docs/implicit-surfaces.md for why: the specks of Taubin's heart).
 //!
 //! The `heart` preset (and an equation written exactly as that preset writes it) is the
 //! paper's heart: it builds and delegates to [`crate::shapes::Heart`] with the same frame and
