@@ -5,6 +5,7 @@
 //! denominator, so expansion is exact in most equations of interest; the single rounding to
 //! `f64` happens when the surface is compiled for ray tracing.
 
+use super::dd::Dd;
 use std::cmp::Ordering;
 
 /// A coefficient: an exact reduced fraction, or a floating-point approximation once exact
@@ -57,6 +58,16 @@ impl Coef {
                 // at most three otherwise.
                 n as f64 / d as f64
             }
+        }
+    }
+
+    /// The value to about 106 bits as a double-double (`hi` is the nearest `f64`, as
+    /// [`Coef::to_f64`] gives when numerator and denominator fit in 53 bits).
+    pub fn to_dd(self) -> Dd {
+        match self {
+            Coef::Approx(v) => Dd::from_f64(v),
+            Coef::Exact(n, 1) => Dd::from_i128(n),
+            Coef::Exact(n, d) => Dd::from_i128(n) / Dd::from_i128(d),
         }
     }
 
@@ -218,5 +229,13 @@ mod tests {
         assert!((big.to_f64() - 1e-40).abs() < 1e-54);
         assert_eq!(Coef::int(3).pow(4), Coef::int(81));
         assert_eq!(Coef::int(3).pow(0), Coef::ONE);
+        let ninth = Coef::int(9).over(Coef::int(80)).to_dd();
+        assert_eq!(ninth.hi, 9.0 / 80.0);
+        assert!(
+            (ninth * Dd::from_f64(80.0) - Dd::from_f64(9.0))
+                .to_f64()
+                .abs()
+                < 1e-30
+        );
     }
 }

@@ -6,8 +6,14 @@
 //! result is compiled to `f64` terms plus its three symbolic partial derivatives. Per ray,
 //! the ray is re-parametrised over the chord it cuts from the clip sphere (`s ∈ [−1, 1]`,
 //! origin at the chord's midpoint), the univariate polynomial in `s` is formed by nested
-//! Horner composition (O(terms × degree), no allocation), its first root is found by the
-//! scene's [`Solver`], and `s` is mapped back to the caller's `t`.
+//! Horner composition (O(terms × degree), no allocation) over the ray's span inside a box
+//! that holds the surface ([`extent`], found once at load time), its first root is found by
+//! the scene's [`Solver`], and `s` is mapped back to the caller's `t`. A root that `f64`
+//! cannot resolve (a multiple root or a cluster: `N/|p′|` large, `N` the rounding of `p`) is
+//! found again on the polynomial recentred at it and composed in double-double arithmetic
+//! ([`dd`]) with the exact coefficients; where `∇f` is near its rounding, the normal is the
+//! plane that separates the signs of `f` on a small sphere about the point (see
+//! docs/implicit-surfaces.md for why: the specks of Taubin's heart).
 //!
 //! The `heart` preset (and an equation written exactly as that preset writes it) is the
 //! paper's heart: it builds and delegates to [`crate::shapes::Heart`] with the same frame and
@@ -15,13 +21,16 @@
 //! at its equator curve. Any other way of typing the heart goes through the generic path.
 
 pub mod coef;
+pub mod dd;
 pub mod equation;
+pub mod extent;
 pub mod poly;
 pub mod presets;
 
 use super::{Heart, Shape};
 use crate::geometry::{Aabb, DVec3, Frame, Ray};
 use crate::roots::Solver;
+use dd::Dd;
 use poly::{Compiled, Poly, Uni};
 pub use presets::{Preset, HEART_EQUATION};
 
@@ -89,6 +98,149 @@ fn is_root(c: &[f64], s: f64) -> bool {
 struct Surface {
     f: Compiled,
     grad: [Compiled; 3],
+    /// Object-space box holding the surface's part inside the clip sphere
+    /// ([`extent::zero_set_box`]); `None` when there is none.
+    object_box: Option<Aabb>,
+}
+
+impl Surface {
+    /// A vector along the outward normal at the surface point `q` (not normalised; zero at a
+    /// singular point where no direction can be told). Normally `∇f` in `f64`. Where `∇f` is
+    /// not far above its rounding (close to a curve where it vanishes, such as the equator of
+    /// a heart, `|∇f|` falls with the square of the distance to it), its direction is noise
+    /// and also swings with the smallest distance of `q` from the surface (which a root
+    /// found even in double-double arithmetic has, ~1e-11 at a triple root): then the plane
+    /// separating the signs of `f` on a sphere of radius `h` about `q`
+    /// ([`Surface::normal_from_signs`]), with `∇f` in double-double arithmetic as the
+    /// fallback where the signs are not split by a plane.
+    fn normal_direction(&self, q: DVec3, h: f64) -> DVec3 {
+        let p = q.to_array();
+        let parts = self.grad.each_ref().map(|g| g.eval_with_bound(p));
+        let g = DVec3::new(parts[0].0, parts[1].0, parts[2].0);
+        let scale = parts.iter().fold(0.0f64, |m, v| m.max(v.1));
+        let terms = self.grad.iter().map(|g| g.terms.len()).max().unwrap_or(1) as f64;
+        let noise = ROUNDING * terms * scale;
+        if g.abs().max_element() > GRADIENT_MARGIN * noise {
+            return g;
+        }
+        if let Some(n) = self.normal_from_signs(q, h) {
+            return n;
+        }
+        let g = DVec3::from_array(self.grad.each_ref().map(|g| g.eval_dd(p).to_f64()));
+        if g.abs().max_element() > 1e3 * f64::EPSILON * noise {
+            g
+        } else {
+            DVec3::ZERO
+        }
+    }
+}
+
+/// How far above its rounding `∇f` must be for its `f64` direction to be used as the normal
+/// (the direction is then good to about the inverse of this, in radians).
+const GRADIENT_MARGIN: f64 = 1e6;
+
+/// Radius, relative to the clip radius, of the sphere on which
+/// [`Surface::normal_from_signs`] reads the signs of `f`: large enough for `f` to be far
+/// above its double-double rounding there even where it vanishes to high order, small enough
+/// for the surface to be flat across it (a tilt of about this many radians per unit
+/// curvature).
+const SIGN_SPHERE: f64 = 1e-5;
+
+impl Surface {
+    /// The sign of `f` at `p`, in double-double arithmetic (0 where even that is zero).
+    fn sign_dd(&self, p: DVec3) -> f64 {
+        let v = self.f.eval_dd(p.to_array()).hi;
+        if v > 0.0 {
+            1.0
+        } else if v < 0.0 {
+            -1.0
+        } else {
+            0.0
+        }
+    }
+
+    /// The outward unit normal at `q` where `∇f` vanishes (to rounding) but the surface is
+    /// smooth, as on the equator curve of a heart: the plane through `q` that separates the
+    /// signs of `f` on the sphere of radius `h` about it. Two points of the sphere where `f`
+    /// changes sign (found by bisection between sample directions of opposite signs) span
+    /// the tangent plane. `None` when the signs are not split by a plane (a true singular
+    /// point, such as a cone's apex) or `f` has one sign all round.
+    fn normal_from_signs(&self, q: DVec3, h: f64) -> Option<DVec3> {
+        // The 6 axis and 8 diagonal directions.
+        let mut dirs = [DVec3::ZERO; 14];
+        for (i, d) in dirs.iter_mut().enumerate() {
+            *d = if i < 6 {
+                let mut v = [0.0; 3];
+                v[i / 2] = if i % 2 == 0 { 1.0 } else { -1.0 };
+                DVec3::from_array(v)
+            } else {
+                let k = i - 6;
+                DVec3::new(
+                    if k & 1 == 0 { 1.0 } else { -1.0 },
+                    if k & 2 == 0 { 1.0 } else { -1.0 },
+                    if k & 4 == 0 { 1.0 } else { -1.0 },
+                ) / 3f64.sqrt()
+            };
+        }
+        let signs = dirs.map(|d| self.sign_dd(q + h * d));
+        // The sign change between neighbouring directions a and b, by bisection on the arc.
+        let boundary = |a: DVec3, sa: f64, b: DVec3, steps: usize| {
+            let (mut lo, mut hi) = (0.0f64, 1.0f64);
+            for _ in 0..steps {
+                let m = 0.5 * (lo + hi);
+                let u = (a + m * (b - a)).normalize();
+                if self.sign_dd(q + h * u) == sa {
+                    lo = m;
+                } else {
+                    hi = m;
+                }
+            }
+            (a + 0.5 * (lo + hi) * (b - a)).normalize()
+        };
+        let mut crossings: Vec<(usize, usize, DVec3)> = Vec::new();
+        for i in 0..14 {
+            for j in i + 1..14 {
+                let (si, sj) = (signs[i], signs[j]);
+                if si != 0.0 && sj != 0.0 && si != sj && dirs[i].dot(dirs[j]) > 0.3 {
+                    crossings.push((i, j, boundary(dirs[i], si, dirs[j], 12)));
+                }
+            }
+        }
+        // The two crossings farthest from parallel span the tangent plane; refine them.
+        let mut best = (0.0, 0, 0);
+        for a in 0..crossings.len() {
+            for b in a + 1..crossings.len() {
+                let w = crossings[a].2.cross(crossings[b].2).length();
+                if w > best.0 {
+                    best = (w, a, b);
+                }
+            }
+        }
+        if best.0 < 0.5 {
+            return None;
+        }
+        let refine = |(i, j, _): (usize, usize, DVec3)| boundary(dirs[i], signs[i], dirs[j], 48);
+        let n = refine(crossings[best.1])
+            .cross(refine(crossings[best.2]))
+            .normalize();
+        // Every clear sample direction must lie on the side its sign says, then orient.
+        let mut orient = 0.0;
+        for (d, s) in dirs.iter().zip(signs) {
+            let side = n.dot(*d);
+            if side.abs() > 0.2 {
+                if s == 0.0 {
+                    return None;
+                }
+                let agree = side.signum() * s;
+                if orient == 0.0 {
+                    orient = agree;
+                } else if agree != orient {
+                    return None;
+                }
+            }
+        }
+        (orient != 0.0).then_some(n * orient)
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -178,11 +330,17 @@ impl Implicit {
             })?,
         };
         let grad = [0, 1, 2].map(|v| Compiled::new(&poly.derivative(v)));
+        let object_box = extent::zero_set_box(&f, bound)
+            .map(|(lo, hi)| Aabb::new(DVec3::from_array(lo), DVec3::from_array(hi)));
         Ok(Self {
             frame,
             solver: Solver::default(),
             bound,
-            kind: Kind::Generic(Box::new(Surface { f, grad })),
+            kind: Kind::Generic(Box::new(Surface {
+                f,
+                grad,
+                object_box,
+            })),
         })
     }
 
@@ -314,38 +472,171 @@ impl Implicit {
         if lo_t.is_nan() || hi_t.is_nan() || lo_t >= hi_t {
             return None;
         }
-        let n = s.f.degree;
-        let mut c: Uni = s.f.compose(mid.to_array(), e.to_array());
-        // Normalise (the solver sees coefficients of order 1) and drop leading terms too
-        // small to matter anywhere on |s| ≤ 1.
-        let big = c[..=n].iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        if !(big > 0.0 && big.is_finite()) {
+        // Only the span inside the box that holds the surface needs searching.
+        let (lo_t, hi_t) = s
+            .object_box?
+            .clip(&self.frame.ray_to_object(ray), lo_t, hi_t)?;
+        if lo_t >= hi_t {
             return None;
         }
-        let mut deg = n;
-        while deg > 0 && c[deg].abs() <= 1e-15 * big {
-            deg -= 1;
-        }
-        // A power of two: exact, so the solver sees the composed coefficients unrounded.
-        let inv = 2f64.powi(-(big.log2().floor() as i32));
-        for v in &mut c[..=deg] {
-            *v *= inv;
-        }
+        let (mid, e) = (mid.to_array(), e.to_array());
+        let mut c: Uni = [0.0; MAX_DEGREE + 1];
+        s.f.compose_into(mid, e, &mut c);
+        let (deg, inv) = normalise(&mut c, s.f.degree)?;
         let mut s_lo = (lo_t - t_mid) / t_half;
         let s_hi = ((hi_t - t_mid) / t_half).min(1.0);
         for _ in 0..8 {
             let root = self.solver.first_root(&c[..=deg], s_lo, s_hi)?;
-            let t = t_mid + root * t_half;
-            if t > guard && t < t_max && is_root(&c[..=deg], root) {
-                return Some(t);
+            let radius = ill_conditioned(s, &c[..=deg], inv, mid, e, root);
+            if radius == 0.0 {
+                let t = t_mid + root * t_half;
+                if t > guard && t < t_max && is_root(&c[..=deg], root) {
+                    return Some(t);
+                }
+                if root <= s_lo {
+                    return None;
+                }
+                s_lo = root;
+                continue;
             }
-            if root <= s_lo {
+            // f64 cannot tell the roots near `root` apart: solve again there with the
+            // polynomial recentred and recomputed in double-double arithmetic.
+            let (w_lo, w_hi) = (root - radius, root + radius);
+            if let Some(r) = local_root(
+                s,
+                self.solver,
+                mid,
+                e,
+                root,
+                radius,
+                s_lo.max(w_lo),
+                s_hi.min(w_hi),
+            ) {
+                let t = t_mid + r * t_half;
+                return (t > guard && t < t_max).then_some(t);
+            }
+            if w_hi >= s_hi {
                 return None;
             }
-            s_lo = root;
+            s_lo = w_hi;
         }
         None
     }
+}
+
+/// Scales `c[..=n]` by a power of two (exact) so its largest coefficient is in `[1, 2)` and
+/// drops leading coefficients below `1e-15` of it (they cannot matter on `|s| ≤ 1`): the
+/// degree left and the factor applied, or `None` for a zero or non-finite polynomial.
+#[inline]
+fn normalise(c: &mut Uni, n: usize) -> Option<(usize, f64)> {
+    let big = c[..=n].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if !(big > 0.0 && big.is_finite()) {
+        return None;
+    }
+    let mut deg = n;
+    while deg > 0 && c[deg].abs() <= 1e-15 * big {
+        deg -= 1;
+    }
+    let inv = pow2_inverse(big);
+    for v in &mut c[..=deg] {
+        *v *= inv;
+    }
+    Some((deg, inv))
+}
+
+/// `2⁻ᵏ` with `2ᵏ ≤ x < 2ᵏ⁺¹` (`x` finite and positive), from the bits of `x` when `x` is a
+/// normal number whose inverse power is too.
+#[inline]
+fn pow2_inverse(x: f64) -> f64 {
+    let biased = ((x.to_bits() >> 52) & 0x7ff) as i64;
+    let k = biased - 1023;
+    if biased > 0 && (-1022..=1023).contains(&-k) {
+        f64::from_bits(((1023 - k) as u64) << 52)
+    } else {
+        2f64.powi(-(x.log2().floor() as i32))
+    }
+}
+
+/// Relative rounding of a composed coefficient, per unit of `Σ |terms|` at the point, and of
+/// its evaluation: `f64` composition and Horner evaluation each lose a few units of
+/// `(degree + 1)·ε`; a generous multiple keeps the estimate an upper bound.
+const ROUNDING: f64 = 16.0 * f64::EPSILON;
+
+/// Widest uncertainty (in `s`) accepted for an `f64` root before it is recomputed in
+/// double-double arithmetic. A root is good to `N/|p′|` (`N` the rounding of `p`); at a
+/// simple root of a well-scaled ray that is ~1e-15. Where it is larger, the ray meets the
+/// surface nearly tangentially or close to a curve where `∇f` vanishes (a multiple root of
+/// the ray polynomial): there the `f64` root may be off the surface by up to `∛ε ≈ 1e-5`, the
+/// normal `∇f` taken there can point anywhere, and a ray starting on the surface may find
+/// spurious roots next to its origin (self-shadowing specks).
+const SIMPLE_ROOT_RADIUS: f64 = 1e-11;
+
+/// Zero when `root` of the normalised ray polynomial `c` (scaled by `inv` from the
+/// composition of `s.f` with `mid + s·e`) is resolved by `f64` to [`SIMPLE_ROOT_RADIUS`];
+/// otherwise the half-width (a power of two, at most 2) of the interval around it within
+/// which the rounding of `p` can hide other roots or move this one.
+#[inline]
+fn ill_conditioned(s: &Surface, c: &[f64], inv: f64, mid: [f64; 3], e: [f64; 3], root: f64) -> f64 {
+    // p and p′ at the root.
+    let (mut p, mut dp) = (0.0f64, 0.0f64);
+    for &k in c.iter().rev() {
+        dp = dp * root + p;
+        p = p * root + k;
+    }
+    let point = [0, 1, 2].map(|i| mid[i] + root * e[i]);
+    let noise = ROUNDING * (c.len() as f64) * inv * s.f.eval_with_bound(point).1;
+    if noise <= SIMPLE_ROOT_RADIUS * dp.abs() {
+        return 0.0;
+    }
+    // The radius within which |p − p(root)| may stay below the noise: the smallest
+    // (noise / |p⁽ᵐ⁾(root)/m!|)^(1/m) over m ≥ 1 (Taylor coefficients by synthetic division).
+    let n = c.len() - 1;
+    let mut a = [0.0f64; MAX_DEGREE + 1];
+    a[..=n].copy_from_slice(c);
+    let mut radius = f64::INFINITY;
+    for m in 0..=n {
+        for k in (m..n).rev() {
+            a[k] += root * a[k + 1];
+        }
+        if m >= 1 && a[m] != 0.0 {
+            radius = radius.min((noise / a[m].abs()).powf(1.0 / m as f64));
+        }
+    }
+    // Margin for the region's extent on both sides and the estimate's factor of n^(1/m).
+    let w = (4.0 * radius).clamp(f64::MIN_POSITIVE, 2.0);
+    (1.0 / pow2_inverse(w) * 2.0).min(2.0)
+}
+
+/// The first root in `[lo, hi]` (within `radius` of `root`) of the ray polynomial recentred
+/// at `root`: `q(u) = f(P + u·E)` with `P = mid + root·e`, `E = radius·e`, composed in
+/// double-double arithmetic from the exact coefficients, where the cancellation that hid the
+/// roots from `f64` happens; rounded to `f64` only afterwards, `q`'s roots are well
+/// separated on `|u| ≤ 1`, and the ordinary solver finds them.
+#[allow(clippy::too_many_arguments)]
+fn local_root(
+    s: &Surface,
+    solver: Solver,
+    mid: [f64; 3],
+    e: [f64; 3],
+    root: f64,
+    radius: f64,
+    lo: f64,
+    hi: f64,
+) -> Option<f64> {
+    if lo >= hi || lo.is_nan() || hi.is_nan() {
+        return None;
+    }
+    let p = [0, 1, 2].map(|i| Dd::from_f64(mid[i] + root * e[i]));
+    // radius is a power of two: E is exact.
+    let big_e = [0, 1, 2].map(|i| Dd::from_f64(e[i] * radius));
+    let mut q = [Dd::ZERO; MAX_DEGREE + 1];
+    s.f.compose_into(p, big_e, &mut q);
+    let mut c: Uni = q.map(Dd::to_f64);
+    let (deg, _) = normalise(&mut c, s.f.degree)?;
+    let u_lo = ((lo - root) / radius).max(-1.0);
+    let u_hi = ((hi - root) / radius).min(1.0);
+    let u = solver.first_root(&c[..=deg], u_lo, u_hi)?;
+    Some((root + u * radius).clamp(lo, hi))
 }
 
 impl Shape for Implicit {
@@ -371,10 +662,11 @@ impl Shape for Implicit {
 
     fn normal(&self, p: DVec3) -> DVec3 {
         let q = self.frame.point_to_object(p);
-        if let Kind::Heart(h) = &self.kind {
-            return h.normal(p);
-        }
-        let g = self.gradient(q);
+        let s = match &self.kind {
+            Kind::Heart(h) => return h.normal(p),
+            Kind::Generic(s) => s,
+        };
+        let g = s.normal_direction(q, SIGN_SPHERE * self.bound);
         // Scale before normalising so tiny (but non-zero) gradients do not underflow.
         let big = g.abs().max_element();
         let n = if big > 0.0 && big.is_finite() {
@@ -390,9 +682,10 @@ impl Shape for Implicit {
                 DVec3::Z
             }
         };
-        let w = self.frame.normal_to_world(n);
-        if w.is_finite() {
-            w
+        let w = self.frame.normal_matrix * n;
+        let big = w.abs().max_element();
+        if big > 0.0 && big.is_finite() {
+            (w / big).normalize()
         } else {
             DVec3::Z
         }
@@ -414,7 +707,13 @@ impl Shape for Implicit {
                 let hb = h.bounds();
                 Aabb::new(hb.min.max(sphere.min), hb.max.min(sphere.max))
             }
-            Kind::Generic(_) => sphere,
+            Kind::Generic(s) => match &s.object_box {
+                Some(b) => {
+                    let wb = self.frame.bounds_to_world(b).padded(1e-9);
+                    Aabb::new(wb.min.max(sphere.min), wb.max.min(sphere.max))
+                }
+                None => Aabb::new(sphere.min, sphere.min),
+            },
         }
     }
 }

@@ -2,9 +2,11 @@
 //! `f64` form for ray tracing (composition with a ray, value, gradient).
 
 use super::coef::Coef;
+use super::dd::Dd;
 use super::equation::{Expr, Node, Span};
 use super::{EquationError, MAX_DEGREE};
 use std::collections::BTreeMap;
+use std::ops::{Add, Mul};
 
 /// Exponents `[i, j, k]` of the monomial `xⁱ yʲ zᵏ`.
 pub type Exps = [u8; 3];
@@ -199,8 +201,10 @@ impl Poly {
 pub struct Term {
     /// Exponents of x, y, z.
     pub e: Exps,
-    /// Coefficient.
+    /// Coefficient, rounded to the nearest `f64`.
     pub c: f64,
+    /// What the rounding of `c` lost: `c + lo` is the exact coefficient to about 106 bits.
+    pub lo: f64,
 }
 
 /// A polynomial compiled for evaluation: `f64` terms sorted by descending x-exponent, then
@@ -212,51 +216,139 @@ pub struct Compiled {
     pub terms: Vec<Term>,
     /// Total degree.
     pub degree: usize,
+    /// Highest exponent of z in any term.
+    max_z: usize,
 }
 
 /// Univariate coefficients (ascending) in fixed storage.
 pub type Uni = [f64; MAX_DEGREE + 1];
 
-/// `p ← p · (a + b·s)` for a polynomial of degree < `n` (result degree ≤ `n`).
-#[inline]
-fn mul_linear(p: &mut Uni, n: usize, a: f64, b: f64) {
-    let mut k = n;
+/// The arithmetic a ray composition runs in: `f64`, or [`Dd`] where `f64` cannot resolve
+/// the polynomial.
+pub trait Scalar: Copy + Add<Output = Self> + Mul<Output = Self> {
+    /// Zero.
+    const ZERO: Self;
+    /// One.
+    const ONE: Self;
+    /// The coefficient of a term in this arithmetic.
+    fn coef(t: &Term) -> Self;
+}
+
+impl Scalar for f64 {
+    const ZERO: f64 = 0.0;
+    const ONE: f64 = 1.0;
+    #[inline]
+    fn coef(t: &Term) -> f64 {
+        t.c
+    }
+}
+
+impl Scalar for Dd {
+    const ZERO: Dd = Dd::ZERO;
+    const ONE: Dd = Dd::from_f64(1.0);
+    #[inline]
+    fn coef(t: &Term) -> Dd {
+        Dd { hi: t.c, lo: t.lo }
+    }
+}
+
+/// `p ← p · (a + b·s)` for a polynomial of degree `deg` stored in `p[..=deg]`; the result
+/// has degree `deg + 1` (the caller keeps `deg + 1` within `p`).
+#[inline(always)]
+fn mul_linear<T: Scalar>(p: &mut [T], deg: usize, a: T, b: T) {
+    p[deg + 1] = b * p[deg];
+    let mut k = deg;
     while k > 0 {
         p[k] = a * p[k] + b * p[k - 1];
         k -= 1;
     }
-    p[0] *= a;
+    p[0] = a * p[0];
+}
+
+/// Offset of row `k` (the `k + 1` coefficients of `Z(s)ᵏ`) in the triangular table of powers.
+#[inline(always)]
+const fn tri(k: usize) -> usize {
+    k * (k + 1) / 2
 }
 
 impl Compiled {
-    /// Rounds the exact coefficients once and sorts the terms.
+    /// Rounds the exact coefficients once (keeping the remainders for [`Dd`] work) and sorts
+    /// the terms.
     pub fn new(p: &Poly) -> Compiled {
         let mut terms: Vec<Term> = p
             .terms
             .iter()
-            .map(|(&e, &c)| Term { e, c: c.to_f64() })
+            .map(|(&e, &c)| {
+                let d = c.to_dd();
+                Term {
+                    e,
+                    c: d.hi,
+                    lo: d.lo,
+                }
+            })
             .filter(|t| t.c != 0.0)
             .collect();
         terms.sort_by(|a, b| (b.e[0], b.e[1], a.e[2]).cmp(&(a.e[0], a.e[1], b.e[2])));
+        let max_z = terms.iter().map(|t| t.e[2] as usize).max().unwrap_or(0);
         Compiled {
             terms,
             degree: p.degree(),
+            max_z,
+        }
+    }
+
+    /// A compiled polynomial from terms given directly (any order), of the given total
+    /// degree (at least that of every term, at most [`MAX_DEGREE`]).
+    pub fn from_terms(mut terms: Vec<Term>, degree: usize) -> Compiled {
+        terms.sort_by(|a, b| (b.e[0], b.e[1], a.e[2]).cmp(&(a.e[0], a.e[1], b.e[2])));
+        let max_z = terms.iter().map(|t| t.e[2] as usize).max().unwrap_or(0);
+        Compiled {
+            terms,
+            degree,
+            max_z,
         }
     }
 
     /// The value at `p`.
     #[inline]
     pub fn eval(&self, p: [f64; 3]) -> f64 {
+        self.eval_with_bound(p).0
+    }
+
+    /// The value at `p` and `Σ |c|·|xⁱ yʲ zᵏ|` over the terms (the scale of the rounding
+    /// error of the value: it is within a few `(degree + terms)·ε` of that).
+    #[inline]
+    pub fn eval_with_bound(&self, p: [f64; 3]) -> (f64, f64) {
         let mut pw = [[1.0; MAX_DEGREE + 1]; 3];
         for (v, row) in pw.iter_mut().enumerate() {
             for k in 1..=self.degree {
                 row[k] = row[k - 1] * p[v];
             }
         }
-        self.terms
-            .iter()
-            .map(|t| t.c * pw[0][t.e[0] as usize] * pw[1][t.e[1] as usize] * pw[2][t.e[2] as usize])
-            .sum()
+        let (mut v, mut m) = (0.0, 0.0);
+        for t in &self.terms {
+            let x = t.c * pw[0][t.e[0] as usize] * pw[1][t.e[1] as usize] * pw[2][t.e[2] as usize];
+            v += x;
+            m += x.abs();
+        }
+        (v, m)
+    }
+
+    /// The value at `p` (exact `f64` coordinates) in double-double arithmetic, with the
+    /// exact coefficients: accurate to about `1e-31` of `Σ |terms|`.
+    pub fn eval_dd(&self, p: [f64; 3]) -> Dd {
+        let mut pw = [[Dd::from_f64(1.0); MAX_DEGREE + 1]; 3];
+        for (v, row) in pw.iter_mut().enumerate() {
+            for k in 1..=self.degree {
+                row[k] = row[k - 1] * Dd::from_f64(p[v]);
+            }
+        }
+        self.terms.iter().fold(Dd::ZERO, |acc, t| {
+            acc + Dd::coef(t)
+                * pw[0][t.e[0] as usize]
+                * pw[1][t.e[1] as usize]
+                * pw[2][t.e[2] as usize]
+        })
     }
 
     /// The coefficients (ascending in `s`) of `f(o + s·e)`, computed without expanding any
@@ -264,15 +356,29 @@ impl Compiled {
     /// Horner scheme in `X(s)`; every step is a multiplication by a linear polynomial, so the
     /// cost is O(terms × degree) and nothing is allocated.
     pub fn compose(&self, o: [f64; 3], e: [f64; 3]) -> Uni {
-        let n = self.degree;
-        let mut zp = [[0.0; MAX_DEGREE + 1]; MAX_DEGREE + 1];
-        zp[0][0] = 1.0;
-        for k in 1..=n {
-            let (prev, cur) = zp.split_at_mut(k);
-            cur[0] = prev[k - 1];
-            mul_linear(&mut cur[0], k, o[2], e[2]);
+        let mut out = [0.0; MAX_DEGREE + 1];
+        self.compose_into(o, e, &mut out);
+        out
+    }
+
+    /// [`Compiled::compose`] into `out` (all `MAX_DEGREE + 1` entries are written; those
+    /// above the degree are zero), in the arithmetic `T`: `f64`, or [`Dd`] with the exact
+    /// coefficients for the few rays where `f64` cannot resolve the surface.
+    #[inline]
+    pub fn compose_into<T: Scalar>(&self, o: [T; 3], e: [T; 3], out: &mut [T; MAX_DEGREE + 1]) {
+        // Z(s)^k for k ≤ max_z, row k at tri(k).
+        let kz = self.max_z;
+        let mut zp = [T::ZERO; tri(MAX_DEGREE + 1)];
+        zp[0] = T::ONE;
+        for k in 1..=kz {
+            let (prev, cur) = zp.split_at_mut(tri(k));
+            let row = &mut cur[..=k];
+            row[..k].copy_from_slice(&prev[tri(k - 1)..tri(k - 1) + k]);
+            mul_linear(row, k - 1, o[2], e[2]);
         }
-        let mut fx: Uni = [0.0; MAX_DEGREE + 1];
+        out.fill(T::ZERO);
+        let mut fx_deg = 0usize;
+        let mut hy = [T::ZERO; MAX_DEGREE + 1];
         let mut cur_i: Option<u8> = None;
         let terms = &self.terms;
         let mut t = 0;
@@ -280,41 +386,47 @@ impl Compiled {
             let i = terms[t].e[0];
             if let Some(ci) = cur_i {
                 for _ in i..ci {
-                    mul_linear(&mut fx, n, o[0], e[0]);
+                    mul_linear(out, fx_deg, o[0], e[0]);
+                    fx_deg += 1;
                 }
             }
             cur_i = Some(i);
             // h_i(s) = Σ_j Y^j Σ_k c_ijk Z^k by Horner in Y.
-            let mut hy: Uni = [0.0; MAX_DEGREE + 1];
+            let mut hy_deg = 0usize;
+            hy.fill(T::ZERO);
             let mut cur_j: Option<u8> = None;
             while t < terms.len() && terms[t].e[0] == i {
                 let j = terms[t].e[1];
                 if let Some(cj) = cur_j {
                     for _ in j..cj {
-                        mul_linear(&mut hy, n, o[1], e[1]);
+                        mul_linear(&mut hy, hy_deg, o[1], e[1]);
+                        hy_deg += 1;
                     }
                 }
                 cur_j = Some(j);
                 while t < terms.len() && terms[t].e[0] == i && terms[t].e[1] == j {
                     let k = terms[t].e[2] as usize;
-                    let c = terms[t].c;
-                    for (h, z) in hy[..=k].iter_mut().zip(&zp[k][..=k]) {
-                        *h += c * z;
+                    let c = T::coef(&terms[t]);
+                    for (h, &z) in hy[..=k].iter_mut().zip(&zp[tri(k)..=tri(k) + k]) {
+                        *h = *h + c * z;
                     }
+                    hy_deg = hy_deg.max(k);
                     t += 1;
                 }
             }
             for _ in 0..cur_j.unwrap_or(0) {
-                mul_linear(&mut hy, n, o[1], e[1]);
+                mul_linear(&mut hy, hy_deg, o[1], e[1]);
+                hy_deg += 1;
             }
-            for (f, h) in fx.iter_mut().zip(&hy) {
-                *f += h;
+            for (f, &h) in out[..=hy_deg].iter_mut().zip(&hy[..=hy_deg]) {
+                *f = *f + h;
             }
+            fx_deg = fx_deg.max(hy_deg);
         }
         for _ in 0..cur_i.unwrap_or(0) {
-            mul_linear(&mut fx, n, o[0], e[0]);
+            mul_linear(out, fx_deg, o[0], e[0]);
+            fx_deg += 1;
         }
-        fx
     }
 }
 
@@ -337,15 +449,14 @@ pub fn derive_bound(c: &Compiled) -> Option<f64> {
     if n == 0 {
         return None;
     }
-    let top = Compiled {
-        terms: c
-            .terms
+    let top = Compiled::from_terms(
+        c.terms
             .iter()
             .copied()
             .filter(|t| degree_of(&t.e) == n)
             .collect(),
-        degree: n,
-    };
+        n,
+    );
     // Fibonacci-sphere directions.
     const SAMPLES: usize = 4000;
     let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
