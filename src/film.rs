@@ -64,14 +64,18 @@ impl Image {
         bytes
             .par_chunks_mut(3 * 4096)
             .zip(self.pixels.par_chunks(4096))
-            .for_each(|(out, px)| {
-                for (o, p) in out.chunks_exact_mut(3).zip(px) {
-                    o[0] = linear_to_srgb8(p.x as f64);
-                    o[1] = linear_to_srgb8(p.y as f64);
-                    o[2] = linear_to_srgb8(p.z as f64);
-                }
-            });
+            .for_each(|(out, px)| srgb8_into(px, out));
         bytes
+    }
+}
+
+/// Writes `pixels` as 8-bit sRGB bytes (`R, G, B` each) into `out`, which holds three bytes
+/// a pixel.
+fn srgb8_into(pixels: &[Vec3], out: &mut [u8]) {
+    for (o, p) in out.chunks_exact_mut(3).zip(pixels) {
+        o[0] = linear_to_srgb8(p.x as f64);
+        o[1] = linear_to_srgb8(p.y as f64);
+        o[2] = linear_to_srgb8(p.z as f64);
     }
 }
 
@@ -246,6 +250,98 @@ pub fn write_image(image: &Image, path: &Path) -> Result<(), OutputError> {
 /// temporary file is left.
 pub fn write_image_as(image: &Image, path: &Path, format: ImageFormat) -> Result<(), OutputError> {
     write_atomically(path, |file| encode(image, format, file))
+}
+
+/// Writes a `width × height` PNG (8-bit sRGB, as [`write_image`] would) atomically while its
+/// rows are still being made: `produce` runs on the calling thread and hands finished runs of
+/// whole rows to the [`RowSink`] it is given, from any thread and in any order, each row
+/// exactly once; they are compressed, in order, on a thread of their own as soon as every row
+/// above them has arrived. Returns what `produce` returns once the file is complete. The
+/// path is checked first (as [`check_output_path`]); on any failure, including rows missing
+/// when `produce` returns, the target is left as it was and no temporary file remains.
+pub fn write_png_streaming<R>(
+    path: &Path,
+    width: u32,
+    height: u32,
+    produce: impl FnOnce(&RowSink) -> R,
+) -> Result<R, OutputError> {
+    check_output_path(path)?;
+    let mut result = None;
+    write_atomically(path, |file| {
+        if width == 0 || height == 0 {
+            return Err(format!("the image is {width}×{height}"));
+        }
+        let (sender, receiver) = std::sync::mpsc::channel();
+        std::thread::scope(|scope| {
+            let encoder = scope.spawn(move || encode_png_rows(file, width, height, receiver));
+            let sink = RowSink {
+                width: width as usize,
+                sender,
+            };
+            result = Some(produce(&sink));
+            drop(sink); // ends the encoder's input
+            encoder
+                .join()
+                .unwrap_or_else(|_| Err("the PNG encoder panicked".to_string()))
+        })
+    })?;
+    Ok(result.expect("produce ran"))
+}
+
+/// Where [`write_png_streaming`]'s producer puts finished rows.
+pub struct RowSink {
+    width: usize,
+    sender: std::sync::mpsc::Sender<(u32, Vec<u8>)>,
+}
+
+impl RowSink {
+    /// Hands over whole rows from `first_row` down (`pixels.len()` a multiple of the width;
+    /// linear RGB, converted to 8-bit sRGB here, on the caller's thread). Rows after a write
+    /// error are dropped; the error is reported when the file is finished.
+    pub fn rows(&self, first_row: u32, pixels: &[Vec3]) {
+        debug_assert_eq!(pixels.len() % self.width, 0, "whole rows only");
+        let mut bytes = vec![0u8; 3 * pixels.len()];
+        srgb8_into(pixels, &mut bytes);
+        let _ = self.sender.send((first_row, bytes));
+    }
+}
+
+/// The encoder thread of [`write_png_streaming`]: puts the runs of rows in order as they come
+/// and compresses each contiguous stretch at once.
+fn encode_png_rows(
+    file: File,
+    width: u32,
+    height: u32,
+    runs: std::sync::mpsc::Receiver<(u32, Vec<u8>)>,
+) -> Result<(), String> {
+    let mut out = BufWriter::new(file);
+    let mut encoder = png::Encoder::new(&mut out, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(png::Compression::Fast);
+    encoder.set_filter(png::Filter::Adaptive);
+    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+    let mut stream = writer.stream_writer().map_err(|e| e.to_string())?;
+    let row_bytes = 3 * width as usize;
+    let mut waiting = std::collections::BTreeMap::new();
+    let mut next_row = 0u32;
+    for (first_row, bytes) in runs {
+        if bytes.len() % row_bytes != 0 || first_row < next_row || waiting.contains_key(&first_row)
+        {
+            return Err(format!("rows from {first_row} handed over twice or cut"));
+        }
+        waiting.insert(first_row, bytes);
+        while let Some(bytes) = waiting.remove(&next_row) {
+            stream.write_all(&bytes).map_err(|e| e.to_string())?;
+            next_row += (bytes.len() / row_bytes) as u32;
+        }
+    }
+    if next_row != height || !waiting.is_empty() {
+        return Err(format!("only rows 0..{next_row} of {height} were made"));
+    }
+    stream.finish().map_err(|e| e.to_string())?;
+    writer.finish().map_err(|e| e.to_string())?;
+    finish(out)
 }
 
 /// Runs `encode` on a fresh temporary file beside `path` and renames it over `path` when it
@@ -501,6 +597,64 @@ mod tests {
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .collect();
         assert_eq!(names.len(), 3, "{names:?}");
+    }
+
+    #[test]
+    fn streamed_png_has_the_same_pixels_whatever_the_order_of_rows() {
+        let dir = tempfile::tempdir().unwrap();
+        let (w, h) = (37u32, 29u32);
+        let mut img = Image::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                let v = DVec3::new(x as f64 / 36.0, y as f64 / 28.0, ((x * y) % 7) as f64 / 5.0);
+                img.set(x, y, v);
+            }
+        }
+        let whole = dir.path().join("whole.png");
+        write_image(&img, &whole).unwrap();
+        let streamed = dir.path().join("streamed.png");
+        let row = |y: u32| &img.pixels[(y * w) as usize..((y + 1) * w) as usize];
+        let answer = write_png_streaming(&streamed, w, h, |sink| {
+            // Bottom runs first, from two threads, in runs of uneven size.
+            std::thread::scope(|s| {
+                s.spawn(|| {
+                    sink.rows(20, &img.pixels[(20 * w) as usize..]);
+                    sink.rows(10, &img.pixels[(10 * w) as usize..(20 * w) as usize]);
+                });
+                s.spawn(|| {
+                    for y in (0..10).rev() {
+                        sink.rows(y, row(y));
+                    }
+                });
+            });
+            42
+        })
+        .unwrap();
+        assert_eq!(answer, 42);
+        let a = image::open(&whole).unwrap().to_rgb8();
+        let b = image::open(&streamed).unwrap().to_rgb8();
+        assert_eq!(a, b);
+        let names = std::fs::read_dir(dir.path()).unwrap().count();
+        assert_eq!(names, 2, "a temporary file was left");
+    }
+
+    #[test]
+    fn streamed_png_with_missing_or_repeated_rows_fails_cleanly() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("keep.png");
+        std::fs::write(&target, b"old").unwrap();
+        let img = Image::new(4, 3);
+        let missing = write_png_streaming(&target, 4, 3, |sink| sink.rows(0, &img.pixels[..8]));
+        assert!(missing.is_err());
+        let twice = write_png_streaming(&target, 4, 3, |sink| {
+            sink.rows(0, &img.pixels);
+            sink.rows(1, &img.pixels[4..8]);
+        });
+        assert!(twice.is_err());
+        assert_eq!(std::fs::read(&target).unwrap(), b"old");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        let nowhere = dir.path().join("no").join("such.png");
+        assert!(write_png_streaming(&nowhere, 4, 3, |_| ()).is_err());
     }
 
     #[test]

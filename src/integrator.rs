@@ -40,14 +40,15 @@ use crate::lights::Light;
 use crate::scene::Scene;
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
-use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// Relative self-intersection guard for secondary and shadow rays (see the module docs).
 pub const SELF_HIT_EPS: f64 = 1e-9;
 
 /// Side of the square image tiles, in pixels; each band of tiles one `TILE_SIZE` tall is one
-/// parallel work item, rendered straight into its rows of the image.
+/// unit of parallel work, rendered straight into its rows of the image.
 pub const TILE_SIZE: u32 = 16;
 
 /// Most surfaces a shadow ray passes through before the light counts as blocked.
@@ -114,46 +115,73 @@ pub fn render_with_progress(
     settings: &RenderSettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Image, RenderStats) {
+    render_in_bands(scene, settings, progress, &|_, _| {})
+}
+
+/// [`render_with_progress`], also handing each finished band of rows to `band_done(first_row,
+/// rows)` from the worker thread that rendered it (`rows`: whole rows of the image, top to
+/// bottom, [`TILE_SIZE`] of them except at the bottom edge). Bands are taken in order from
+/// the top, so they finish in nearly ascending order, each exactly once. Lets a caller
+/// consume the image while the rest is being rendered (e.g. encode it).
+pub fn render_in_bands(
+    scene: &Scene,
+    settings: &RenderSettings,
+    progress: &(dyn Fn(u64) + Sync),
+    band_done: &(dyn Fn(u32, &[Vec3]) + Sync),
+) -> (Image, RenderStats) {
     let start = Instant::now();
     let (width, height) = (scene.width.max(1), scene.height.max(1));
     let tracer = Tracer::new(scene, settings);
     let mut image = Image::new(width, height);
     // Each band of TILE_SIZE rows is a disjoint slice of the image, filled in place tile by
-    // tile: no per-tile buffers, so the film exists once.
+    // tile: no per-tile buffers, so the film exists once. Workers take the next band from a
+    // shared counter: bands finish in order from the top, and a worker that runs out of work
+    // waits for one band at most.
     let band_len = width as usize * TILE_SIZE as usize;
-    let pixels = &mut image.pixels;
-    let mut work = || {
-        pixels
-            .par_chunks_mut(band_len)
-            .with_max_len(1)
-            .enumerate()
-            .map(|(band, out)| {
-                let y0 = band as u32 * TILE_SIZE;
-                let y1 = (y0 + TILE_SIZE).min(height);
-                let mut rays = 0;
-                for x0 in (0..width).step_by(TILE_SIZE as usize) {
-                    let tile = Tile {
-                        x0,
-                        y0,
-                        x1: (x0 + TILE_SIZE).min(width),
-                        y1,
-                    };
-                    rays += tracer.render_tile(&tile, width, height, out);
-                    progress(((tile.x1 - tile.x0) * (y1 - y0)) as u64);
-                }
-                rays
-            })
-            .sum::<u64>()
+    let bands: Vec<Mutex<&mut [Vec3]>> =
+        image.pixels.chunks_mut(band_len).map(Mutex::new).collect();
+    let next_band = AtomicUsize::new(0);
+    let rays = AtomicU64::new(0);
+    let worker = || loop {
+        let band = next_band.fetch_add(1, Ordering::Relaxed);
+        let Some(slot) = bands.get(band) else {
+            return;
+        };
+        // Each band is taken once, so its lock is never contended.
+        let mut out = slot.lock().unwrap_or_else(|e| e.into_inner());
+        let y0 = band as u32 * TILE_SIZE;
+        let y1 = (y0 + TILE_SIZE).min(height);
+        let mut band_rays = 0;
+        for x0 in (0..width).step_by(TILE_SIZE as usize) {
+            let tile = Tile {
+                x0,
+                y0,
+                x1: (x0 + TILE_SIZE).min(width),
+                y1,
+            };
+            band_rays += tracer.render_tile(&tile, width, height, &mut out);
+            progress(((tile.x1 - tile.x0) * (y1 - y0)) as u64);
+        }
+        rays.fetch_add(band_rays, Ordering::Relaxed);
+        band_done(y0, &out);
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)
         .build();
-    let (rays, threads) = match pool {
-        Ok(pool) => (pool.install(work), pool.current_num_threads()),
-        Err(_) => (work(), rayon::current_num_threads()),
+    let threads = match pool {
+        Ok(pool) => {
+            let threads = pool.current_num_threads();
+            pool.broadcast(|_| worker());
+            threads
+        }
+        Err(_) => {
+            worker();
+            1
+        }
     };
+    drop(bands);
     let stats = RenderStats {
-        rays,
+        rays: rays.into_inner(),
         elapsed: start.elapsed(),
         threads,
     };
@@ -542,6 +570,33 @@ mod tests {
         // Normal incidence: ((n1 − n2)/(n1 + n2))².
         assert!((fresnel(1.0, 1.0, 1.0 / 1.5) - 0.04).abs() < 1e-12);
         assert_eq!(fresnel(0.3, 0.3, 1.0), 0.0);
+    }
+
+    #[test]
+    fn bands_are_handed_over_once_each_and_match_the_image() {
+        let mut scene = crate::scene::parse(
+            crate::scene::DEFAULT_SCENE,
+            "heart.scene",
+            &crate::scene::LoadOptions::default(),
+        )
+        .unwrap();
+        (scene.width, scene.height) = (40, 37); // the last band is short
+        let settings = RenderSettings {
+            threads: 2,
+            ..RenderSettings::default()
+        };
+        let seen = Mutex::new(Vec::new());
+        let (image, stats) = render_in_bands(&scene, &settings, &|_| {}, &|row, rows| {
+            seen.lock().unwrap().push((row, rows.to_vec()));
+        });
+        let mut seen = seen.into_inner().unwrap();
+        seen.sort_by_key(|(row, _)| *row);
+        let rows: Vec<u32> = seen.iter().map(|(row, _)| *row).collect();
+        assert_eq!(rows, vec![0, 16, 32]);
+        let handed: Vec<Vec3> = seen.into_iter().flat_map(|(_, px)| px).collect();
+        assert_eq!(handed, image.pixels);
+        assert_eq!(image, render(&scene, &settings));
+        assert!(stats.rays >= 40 * 37);
     }
 
     #[test]

@@ -120,7 +120,7 @@ fn centre_sampled(scene: &Scene) -> Image {
             let ray = scene
                 .camera
                 .ray(x as f64 + 0.5, y as f64 + 0.5, scene.width, scene.height);
-            image.pixels[(y * scene.width + x) as usize] = trace_ray(scene, &settings(), &ray);
+            image.set(x, y, trace_ray(scene, &settings(), &ray));
         }
     }
     image

@@ -159,13 +159,27 @@ pub fn run(args: RenderArgs) -> i32 {
     } else {
         indicatif::ProgressBar::hidden()
     };
-    let (image, stats) = integrator::render_with_progress(&scene, &settings, &|n| bar.inc(n));
+    let progress = |n| bar.inc(n);
+    let written = if format == ImageFormat::Png {
+        // Rows are compressed while the rest of the image renders.
+        film::write_png_streaming(&args.output, scene.width, scene.height, |sink| {
+            integrator::render_in_bands(&scene, &settings, &progress, &|row, rows| {
+                sink.rows(row, rows)
+            })
+            .1
+        })
+    } else {
+        let (image, stats) = integrator::render_with_progress(&scene, &settings, &progress);
+        film::write_image_as(&image, &args.output, format).map(|()| stats)
+    };
     bar.finish_and_clear();
-
-    if let Err(e) = film::write_image_as(&image, &args.output, format) {
-        report(e);
-        return 1;
-    }
+    let stats = match written {
+        Ok(stats) => stats,
+        Err(e) => {
+            report(e);
+            return 1;
+        }
+    };
     if !args.quiet {
         eprintln!(
             "kardia: {}×{}, {} spp, {} thread{}, {:.2} s, {} rays, {} → {}",
