@@ -72,27 +72,18 @@ impl Image {
 /// Writes `pixels` as 8-bit sRGB bytes (`R, G, B` each) into `out`, which holds three bytes
 /// a pixel.
 fn srgb8_into(pixels: &[Vec3], out: &mut [u8]) {
+    let table = srgb8_table();
     for (o, p) in out.chunks_exact_mut(3).zip(pixels) {
-        o[0] = linear_to_srgb8(p.x as f64);
-        o[1] = linear_to_srgb8(p.y as f64);
-        o[2] = linear_to_srgb8(p.z as f64);
+        o[0] = table.code(p.x as f64);
+        o[1] = table.code(p.y as f64);
+        o[2] = table.code(p.z as f64);
     }
 }
 
 /// One linear channel value as an 8-bit sRGB code: clamped to `[0, 1]` (NaN → 0), encoded
 /// with the sRGB transfer curve, rounded to nearest.
 pub fn linear_to_srgb8(v: f64) -> u8 {
-    // Same answer as `srgb8_by_formula` for every input (tested), without a `powf` per
-    // channel: the bucket of `v` gives the code at the bucket's lower edge, and one
-    // comparison with the next code's first value says whether `v` has reached it.
-    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-    let table = srgb8_table();
-    let code = table.bucket_code[(v * SRGB_BUCKETS as f64) as usize];
-    if code < 255 && v >= table.first_linear[code as usize + 1] {
-        code + 1
-    } else {
-        code
-    }
+    srgb8_table().code(v)
 }
 
 /// Buckets of equal width over `[0, 1]`; narrower than the closest pair of code
@@ -105,6 +96,26 @@ struct Srgb8Table {
     first_linear: [f64; 256],
     /// The code of each bucket's lower edge, plus one entry for 1.0 itself.
     bucket_code: [u8; SRGB_BUCKETS + 1],
+}
+
+impl Srgb8Table {
+    /// [`linear_to_srgb8`]: the same answer as `srgb8_by_formula` for every input (tested),
+    /// without a `powf`: the bucket of `v` gives the code at the bucket's lower edge, and one
+    /// comparison with the next code's first value says whether `v` has reached it.
+    #[inline]
+    fn code(&self, v: f64) -> u8 {
+        // `!(v > 0)` also catches NaN; black is most of a typical background.
+        if !(v > 0.0) {
+            return 0;
+        }
+        let v = v.min(1.0);
+        let code = self.bucket_code[(v * SRGB_BUCKETS as f64) as usize];
+        if code < 255 && v >= self.first_linear[code as usize + 1] {
+            code + 1
+        } else {
+            code
+        }
+    }
 }
 
 fn srgb8_table() -> &'static Srgb8Table {
