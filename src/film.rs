@@ -104,8 +104,8 @@ impl Srgb8Table {
     /// comparison with the next code's first value says whether `v` has reached it.
     #[inline]
     fn code(&self, v: f64) -> u8 {
-        // `!(v > 0)` also catches NaN; black is most of a typical background.
-        if !(v > 0.0) {
+        // Black (most of a typical background) and NaN need no look-up.
+        if v.is_nan() || v <= 0.0 {
             return 0;
         }
         let v = v.min(1.0);
