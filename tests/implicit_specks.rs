@@ -14,16 +14,19 @@
 //! specular highlight, and views from the equator plane (edge-on), above and below it. Each
 //! view checks that it sees the equator. The scene of the gallery image is checked too.
 
+mod render_support;
+
 use kardia::analysis::Rgb8;
 use kardia::camera::Camera;
 use kardia::film::Image;
 use kardia::geometry::{DVec3, Frame};
-use kardia::integrator::{render, trace_ray, RenderSettings};
+use kardia::integrator::{render, RenderSettings};
 use kardia::lights::Light;
 use kardia::materials::Material;
 use kardia::roots::Solver;
 use kardia::scene::{parse_file, LoadOptions, Object, Scene};
 use kardia::shapes::implicit::Implicit;
+use render_support::{centre_sampled, pixels};
 
 /// Image side in pixels; odd, so that the middle pixel row lies on the camera's horizon.
 const SIZE: u32 = 171;
@@ -104,28 +107,6 @@ fn settings() -> RenderSettings {
     }
 }
 
-fn pixels(image: &Image) -> Vec<[u8; 3]> {
-    image
-        .to_srgb8()
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]])
-        .collect()
-}
-
-/// The image through the pixel centres (no jitter), shaded like a render.
-fn centre_sampled(scene: &Scene) -> Image {
-    let mut image = Image::new(scene.width, scene.height);
-    for y in 0..scene.height {
-        for x in 0..scene.width {
-            let ray = scene
-                .camera
-                .ray(x as f64 + 0.5, y as f64 + 0.5, scene.width, scene.height);
-            image.set(x, y, trace_ray(scene, &settings(), &ray));
-        }
-    }
-    image
-}
-
 /// The heart's pixels: those whose centre ray hits object 0 first, with the hit's `z`.
 fn heart_mask(scene: &Scene) -> (Vec<bool>, Vec<f64>) {
     let (w, h) = (scene.width, scene.height);
@@ -174,7 +155,7 @@ fn assert_no_specks(view: &View) {
         let scene = scene(view, solver);
         for (how, image) in [
             ("integrator", render(&scene, &settings())),
-            ("pixel centres", centre_sampled(&scene)),
+            ("pixel centres", centre_sampled(&scene, &settings())),
         ] {
             let (found, equator) = specks(&image, &scene);
             println!(
@@ -219,7 +200,7 @@ fn taubin_heart_scene_has_no_specks() {
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/implicit/taubin_heart.scene");
     let mut scene = parse_file(&path, &LoadOptions::default()).unwrap();
     (scene.width, scene.height) = (600, 450);
-    let (found, equator) = specks(&centre_sampled(&scene), &scene);
+    let (found, equator) = specks(&centre_sampled(&scene, &settings()), &scene);
     println!(
         "gallery scene: {equator} judged pixels near the equator, {} specks",
         found.len()

@@ -33,17 +33,20 @@
 //! naive way (first root of the sextic `f`, normal `∇f`, POV-Ray's method) shows specks in the
 //! same views.
 
+mod render_support;
+
 use kardia::analysis::{Rgb8, SPECK_JUMP};
 use kardia::camera::Camera;
 use kardia::film::Image;
 use kardia::geometry::{Aabb, DVec3, Frame, Ray};
-use kardia::integrator::{render, trace_ray, RenderSettings};
+use kardia::integrator::{render, RenderSettings};
 use kardia::lights::Light;
 use kardia::materials::Material;
 use kardia::roots::Solver;
 use kardia::scene::{Object, Scene};
 use kardia::shapes::heart::{gradient_f, sextic_coefficients, BOUNDS};
 use kardia::shapes::{Heart, Shape};
+use render_support::{centre_sampled, pixels};
 
 /// Image side in pixels; odd, so that a pixel row lies on the camera's horizon.
 const SIZE: u32 = 171;
@@ -162,35 +165,12 @@ const ROTATED: View = View {
     fov: 38.0,
 };
 
-/// The image as rows of 8-bit sRGB pixels, converted as the PNG writer converts.
-fn pixels(image: &Image) -> Vec<[u8; 3]> {
-    image
-        .to_srgb8()
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]])
-        .collect()
-}
-
 fn background8() -> [u8; 3] {
     pixels(&Image {
         width: 1,
         height: 1,
         pixels: vec![BACKGROUND.as_vec3()],
     })[0]
-}
-
-/// The image through the pixel centres (no jitter), shaded like a render.
-fn centre_sampled(scene: &Scene, settings: &RenderSettings) -> Image {
-    let mut image = Image::new(scene.width, scene.height);
-    for y in 0..scene.height {
-        for x in 0..scene.width {
-            let ray = scene
-                .camera
-                .ray(x as f64 + 0.5, y as f64 + 0.5, scene.width, scene.height);
-            image.set(x, y, trace_ray(scene, settings, &ray));
-        }
-    }
-    image
 }
 
 fn settings() -> RenderSettings {

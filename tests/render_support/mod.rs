@@ -3,7 +3,9 @@
 #![allow(dead_code)]
 
 use kardia::camera::Camera;
+use kardia::film::Image;
 use kardia::geometry::DVec3;
+use kardia::integrator::{trace_ray, RenderSettings};
 use kardia::lights::Light;
 use kardia::materials::Material;
 use kardia::scene::{Object, Scene};
@@ -75,4 +77,28 @@ pub fn hit_sphere(o: DVec3, d: DVec3, c: DVec3, r: f64) -> Option<f64> {
     [(-b - sq) / a, (-b + sq) / a]
         .into_iter()
         .find(|&t| t > 1e-9)
+}
+
+/// The image through the pixel centres (no jitter), each pixel shaded as a render with
+/// `settings` shades it.
+pub fn centre_sampled(scene: &Scene, settings: &RenderSettings) -> Image {
+    let mut image = Image::new(scene.width, scene.height);
+    for y in 0..scene.height {
+        for x in 0..scene.width {
+            let ray = scene
+                .camera
+                .ray(x as f64 + 0.5, y as f64 + 0.5, scene.width, scene.height);
+            image.set(x, y, trace_ray(scene, settings, &ray));
+        }
+    }
+    image
+}
+
+/// The image as 8-bit sRGB pixels, row-major, converted as the PNG writer converts.
+pub fn pixels(image: &Image) -> Vec<[u8; 3]> {
+    image
+        .to_srgb8()
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect()
 }
