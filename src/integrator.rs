@@ -265,12 +265,16 @@ impl SampleState {
         self.rng.random::<f64>()
     }
 
-    /// A jittered point of this sample's stratum of the unit square for light `light`.
-    fn light_point(&mut self, light: usize) -> (f64, f64) {
+    /// A jittered point of the unit square for shadow ray `ray` of `rays` that this sample
+    /// sends to light `light`: the pixel's `count·rays` strata are each taken once, in an
+    /// order rotated per pixel and light.
+    fn light_point(&mut self, light: usize, ray: u32, rays: u32) -> (f64, f64) {
         let rotation = mix(self.key ^ (light as u64).wrapping_mul(0xa076_1d64_78bd_642f));
-        let stratum = ((self.index as u64 + rotation) % self.count as u64) as u32;
+        let strata = self.count as u64 * rays as u64;
+        let index = self.index as u64 * rays as u64 + ray as u64;
+        let stratum = ((index + rotation) % strata) as u32;
         let (u, v) = (self.uniform(), self.uniform());
-        stratified_point(stratum, self.count, u, v)
+        stratified_point(stratum, strata as u32, u, v)
     }
 }
 
@@ -409,27 +413,36 @@ impl<'a> Tracer<'a> {
         };
         let mut colour = scene.ambient * base;
         for (index, light) in scene.lights.iter().enumerate() {
-            let target = self.light_sample(light, index, p, s);
-            let to_light = target - p;
-            let dist = to_light.length();
-            if dist <= eps {
-                continue;
+            let rays = if light.radius > 0.0 {
+                light.samples.max(1)
+            } else {
+                1
+            };
+            let mut lit = DVec3::ZERO;
+            for ray in 0..rays {
+                let target = self.light_sample(light, index, (ray, rays), p, s);
+                let to_light = target - p;
+                let dist = to_light.length();
+                if dist <= eps {
+                    continue;
+                }
+                let l = to_light / dist;
+                let n_dot_l = n.dot(l);
+                if n_dot_l <= 0.0 {
+                    continue;
+                }
+                let visibility = self.transmittance(p, l, eps, dist, s);
+                if visibility == DVec3::ZERO {
+                    continue;
+                }
+                let mut f = base * n_dot_l;
+                if m.specular > 0.0 {
+                    let h = (l - d).normalize_or_zero();
+                    f += DVec3::splat(m.specular * n.dot(h).max(0.0).powf(m.shininess));
+                }
+                lit += visibility * f;
             }
-            let l = to_light / dist;
-            let n_dot_l = n.dot(l);
-            if n_dot_l <= 0.0 {
-                continue;
-            }
-            let visibility = self.transmittance(p, l, eps, dist, s);
-            if visibility == DVec3::ZERO {
-                continue;
-            }
-            let mut f = base * n_dot_l;
-            if m.specular > 0.0 {
-                let h = (l - d).normalize_or_zero();
-                f += DVec3::splat(m.specular * n.dot(h).max(0.0).powf(m.shininess));
-            }
-            colour += light.colour * visibility * f;
+            colour += light.colour * lit / rays as f64;
         }
 
         if depth < self.max_depth {
@@ -464,9 +477,17 @@ impl<'a> Tracer<'a> {
         colour
     }
 
-    /// The point of `light` a shadow ray from `p` aims at: the centre of a point light, a
-    /// stratified point of the disc facing `p` for a spherical one.
-    fn light_sample(&self, light: &Light, index: usize, p: DVec3, s: &mut SampleState) -> DVec3 {
+    /// The point of `light` (number `index` in the scene) that shadow ray `ray` of `rays`
+    /// from `p` aims at: the centre of a point light, a stratified point of the disc facing
+    /// `p` for a spherical one.
+    fn light_sample(
+        &self,
+        light: &Light,
+        index: usize,
+        (ray, rays): (u32, u32),
+        p: DVec3,
+        s: &mut SampleState,
+    ) -> DVec3 {
         if light.radius <= 0.0 {
             return light.position;
         }
@@ -474,7 +495,7 @@ impl<'a> Tracer<'a> {
         if w == DVec3::ZERO {
             return light.position;
         }
-        let (u, v) = s.light_point(index);
+        let (u, v) = s.light_point(index, ray, rays);
         let (a, b) = concentric_disc(u, v);
         let (e1, e2) = basis(w);
         light.position + light.radius * (a * e1 + b * e2)

@@ -84,6 +84,7 @@ fn scene(view: &View, solver: Solver) -> Scene {
             position: view.light,
             colour: DVec3::splat(0.9),
             radius: 0.0,
+            samples: 1,
         }],
         objects: vec![Object::new(
             Box::new(shape),

@@ -348,6 +348,47 @@ fn soft_shadows_are_deterministic() {
     assert!(full > 100, "{full} fully lit pixels");
 }
 
+/// More shadow samples per pixel sample for a spherical light: the same penumbra on
+/// average (the estimate is unbiased), less noise against a many-sample reference, and the
+/// extra shadow rays counted.
+#[test]
+fn light_samples_smooth_the_penumbra() {
+    let build = |samples: u32| {
+        let mut s = scene(48, 48, DVec3::new(0.0, -0.01, 6.0), DVec3::ZERO, 50.0);
+        plane(&mut s, DVec3::ZERO, DVec3::Z, Material::diffuse(DVec3::ONE));
+        sphere(&mut s, DVec3::new(0.0, 0.0, 1.0), 0.6, Material::default());
+        light(&mut s, DVec3::new(0.0, 0.0, 4.0), DVec3::ONE, 1.0);
+        s.lights[0].samples = samples;
+        s
+    };
+    let reference = render(&build(64), &settings(16));
+    let error = |samples: u32| {
+        let (image, stats) = render_with_progress(&build(samples), &settings(1), &|_| {});
+        let (mut squares, mut sum, mut reference_sum) = (0.0, 0.0, 0.0);
+        for (a, b) in image.pixels.iter().zip(&reference.pixels) {
+            let d = (a.x - b.x) as f64;
+            squares += d * d;
+            sum += a.x as f64;
+            reference_sum += b.x as f64;
+        }
+        let n = image.pixels.len() as f64;
+        ((squares / n).sqrt(), (sum - reference_sum) / n, stats.rays)
+    };
+    let (noisy, bias_1, rays_1) = error(1);
+    let (smooth, bias_16, rays_16) = error(16);
+    assert!(
+        smooth < 0.4 * noisy,
+        "RMS error {noisy:.4} with 1 shadow sample, {smooth:.4} with 16"
+    );
+    assert!(
+        bias_1.abs() < 0.01 && bias_16.abs() < 0.01,
+        "{bias_1} {bias_16}"
+    );
+    // Every pixel sees the plane or the sphere: one primary ray, then 1 or 16 shadow rays
+    // wherever the surface faces the light.
+    assert!(rays_16 > rays_1 + 10 * 48 * 48, "{rays_1} → {rays_16}");
+}
+
 /// Every ray is counted: a view filled by one lit plane costs a primary and a shadow ray
 /// per sample; an empty scene costs one primary ray per sample.
 #[test]

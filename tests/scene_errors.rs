@@ -155,6 +155,11 @@ fn extra_numbers() {
         "expected end of line, found the number `3`",
     );
     check(
+        "LIGHT (0,0,5) (1,1,1) 0.5 SAMPLES 4 9",
+        "9",
+        "expected end of line, found the number `9`",
+    );
+    check(
         "BACKGROUND (0,0,0) 1",
         "1",
         "expected end of line, found the number `1`",
@@ -289,6 +294,16 @@ fn bad_radii() {
         "LIGHT (0,0,5) (1,1,1) -0.5",
         "-0.5",
         "the light's radius must be at least 0, not -0.5",
+    );
+    check(
+        "LIGHT (1,1,5) (1,1,1) 1.5 SAMPLES 0",
+        "0",
+        "the light's shadow samples must be a whole number from 1 to 1024, not 0",
+    );
+    check(
+        "LIGHT (0,0,5) (1,1,1) 0.5 SAMPLES 2.5",
+        "2.5",
+        "the light's shadow samples must be a whole number from 1 to 1024, not 2.5",
     );
     check(
         "IMPLICIT \"x^2+y^2+z^2-1\" (0,0,0) (1,0,0) (0,1,0) (0,0,1) (1,0,0) BOUND 0",

@@ -79,7 +79,7 @@ fn a_full_scene_has_the_values_written() {
          BACKGROUND (0.1, 0.2, 0.3)\n\
          AMBIENT (0.05 0.05 0.05)\n\
          LIGHT (1, 2, 3) (1, 1, 1)\n\
-         LIGHT (4, 5, 6) (0.5, 0.5, 0.5) 0.25\n\
+         LIGHT (4, 5, 6) (0.5, 0.5, 0.5) 0.25 samples 8\n\
          MATERIAL glass (0, 0, 0) TRANSMIT 0.9 IOR 1.5 ATTENUATION (0.1, 0.2, 0.3)\n\
          MATERIAL tinted glass REFLECT 0.1 INSIDE (0.2, 0, 0)\n\
          \n\
@@ -99,6 +99,7 @@ fn a_full_scene_has_the_values_written() {
     assert_eq!(s.lights.len(), 2);
     assert_eq!(s.lights[0].radius, 0.0);
     assert_eq!(s.lights[1].radius, 0.25);
+    assert_eq!((s.lights[0].samples, s.lights[1].samples), (1, 8));
     assert_eq!(s.lights[1].position, DVec3::new(4.0, 5.0, 6.0));
     let kinds: Vec<_> = s.objects.iter().map(|o| (o.keyword, o.line)).collect();
     assert_eq!(

@@ -102,6 +102,7 @@ impl View {
                 position: self.light,
                 colour: DVec3::splat(0.9),
                 radius: 0.0,
+                samples: 1,
             }],
             objects: vec![Object::new(
                 shape,

@@ -28,7 +28,7 @@ pub(crate) const STATEMENTS: &[(&str, &str)] = &[
     ("CAMERA", "CAMERA (eye) (look_at) (up) fov"),
     ("BACKGROUND", "BACKGROUND (r, g, b)"),
     ("AMBIENT", "AMBIENT (r, g, b)"),
-    ("LIGHT", "LIGHT (position) (r, g, b) [radius]"),
+    ("LIGHT", "LIGHT (position) (r, g, b) [radius [SAMPLES n]]"),
     ("MATERIAL", "MATERIAL name <surface>"),
     ("SPHERE", "SPHERE (centre) radius <surface>"),
     ("PLANE", "PLANE (point) (normal) <surface>"),
@@ -195,11 +195,22 @@ impl Builder {
                 } else {
                     0.0
                 };
+                let samples = if cur
+                    .peek_word()
+                    .is_some_and(|w| w.eq_ignore_ascii_case("SAMPLES"))
+                {
+                    cur.pos += 1;
+                    cur.whole("the light's shadow samples", 1, Light::MAX_SAMPLES)?
+                        .0
+                } else {
+                    1
+                };
                 cur.end()?;
                 self.lights.push(Light {
                     position: position.v,
                     colour: colour.v,
                     radius,
+                    samples,
                 });
             }
             "MATERIAL" => self.material(cur)?,

@@ -59,6 +59,7 @@ pub fn light(s: &mut Scene, position: DVec3, colour: DVec3, radius: f64) {
         position,
         colour,
         radius,
+        samples: 1,
     });
 }
 
