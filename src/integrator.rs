@@ -212,7 +212,12 @@ pub fn strata(spp: u32) -> (u32, u32) {
 /// The position of sample `i` of `spp` inside a unit pixel, given two uniform numbers in
 /// `[0, 1)`: a jittered point of stratum `i` of the [`strata`] grid (row-major).
 pub fn stratified_point(i: u32, spp: u32, u: f64, v: f64) -> (f64, f64) {
-    let (cols, rows) = strata(spp);
+    point_in_grid(i, strata(spp), u, v)
+}
+
+/// [`stratified_point`] with the [`strata`] grid `(cols, rows)` already computed.
+#[inline]
+fn point_in_grid(i: u32, (cols, rows): (u32, u32), u: f64, v: f64) -> (f64, f64) {
     let i = i % (cols * rows);
     (
         ((i % cols) as f64 + u) / cols as f64,
@@ -266,15 +271,20 @@ impl SampleState {
     }
 
     /// A jittered point of the unit square for shadow ray `ray` of `rays` that this sample
-    /// sends to light `light`: the pixel's `count·rays` strata are each taken once, in an
-    /// order rotated per pixel and light.
-    fn light_point(&mut self, light: usize, ray: u32, rays: u32) -> (f64, f64) {
+    /// sends to light `light`: the pixel's `count·rays` strata (laid out as `grid`, the
+    /// [`strata`] of that number) are each taken once, in an order rotated per pixel and light.
+    fn light_point(
+        &mut self,
+        light: usize,
+        (ray, rays): (u32, u32),
+        grid: (u32, u32),
+    ) -> (f64, f64) {
         let rotation = mix(self.key ^ (light as u64).wrapping_mul(0xa076_1d64_78bd_642f));
         let strata = self.count as u64 * rays as u64;
         let index = self.index as u64 * rays as u64 + ray as u64;
         let stratum = ((index + rotation) % strata) as u32;
         let (u, v) = (self.uniform(), self.uniform());
-        stratified_point(stratum, strata as u32, u, v)
+        point_in_grid(stratum, grid, u, v)
     }
 }
 
@@ -350,15 +360,34 @@ fn beer_lambert(attenuation: DVec3, distance: f64) -> DVec3 {
 struct Tracer<'a> {
     scene: &'a Scene,
     spp: u32,
+    /// The [`strata`] of `spp`: where a pixel's samples go.
+    pixel_grid: (u32, u32),
+    /// Per light: its shadow rays per pixel sample and the [`strata`] of `spp` times that.
+    light_grids: Vec<(u32, (u32, u32))>,
     max_depth: u32,
     seed: u64,
 }
 
 impl<'a> Tracer<'a> {
     fn new(scene: &'a Scene, settings: &RenderSettings) -> Self {
+        let spp = settings.spp.max(1);
+        let light_grids = scene
+            .lights
+            .iter()
+            .map(|light| {
+                let rays = if light.radius > 0.0 {
+                    light.samples.max(1)
+                } else {
+                    1
+                };
+                (rays, strata(spp.saturating_mul(rays)))
+            })
+            .collect();
         Self {
             scene,
-            spp: settings.spp.max(1),
+            spp,
+            pixel_grid: strata(spp),
+            light_grids,
             max_depth: settings.max_depth,
             seed: mix(settings.seed),
         }
@@ -377,7 +406,7 @@ impl<'a> Tracer<'a> {
                 for i in 0..self.spp {
                     state.index = i;
                     let (u, v) = (state.uniform(), state.uniform());
-                    let (dx, dy) = stratified_point(i, self.spp, u, v);
+                    let (dx, dy) = point_in_grid(i, self.pixel_grid, u, v);
                     let ray = self
                         .scene
                         .camera
@@ -413,14 +442,10 @@ impl<'a> Tracer<'a> {
         };
         let mut colour = scene.ambient * base;
         for (index, light) in scene.lights.iter().enumerate() {
-            let rays = if light.radius > 0.0 {
-                light.samples.max(1)
-            } else {
-                1
-            };
+            let (rays, grid) = self.light_grids[index];
             let mut lit = DVec3::ZERO;
             for ray in 0..rays {
-                let target = self.light_sample(light, index, (ray, rays), p, s);
+                let target = self.light_sample(light, index, (ray, rays), grid, p, s);
                 let to_light = target - p;
                 let dist = to_light.length();
                 if dist <= eps {
@@ -479,12 +504,13 @@ impl<'a> Tracer<'a> {
 
     /// The point of `light` (number `index` in the scene) that shadow ray `ray` of `rays`
     /// from `p` aims at: the centre of a point light, a stratified point of the disc facing
-    /// `p` for a spherical one.
+    /// `p` for a spherical one (`grid`: the light's strata, see [`Tracer::light_grids`]).
     fn light_sample(
         &self,
         light: &Light,
         index: usize,
-        (ray, rays): (u32, u32),
+        rays: (u32, u32),
+        grid: (u32, u32),
         p: DVec3,
         s: &mut SampleState,
     ) -> DVec3 {
@@ -495,7 +521,7 @@ impl<'a> Tracer<'a> {
         if w == DVec3::ZERO {
             return light.position;
         }
-        let (u, v) = s.light_point(index, ray, rays);
+        let (u, v) = s.light_point(index, rays, grid);
         let (a, b) = concentric_disc(u, v);
         let (e1, e2) = basis(w);
         light.position + light.radius * (a * e1 + b * e2)
