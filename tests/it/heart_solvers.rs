@@ -1,7 +1,7 @@
 //! The hard cases of shared/notes/heart-math.md through `Shape::intersect` with every real
 //! root finder of the `roots` module (`Solver::ALL`), and the heart inside a `Scene`.
 
-mod heart_support;
+use crate::heart_support;
 
 use heart_support::cases::{self, unit_heart};
 use kardia::geometry::{DVec3, Ray};

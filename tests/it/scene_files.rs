@@ -173,7 +173,7 @@ fn odd_whitespace_line_endings_and_bom() {
 
 #[test]
 fn the_examples_in_the_format_documentation_parse() {
-    let doc = include_str!("../docs/scene-format.md");
+    let doc = include_str!("../../docs/scene-format.md");
     let mut blocks = 0;
     for block in doc.split("```text\n").skip(1) {
         let block = block.split("```").next().unwrap();

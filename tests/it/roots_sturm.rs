@@ -486,7 +486,7 @@ fn an_overall_factor_changes_no_root() {
 }
 
 /// The random root sets of [`random_root_sets`] by the thousand (`ROOTS_SWEEP=20000 cargo test
-/// --release --test roots_sturm -- --ignored sweep`): prints the failures and asserts none.
+/// --release --test it -- --ignored roots_sturm::sweep`): prints the failures and asserts none.
 #[test]
 #[ignore]
 fn sweep() {

@@ -2,7 +2,7 @@
 //! alone (the brute-force root finder of `heart_support`, not the `roots` module; see
 //! `heart_solvers.rs` for the same cases through every real solver).
 
-mod heart_support;
+use crate::heart_support;
 
 use heart_support::brute_intersect;
 use heart_support::cases::{self, HitFn};

@@ -2,7 +2,7 @@
 //! with a brute-force root finder (`Heart::intersect_with`), and every answer is compared with
 //! a direct evaluation of the heart's equation.
 
-mod heart_support;
+use crate::heart_support;
 
 use heart_support::*;
 use kardia::geometry::{DMat3, DVec3, Frame, Ray};

@@ -33,7 +33,7 @@
 //! naive way (first root of the sextic `f`, normal `∇f`, POV-Ray's method) shows specks in the
 //! same views.
 
-mod render_support;
+use crate::render_support;
 
 use kardia::analysis::{Rgb8, SPECK_JUMP};
 use kardia::camera::Camera;

@@ -9,12 +9,12 @@
 //! on (that is the `HEART` shape's trick); it recomputes such roots, and such gradients, in
 //! double-double arithmetic.
 //!
-//! The speck metric is the one of tests/specks.rs ([`Rgb8::specks`] on the 8-bit image, judged
+//! The speck metric is the one of tests/it/specks.rs ([`Rgb8::specks`] on the 8-bit image, judged
 //! inside the heart's silhouette); one sample per pixel, a point light with hard shadows and a
 //! specular highlight, and views from the equator plane (edge-on), above and below it. Each
 //! view checks that it sees the equator. The scene of the gallery image is checked too.
 
-mod render_support;
+use crate::render_support;
 
 use kardia::analysis::Rgb8;
 use kardia::camera::Camera;

@@ -4,10 +4,10 @@
 //! Tolerance: the 8-bit sRGB channel values may differ by at most 2 steps on 99% of all
 //! channel values, and by at most 1.0 step on average (a few silhouette pixels may flip when
 //! the floating-point details of a shape change). Regenerate the files after an intended
-//! change with `KARDIA_BLESS=1 cargo test --test render_golden` and look at them
+//! change with `KARDIA_BLESS=1 cargo test --test it render_golden` and look at them
 //! (`KARDIA_PREVIEW=DIR` also writes 256×256, 16-spp versions into DIR for a closer look).
 
-mod render_support;
+use crate::render_support;
 
 use kardia::film::{write_image, Image};
 use kardia::geometry::DVec3;

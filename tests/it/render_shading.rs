@@ -1,7 +1,7 @@
 //! Shading checks with known answers: Lambert's law, mirror geometry, Snell's law through a
 //! sphere, total internal reflection, Beer–Lambert, shadows, sampling determinism.
 
-mod render_support;
+use crate::render_support;
 
 use kardia::geometry::{DVec3, Ray};
 use kardia::integrator::{render, render_with_progress, trace_ray, RenderSettings};
