@@ -1,9 +1,11 @@
 //! All integration tests, one module per area, linked into one test binary.
 
+mod fuzz_support;
 mod heart_support;
 mod render_support;
 
 mod cli_render;
+mod fuzz_scenes;
 mod heart_geometry;
 mod heart_hard_cases;
 mod heart_solvers;
