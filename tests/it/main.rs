@@ -23,5 +23,6 @@ mod roots_sturm;
 mod scene_errors;
 mod scene_files;
 mod scene_fuzz;
+mod scene_ranges;
 mod shapes_props;
 mod specks;
