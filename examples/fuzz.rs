@@ -2,7 +2,8 @@
 //! CASES SEED [THREADS]` runs cases 0..CASES of the run SEED in the dev profile (debug
 //! assertions and overflow checks on) and prints the counts: cases, parsed, rendered,
 //! panics, non-finite images, malformed errors, slow cases and the slowest case.
-//! `bench/fuzz.sh` drives it. Exits 1 if any case failed.
+//! `bench/fuzz.sh` drives it. Exits 1 if any case failed. `fuzz case SEED INDEX` prints one
+//! case and times it; `fuzz seeds` times the unmutated base scenes.
 
 #[path = "../tests/it/fuzz_support/mod.rs"]
 mod fuzz_support;
@@ -28,6 +29,17 @@ fn main() {
     };
     if args.first().is_some_and(|a| a == "seeds") {
         time_seeds();
+        return;
+    }
+    if args.first().is_some_and(|a| a == "case") {
+        // `fuzz case SEED INDEX`: prints case INDEX of run SEED and times it.
+        let (seed, index) = (number(1, 1), number(2, 0));
+        let text = Fuzzer::new().case(seed, index);
+        println!("{text}");
+        for _ in 0..3 {
+            let o = fuzz_support::run_case(&text, seed ^ index);
+            println!("{:?} in {:.1} ms", o.verdict, o.elapsed.as_secs_f64() * 1e3);
+        }
         return;
     }
     let (cases, seed, threads) = (number(0, 1_000_000), number(1, 1), number(2, 1));
@@ -94,7 +106,7 @@ fn main() {
     }
 }
 
-#[allow(dead_code)]
+/// `fuzz seeds`: times each base scene as a case (unmutated).
 fn time_seeds() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     for dir in [root.clone(), root.join("implicit")] {
