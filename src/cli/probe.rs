@@ -109,10 +109,7 @@ pub fn probe_stream<R: io::Read>(
     let mut out = io::BufWriter::new(out);
     let mut raw = Vec::new();
     let mut number = 0usize;
-    loop {
-        let Some(too_long) = read_line_capped(&mut input, &mut raw, MAX_LINE)? else {
-            break;
-        };
+    while let Some(too_long) = read_line_capped(&mut input, &mut raw, MAX_LINE)? {
         number += 1;
         let answer = if too_long {
             error_json(&format!(
