@@ -1,8 +1,9 @@
-//! `first_root` on the shared heart ray corpus (`kardia::roots::heart_corpus`: camera rays
+//! `first_root` on the shared heart ray corpus (`kardia::shapes::heart::heart_corpus`: camera rays
 //! through an axis-aligned heart, each restricted to its bounding box, hits and misses), for
 //! every strategy. The throughput line gives calls per second: ns per call = 1e9 / that.
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use kardia::roots::{heart_corpus, Solver};
+use kardia::roots::Solver;
+use kardia::shapes::heart::heart_corpus;
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {

@@ -25,8 +25,12 @@
 //! and well-conditioned on the equator curve), with `∇f` and then the axis as fallbacks at the
 //! two singular points, mapped to world space by `(M⁻¹)ᵀ`.
 
+mod corpus;
 mod polish;
 mod surface;
+
+#[doc(hidden)]
+pub use corpus::{heart_corpus, heart_hard_rays, CorpusRay};
 
 use polish::{earlier_crossing, polish};
 
