@@ -20,6 +20,7 @@ mod render_golden;
 mod render_shading;
 mod roots_cli;
 mod roots_heart;
+mod roots_reference;
 mod roots_sturm;
 mod scene_errors;
 mod scene_files;
