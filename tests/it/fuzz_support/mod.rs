@@ -5,8 +5,9 @@
 //! panics, every pixel is finite and every case is quick.
 #![allow(dead_code)]
 
-use kardia::integrator::{render, RenderSettings};
-use kardia::scene::{limits, parse, LoadOptions, SceneError};
+use kardia::integrator::{trace_ray, ShadeSetup, View};
+use kardia::pipeline::{Control, RenderRequest, Renderer};
+use kardia::scene::{limits, parse, LoadOptions, Scene, SceneError};
 use rand::{Rng, SeedableRng};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::time::{Duration, Instant};
@@ -583,7 +584,8 @@ impl Default for Fuzzer {
 }
 
 /// Parses `text` and, when it parses, renders it at [`RENDER_SIZE`] with 1 sample per pixel
-/// on one thread; never panics itself (a panic inside is caught and reported).
+/// on one thread and traces its pixels' centre rays in every view ([`renders_finite`]);
+/// never panics itself (a panic inside is caught and reported).
 pub fn run_case(text: &str, seed: u64) -> Outcome {
     let start = Instant::now();
     let result = catch_unwind(AssertUnwindSafe(|| check_case(text, seed)));
@@ -609,23 +611,62 @@ pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 }
 
 fn check_case(text: &str, seed: u64) -> Verdict {
-    let mut scene = match parse(text, "fuzz.scene", &LoadOptions::default()) {
+    let scene = match parse(text, "fuzz.scene", &LoadOptions::default()) {
         Ok(scene) => scene,
         Err(e) => return check_error(text, e),
     };
-    (scene.width, scene.height) = RENDER_SIZE;
-    let settings = RenderSettings {
-        spp: 1,
-        max_depth: 8,
-        seed,
-        threads: 1,
-    };
-    let image = render(&scene, &settings);
-    if image.pixels.iter().all(|p| p.is_finite()) {
+    if renders_finite(&scene, seed) {
         Verdict::Rendered
     } else {
         Verdict::NonFinite
     }
+}
+
+thread_local! {
+    /// One renderer (a one-thread pool) per fuzzing thread, reused by every case.
+    static RENDERER: Renderer = Renderer::new(1).expect("a one-thread render pool");
+}
+
+/// Renders `scene` at [`RENDER_SIZE`] with 1 sample per pixel through the pipeline, and
+/// traces each pixel's centre ray in every view: true when every pixel of the image is
+/// finite and below the film's clamp (`f32::MAX`, where an overflow would be stored), and
+/// every traced colour is finite before it reaches the film (which would turn a NaN into 0).
+pub fn renders_finite(scene: &Scene, seed: u64) -> bool {
+    let (width, height) = RENDER_SIZE;
+    let request = RenderRequest {
+        width: Some(width),
+        height: Some(height),
+        spp: 1,
+        seed,
+        max_depth: 8,
+        ..RenderRequest::default()
+    };
+    let rendered = RENDERER.with(|r| r.render(scene, &request, &Control::default()));
+    let Ok(rendered) = rendered else {
+        return false;
+    };
+    let stored_ok = rendered
+        .image
+        .pixels
+        .iter()
+        .all(|p| p.is_finite() && p.abs().max_element() < f32::MAX);
+    let setup = ShadeSetup {
+        scene,
+        camera: &scene.camera,
+        spp: 1,
+        max_depth: 8,
+    };
+    let traced_ok = (0..height).all(|y| {
+        (0..width).all(|x| {
+            let ray = scene
+                .camera
+                .ray(x as f64 + 0.5, y as f64 + 0.5, width, height);
+            View::ALL
+                .iter()
+                .all(|&(view, _)| trace_ray(view, &setup, seed, &ray).is_finite())
+        })
+    });
+    stored_ok && traced_ok
 }
 
 /// Checks that a parse error is well formed: located, on character boundaries, showable.
