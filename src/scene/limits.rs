@@ -153,7 +153,7 @@ pub const COORDINATE: Limits = Limits::closed(-1e6, 1e6);
 /// The length of a direction or basis vector (plane normal, up, edges, u v w).
 pub const DIRECTION_LENGTH: Limits = Limits::closed(1e-6, f64::INFINITY);
 /// Image width and height in pixels.
-pub const IMAGE_SIDE: Limits = Limits::whole(1, 32768);
+pub const IMAGE_SIDE: Limits = Limits::whole(1, super::Scene::MAX_SIDE);
 /// The camera's full horizontal field of view in degrees.
 pub const FIELD_OF_VIEW: Limits = Limits::open(0.0, 180.0);
 /// Each component of a colour: diffuse, checker, inside, background, ambient.
@@ -165,7 +165,7 @@ pub const LENGTH: Limits = Limits::closed(1e-6, 1e6);
 /// A light's radius (0: a point light).
 pub const LIGHT_RADIUS: Limits = Limits::closed(0.0, 1e6);
 /// A spherical light's shadow rays per pixel sample.
-pub const LIGHT_SAMPLES: Limits = Limits::whole(1, 1024);
+pub const LIGHT_SAMPLES: Limits = Limits::whole(1, crate::lights::Light::MAX_SAMPLES);
 /// The specular weight ks.
 pub const SPECULAR_WEIGHT: Limits = Limits::closed(0.0, 1e6);
 /// The specular (Blinn–Phong) exponent.
