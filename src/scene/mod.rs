@@ -4,7 +4,9 @@
 mod cursor;
 mod error;
 mod lexer;
+pub mod limits;
 mod parser;
+mod surface;
 
 pub use error::{InvalidScene, SceneError};
 pub use parser::{parse, parse_file, DEFAULT_SIZE};
