@@ -5,7 +5,7 @@
 //! panics, every pixel is finite and every case is quick.
 #![allow(dead_code)]
 
-use kardia::integrator::{render, RenderSettings};
+use kardia::pipeline::{Control, RenderRequest, Renderer};
 use kardia::scene::{limits, parse, LoadOptions, SceneError};
 use rand::{Rng, SeedableRng};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -266,7 +266,8 @@ pub enum Verdict {
     Refused,
     /// The scene parsed and rendered with finite pixels.
     Rendered,
-    /// The scene parsed but its render has a NaN or infinite pixel.
+    /// The scene parsed but its render overflowed: a channel saturated at ±f32::MAX (where
+    /// the film stores what would have been infinite).
     NonFinite,
     /// Parsing or rendering panicked (the message).
     Panicked(String),
@@ -571,23 +572,35 @@ pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 }
 
 fn check_case(text: &str, seed: u64) -> Verdict {
-    let mut scene = match parse(text, "fuzz.scene", &LoadOptions::default()) {
+    let scene = match parse(text, "fuzz.scene", &LoadOptions::default()) {
         Ok(scene) => scene,
         Err(e) => return check_error(text, e),
     };
-    (scene.width, scene.height) = RENDER_SIZE;
-    let settings = RenderSettings {
+    let request = RenderRequest {
+        width: Some(RENDER_SIZE.0),
+        height: Some(RENDER_SIZE.1),
         spp: 1,
         max_depth: 8,
         seed,
-        threads: 1,
+        ..RenderRequest::default()
     };
-    let image = render(&scene, &settings);
-    if image.pixels.iter().all(|p| p.is_finite()) {
+    let image = renderer()
+        .render(&scene, &request, &Control::default())
+        .expect("a render of a valid size, uncancelled, succeeds")
+        .image;
+    // The film stores what would overflow as ±f32::MAX: a saturated channel is an overflow.
+    let finite = |p: &kardia::film::Vec3| p.is_finite() && p.abs().max_element() < f32::MAX;
+    if image.pixels.iter().all(finite) {
         Verdict::Rendered
     } else {
         Verdict::NonFinite
     }
+}
+
+/// The one-thread renderer every case of this process shares (its pool is reused).
+fn renderer() -> &'static Renderer {
+    static RENDERER: std::sync::OnceLock<Renderer> = std::sync::OnceLock::new();
+    RENDERER.get_or_init(|| Renderer::new(1).expect("a one-thread pool starts"))
 }
 
 /// Checks that a parse error is well formed: located, on character boundaries, showable.
