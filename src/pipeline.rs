@@ -297,7 +297,8 @@ impl Renderer {
 
     /// Renders `request` of `scene`: the region's image (linear RGB, every pixel finite), or
     /// why not ([`RenderError::Cancelled`] when `control.cancel` was cancelled before the last
-    /// tile was done).
+    /// tile was done). Blocks the calling thread until then (from an async server, call it
+    /// on a blocking thread).
     pub fn render(
         &self,
         scene: &Scene,
