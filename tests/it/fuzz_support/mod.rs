@@ -5,7 +5,7 @@
 //! panics, every pixel is finite and every case is quick.
 #![allow(dead_code)]
 
-use kardia::integrator::{render, RenderSettings};
+use kardia::pipeline::{Control, RenderRequest, Renderer};
 use kardia::scene::{limits, parse, LoadOptions, SceneError};
 use rand::{Rng, SeedableRng};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -570,19 +570,30 @@ pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     }
 }
 
+thread_local! {
+    /// One single-threaded renderer per fuzzing thread, reused by every case.
+    static RENDERER: Renderer = Renderer::new(1).expect("a one-thread pool");
+}
+
 fn check_case(text: &str, seed: u64) -> Verdict {
-    let mut scene = match parse(text, "fuzz.scene", &LoadOptions::default()) {
+    let scene = match parse(text, "fuzz.scene", &LoadOptions::default()) {
         Ok(scene) => scene,
         Err(e) => return check_error(text, e),
     };
-    (scene.width, scene.height) = RENDER_SIZE;
-    let settings = RenderSettings {
+    let request = RenderRequest {
+        width: Some(RENDER_SIZE.0),
+        height: Some(RENDER_SIZE.1),
         spp: 1,
         max_depth: 8,
         seed,
-        threads: 1,
+        ..RenderRequest::default()
     };
-    let image = render(&scene, &settings);
+    let image = RENDERER.with(|renderer| {
+        renderer
+            .render(&scene, &request, &Control::default())
+            .expect("a render without cancellation finishes")
+            .image
+    });
     if image.pixels.iter().all(|p| p.is_finite()) {
         Verdict::Rendered
     } else {
