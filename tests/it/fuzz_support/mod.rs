@@ -571,6 +571,11 @@ pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     }
 }
 
+thread_local! {
+    /// One single-threaded renderer per fuzzing thread, reused by every case.
+    static RENDERER: Renderer = Renderer::new(1).expect("a one-thread pool");
+}
+
 fn check_case(text: &str, seed: u64) -> Verdict {
     let scene = match parse(text, "fuzz.scene", &LoadOptions::default()) {
         Ok(scene) => scene,
@@ -584,10 +589,12 @@ fn check_case(text: &str, seed: u64) -> Verdict {
         seed,
         ..RenderRequest::default()
     };
-    let image = renderer()
-        .render(&scene, &request, &Control::default())
-        .expect("a render of a valid size, uncancelled, succeeds")
-        .image;
+    let image = RENDERER.with(|renderer| {
+        renderer
+            .render(&scene, &request, &Control::default())
+            .expect("a render without cancellation finishes")
+            .image
+    });
     // The film stores what would overflow as ±f32::MAX: a saturated channel is an overflow.
     let finite = |p: &kardia::film::Vec3| p.is_finite() && p.abs().max_element() < f32::MAX;
     if image.pixels.iter().all(finite) {
@@ -595,12 +602,6 @@ fn check_case(text: &str, seed: u64) -> Verdict {
     } else {
         Verdict::NonFinite
     }
-}
-
-/// The one-thread renderer every case of this process shares (its pool is reused).
-fn renderer() -> &'static Renderer {
-    static RENDERER: std::sync::OnceLock<Renderer> = std::sync::OnceLock::new();
-    RENDERER.get_or_init(|| Renderer::new(1).expect("a one-thread pool starts"))
 }
 
 /// Checks that a parse error is well formed: located, on character boundaries, showable.
