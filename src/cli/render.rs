@@ -163,6 +163,7 @@ fn fail(err: impl miette::Diagnostic + Send + Sync + 'static) -> Failure {
     Failure::Reported
 }
 
+/// `kardia render` itself: check the output, load, render into an atomic file, commit, print.
 fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
     // Everything that can fail before rendering is checked first.
     let mut format = film::check_output_path(&args.output).map_err(fail)?;

@@ -267,7 +267,8 @@ pub enum Verdict {
     Refused,
     /// The scene parsed and rendered with finite pixels.
     Rendered,
-    /// The scene parsed but its render has a NaN or infinite pixel.
+    /// The scene parsed but its render overflowed: a channel saturated at ±f32::MAX (where
+    /// the film stores what would have been infinite).
     NonFinite,
     /// Parsing or rendering panicked (the message).
     Panicked(String),
