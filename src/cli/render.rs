@@ -124,6 +124,7 @@ pub fn run(args: RenderArgs) -> i32 {
     }
     let options = LoadOptions {
         solver: args.solver,
+        ..LoadOptions::default()
     };
     let loaded = match &args.scene {
         Some(path) => scene::parse_file(path, &options),

@@ -3,6 +3,7 @@
 mod heart_support;
 mod render_support;
 
+mod anim_scene;
 mod cli_render;
 mod heart_geometry;
 mod heart_hard_cases;
