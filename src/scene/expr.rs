@@ -834,8 +834,9 @@ mod tests {
             pos: 0,
             line: 1,
             next_line: text.len(),
+            keyword: "",
             usage: "",
-            in_surface: false,
+            part_usage: None,
             names: &names,
             uses_time: false,
         };
@@ -952,8 +953,9 @@ mod tests {
             pos: 0,
             line: 1,
             next_line: text.len(),
+            keyword: "",
             usage: "",
-            in_surface: false,
+            part_usage: None,
             names: &names,
             uses_time: false,
         };

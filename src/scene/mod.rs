@@ -5,7 +5,9 @@ mod cursor;
 mod error;
 mod expr;
 mod lexer;
+pub mod limits;
 mod parser;
+mod surface;
 
 pub use error::{InvalidScene, SceneError};
 pub use expr::FrameTime;
@@ -46,8 +48,6 @@ pub struct Animation {
 impl Animation {
     /// Frames per second when `FPS` is not given.
     pub const DEFAULT_FPS: f64 = 24.0;
-    /// Most frames a `FRAMES` statement accepts.
-    pub const MAX_FRAMES: u32 = 1_000_000;
 }
 
 impl Default for Animation {
