@@ -13,6 +13,7 @@ mod implicit_measure;
 mod implicit_render;
 mod implicit_scene;
 mod implicit_specks;
+mod pipeline;
 mod probe_cli;
 mod render_golden;
 mod render_shading;
