@@ -348,7 +348,14 @@ fn read_exr_part(path: &Path) -> Result<(Part, bool), AssembleError> {
         .all_attributes()
         .from_file(path)
         .map_err(|e| unreadable(path, e))?;
-    let text = match image.attributes.other.get(&Text::from(METADATA_KEY)) {
+    // A custom header attribute may be read back as the image's or as the layer's.
+    let key = Text::from(METADATA_KEY);
+    let found = image
+        .attributes
+        .other
+        .get(&key)
+        .or_else(|| image.layer_data.attributes.other.get(&key));
+    let text = match found {
         Some(AttributeValue::Text(t)) => Some(t.to_string()),
         _ => None,
     };

@@ -3,8 +3,10 @@
 mod heart_support;
 mod render_support;
 
+mod anim_cli;
 mod anim_scene;
 mod cli_render;
+mod farm;
 mod heart_geometry;
 mod heart_hard_cases;
 mod heart_solvers;
