@@ -94,12 +94,15 @@ for _ in $(seq 1 600); do
   if [ -z "$(squeue -h -u "$(id -un)")" ]; then break; fi
   sleep 1
 done
-squeue
-echo "== accounting"
-sacct -X --format=JobID,JobName%18,State,ExitCode,Elapsed 2>/dev/null || true
+echo "== jobs (scontrol: every array task, the dependent assemble step)"
+scontrol -o show job | tr ' ' '\n' |
+  awk -F= '$1 == "JobId" { id = $2 } $1 == "ArrayTaskId" { id = id "_" $2 }
+           $1 == "JobName" { name = $2 } $1 == "JobState" { state = $2 }
+           $1 == "Dependency" { dep = $2 }
+           $1 == "ExitCode" { printf "%-8s %-18s %-10s exit %-5s dependency %s\n", id, name, state, $2, dep }'
 
 echo "== results in $out"
-ls "$out"
+echo "parts: $(ls "$out"/part_*.png | wc -l), logs: $(ls "$out"/*.log | wc -l)"
 "$KARDIA" render "$repo/$scene" --spp 4 --quiet -o "$out/single_render.png"
 if cmp "$out/frame_0000_tiled.png" "$out/single_render.png"; then
   echo "joined tiles == single render (byte for byte)"
@@ -107,5 +110,5 @@ else
   echo "joined tiles differ from the single render" >&2
   exit 1
 fi
-frames=$(ls "$out"/frame_[0-9]*.png | wc -l)
+frames=$(ls "$out"/frame_[0-9][0-9][0-9][0-9].png | wc -l)
 echo "frames rendered by the array: $frames"

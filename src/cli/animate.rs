@@ -95,9 +95,20 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
         Ok(s) => s,
         Err(e) => return report(e),
     };
-    let count = a.turntable.or(declared.frames).unwrap_or(1);
     let animated = AnimatedFormat::from_path(&args.output);
     let pattern = animation::has_frame_pattern(&args.output);
+    // Without a frame asked for, a scene is read as a still (frame 0 of 1), as a plain
+    // `kardia render` reads it: so parts of a still join into exactly that render.
+    let selects_frames = a.frame.is_some()
+        || a.frames.is_some()
+        || a.turntable.is_some()
+        || animated.is_some()
+        || pattern;
+    let count = if selects_frames {
+        a.turntable.or(declared.frames).unwrap_or(1)
+    } else {
+        1
+    };
     let range = match (a.frame, a.frames) {
         (Some(n), _) => FrameRange { first: n, last: n },
         (None, Some(r)) => r,
