@@ -412,7 +412,8 @@ impl<'a> Cursor<'a> {
                 return Err(self.fail(
                     a.parts[i].clone(),
                     format!(
-                        "the {name} component of {what} must not be negative, not {}",
+                        "the {name} component of {what} must not be negative, not {} (the \
+                         valid range is {limits})",
                         show_value(a.v[i])
                     ),
                     "negative colour component",

@@ -1,5 +1,6 @@
 //! All integration tests, one module per area, linked into one test binary.
 
+mod fuzz_support;
 mod heart_support;
 mod render_support;
 
@@ -7,6 +8,7 @@ mod anim_cli;
 mod anim_scene;
 mod cli_render;
 mod farm;
+mod fuzz_scenes;
 mod heart_geometry;
 mod heart_hard_cases;
 mod heart_solvers;
@@ -21,9 +23,11 @@ mod render_golden;
 mod render_shading;
 mod roots_cli;
 mod roots_heart;
+mod roots_reference;
 mod roots_sturm;
 mod scene_errors;
 mod scene_files;
 mod scene_fuzz;
+mod scene_ranges;
 mod shapes_props;
 mod specks;
