@@ -2,6 +2,8 @@
 //! (rendering by [`crate::pipeline`]). Each subcommand lives in its own file with its
 //! arguments and its `run`.
 
+mod animate;
+mod assemble;
 mod probe;
 mod render;
 mod roots;
@@ -27,6 +29,8 @@ enum Command {
     Roots(roots::RootsArgs),
     /// Intersect rays read from stdin (or a camera pixel) with a scene; print JSON Lines.
     Probe(probe::ProbeArgs),
+    /// Join part files (rendered with --tile or --region) into the whole image.
+    Assemble(assemble::AssembleArgs),
 }
 
 /// Runs the command line and returns the process exit code. `interrupt` is the binary's
@@ -39,5 +43,6 @@ pub fn main(interrupt: &CancelToken) -> i32 {
         Some(Command::Render(a)) => render::run(a, interrupt),
         Some(Command::Roots(a)) => roots::run(a),
         Some(Command::Probe(a)) => probe::run(a),
+        Some(Command::Assemble(a)) => assemble::run(a),
     }
 }

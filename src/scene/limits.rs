@@ -183,6 +183,11 @@ pub const KUMMER_MU: Limits = Limits::closed(-1e3, 1e3);
 /// The Chmutov preset's degree n.
 pub const CHMUTOV_DEGREE: Limits = Limits::whole(1, 16);
 
+/// `FRAMES` n, the number of frames of an animation.
+pub const FRAME_COUNT: Limits = Limits::whole(1, 1_000_000);
+/// `FRAMES … FPS f`, frames per second of an animated output.
+pub const FRAME_RATE: Limits = Limits::closed(0.01, 1000.0);
+
 /// Every range with the parameters it applies to, in the order of the documentation's table.
 pub const TABLE: &[(&str, Limits)] = &[
     ("`SIZE` width and height (pixels)", IMAGE_SIDE),
@@ -218,6 +223,8 @@ pub const TABLE: &[(&str, Limits)] = &[
     ),
     ("`kummer` μ (μ² ≠ 3)", KUMMER_MU),
     ("`chmutov` degree n", CHMUTOV_DEGREE),
+    ("`FRAMES` n", FRAME_COUNT),
+    ("`FRAMES` … `FPS f`", FRAME_RATE),
 ];
 
 #[cfg(test)]

@@ -4,7 +4,10 @@ mod fuzz_support;
 mod heart_support;
 mod render_support;
 
+mod anim_cli;
+mod anim_scene;
 mod cli_render;
+mod farm;
 mod fuzz_scenes;
 mod heart_geometry;
 mod heart_hard_cases;
