@@ -168,13 +168,14 @@ struct Piece {
     space_after: bool,
 }
 
-/// The pieces of the cursor's tokens from `cur.pos` up to the first string (and at most
-/// `max_tokens` tokens).
-fn pieces(cur: &Cursor, max_tokens: usize) -> Vec<Piece> {
+/// The pieces of the cursor's tokens from `cur.pos` up to the first string, or to the first
+/// comma or unmatched `)` outside parentheses.
+fn pieces(cur: &Cursor) -> Vec<Piece> {
     let text = cur.src.text;
     let is_space = |c: Option<char>| c.is_none_or(char::is_whitespace);
     let mut out = Vec::new();
-    for (index, t) in cur.tokens.iter().enumerate().skip(cur.pos).take(max_tokens) {
+    let mut depth = 0usize;
+    for (index, t) in cur.tokens.iter().enumerate().skip(cur.pos) {
         let mut push = |tk, span: Span, last| {
             out.push(Piece {
                 tk,
@@ -186,8 +187,17 @@ fn pieces(cur: &Cursor, max_tokens: usize) -> Vec<Piece> {
             })
         };
         match t.kind {
-            TokenKind::Open => push(Tk::Open, t.span.clone(), true),
-            TokenKind::Close => push(Tk::Close, t.span.clone(), true),
+            TokenKind::Open => {
+                depth += 1;
+                push(Tk::Open, t.span.clone(), true)
+            }
+            // A comma or an unmatched `)` at the outer level ends any expression: stop there,
+            // so reading each number of a long line costs only its own tokens.
+            TokenKind::Close | TokenKind::Comma if depth == 0 => break,
+            TokenKind::Close => {
+                depth -= 1;
+                push(Tk::Close, t.span.clone(), true)
+            }
             TokenKind::Comma => push(Tk::Comma, t.span.clone(), true),
             TokenKind::Str => break,
             TokenKind::Word => {
@@ -588,19 +598,28 @@ impl Reader<'_> {
     }
 }
 
-/// True when the number at the cursor is followed by an operator that continues it into an
-/// expression (so it cannot be read as a lone number).
+/// True when the word at the cursor, a number as written, is followed by an operator that
+/// continues it into an expression (so it cannot be read as a lone number). Looks at the
+/// next token only.
 pub(super) fn continues(cur: &Cursor) -> bool {
-    let ps = pieces(cur, 2);
-    let Some(first) = ps.first() else {
+    let Some(next) = cur
+        .tokens
+        .get(cur.pos + 1)
+        .filter(|t| t.kind == TokenKind::Word)
+    else {
         return false;
     };
-    if !first.last {
-        return true;
-    }
-    match ps.get(1) {
-        Some(p) if matches!(p.tk, Tk::Star | Tk::Slash | Tk::Caret) => true,
-        Some(p) if matches!(p.tk, Tk::Plus | Tk::Minus) => !p.space_before || p.space_after,
+    let text = cur.src.text;
+    let Some((tk, span)) = split_word(text, next.span.clone()).into_iter().next() else {
+        return false;
+    };
+    match tk {
+        Tk::Star | Tk::Slash | Tk::Caret => true,
+        // `1 - 2` and `1 -(2)`: see the space rule in the module documentation.
+        Tk::Plus | Tk::Minus => text[span.end..]
+            .chars()
+            .next()
+            .is_none_or(char::is_whitespace),
         _ => false,
     }
 }
@@ -611,7 +630,7 @@ pub(super) fn read(cur: &mut Cursor, what: &str) -> Result<Option<Value>, SceneE
     let mut reader = Reader {
         text: cur.src.text,
         names: cur.names,
-        pieces: pieces(cur, usize::MAX),
+        pieces: pieces(cur),
         at: 0,
         parens: 0,
         depth: 0,
@@ -725,7 +744,7 @@ fn report(cur: &Cursor, what: &str, fail: Fail) -> SceneError {
 /// A `LET name = expression` statement after its keyword: the name, its value, whether the
 /// value depends on the time, and the span of the name.
 pub(super) fn let_statement(cur: &mut Cursor) -> Result<(String, f64, bool, Span), SceneError> {
-    let ps = pieces(cur, usize::MAX);
+    let ps = pieces(cur);
     let Some(name_piece) = ps.first().filter(|p| p.tk == Tk::Name) else {
         return Err(cur.unexpected("a name (letters, digits and `_`, starting with a letter)"));
     };
