@@ -1,6 +1,7 @@
 //! The command line: argument parsing and printing only; all work is done by the library.
 //! Each subcommand lives in its own file with its arguments and its `run`.
 
+mod explore;
 mod probe;
 mod render;
 mod roots;
@@ -23,6 +24,8 @@ enum Command {
     Roots(roots::RootsArgs),
     /// Intersect rays read from stdin (or a camera pixel) with a scene; print JSON Lines.
     Probe(probe::ProbeArgs),
+    /// Explore scenes and equations live in the browser (a local web server).
+    Explore(explore::ExploreArgs),
 }
 
 /// Runs the command line and returns the process exit code.
@@ -33,5 +36,6 @@ pub fn main() -> i32 {
         Some(Command::Render(a)) => render::run(a),
         Some(Command::Roots(a)) => roots::run(a),
         Some(Command::Probe(a)) => probe::run(a),
+        Some(Command::Explore(a)) => explore::run(a),
     }
 }
