@@ -12,6 +12,7 @@ pub mod geometry;
 pub mod integrator;
 pub mod lights;
 pub mod materials;
+pub mod pipeline;
 pub mod roots;
 pub mod scene;
 pub mod shapes;

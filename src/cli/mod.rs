@@ -1,12 +1,16 @@
-//! The command line: argument parsing and printing only; all work is done by the library.
-//! Each subcommand lives in its own file with its arguments and its `run`.
+//! The command line: argument parsing and printing only; all work is done by the library
+//! (rendering by [`crate::pipeline`]). Each subcommand lives in its own file with its
+//! arguments and its `run`.
 
 mod explore;
 mod probe;
 mod render;
 mod roots;
 
+use crate::pipeline::CancelToken;
 use clap::{Parser, Subcommand};
+
+pub use render::INTERRUPTED;
 
 /// kardia: a ray tracer for the implicit heart and other algebraic surfaces.
 #[derive(Debug, Parser)]
@@ -28,12 +32,14 @@ enum Command {
     Explore(explore::ExploreArgs),
 }
 
-/// Runs the command line and returns the process exit code.
-pub fn main() -> i32 {
+/// Runs the command line and returns the process exit code. `interrupt` is the binary's
+/// Ctrl-C: once cancelled, a render in progress stops within a tile, writes nothing and the
+/// code is [`INTERRUPTED`] (the library installs no signal handler).
+pub fn main(interrupt: &CancelToken) -> i32 {
     let cli = Cli::parse();
     match cli.command {
-        None => render::run(render::RenderArgs::default()),
-        Some(Command::Render(a)) => render::run(a),
+        None => render::run(render::RenderArgs::default(), interrupt),
+        Some(Command::Render(a)) => render::run(a, interrupt),
         Some(Command::Roots(a)) => roots::run(a),
         Some(Command::Probe(a)) => probe::run(a),
         Some(Command::Explore(a)) => explore::run(a),

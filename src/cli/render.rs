@@ -1,7 +1,7 @@
-//! `kardia render`.
+//! `kardia render`: arguments → [`crate::pipeline`] → an image file, and a summary line.
 
-use crate::film::{self, ImageFormat};
-use crate::integrator::{self, RenderSettings};
+use crate::film::{self, AtomicFile, ImageFormat};
+use crate::pipeline::{CancelToken, Control, Region, RenderError, RenderRequest, Renderer, View};
 use crate::roots::Solver;
 use crate::scene::{self, LoadOptions, Scene};
 use clap::builder::{PossibleValuesParser, TypedValueParser};
@@ -28,21 +28,28 @@ pub struct RenderArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=Scene::MAX_SIDE as i64))]
     pub height: Option<u32>,
     /// Samples per pixel, stratified and jittered.
-    #[arg(long, default_value_t = RenderSettings::default().spp,
+    #[arg(long, default_value_t = RenderRequest::default().spp,
           value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub spp: u32,
     /// Worker threads [default: one per core].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub threads: Option<u32>,
     /// Maximum depth of mirror reflection and refraction (0 = no secondary rays).
-    #[arg(long, default_value_t = RenderSettings::default().max_depth)]
+    #[arg(long, default_value_t = RenderRequest::default().max_depth)]
     pub max_depth: u32,
     /// Seed for the sample jitter and soft shadows; the same seed gives the same image.
-    #[arg(long, default_value_t = RenderSettings::default().seed)]
+    #[arg(long, default_value_t = RenderRequest::default().seed)]
     pub seed: u64,
     /// Root solver for hearts and implicit surfaces.
     #[arg(long, default_value = Solver::default().name(), value_parser = solver_parser())]
     pub solver: Solver,
+    /// What to render: the shaded image, or a study view of the geometry.
+    #[arg(long, default_value = View::default().name(), value_parser = view_parser())]
+    pub view: View,
+    /// Render only the rectangle X,Y,WIDTH,HEIGHT (pixels of the full image, from its top-left
+    /// corner) and write it as an image of its own, exactly as those pixels of the full image.
+    #[arg(long, value_name = "X,Y,WIDTH,HEIGHT", value_parser = parse_region)]
+    pub region: Option<Region>,
     /// Write an .exr output with 16-bit half-float channels instead of 32-bit float.
     #[arg(long)]
     pub half: bool,
@@ -56,9 +63,37 @@ fn solver_parser() -> impl TypedValueParser<Value = Solver> {
         .map(|name| name.parse::<Solver>().unwrap_or_default())
 }
 
+fn view_parser() -> impl TypedValueParser<Value = View> {
+    PossibleValuesParser::new(View::ALL.iter().map(|(_, name)| *name))
+        .map(|name| name.parse::<View>().unwrap_or_default())
+}
+
+/// Parses `X,Y,WIDTH,HEIGHT` (non-negative integers, width and height at least 1).
+fn parse_region(s: &str) -> Result<Region, String> {
+    let numbers: Vec<u32> = s
+        .split(',')
+        .map(|part| part.trim().parse::<u32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected X,Y,WIDTH,HEIGHT (four whole numbers), not '{s}'"))?;
+    let [x, y, width, height] = numbers[..] else {
+        return Err(format!(
+            "expected X,Y,WIDTH,HEIGHT (four numbers), not '{s}'"
+        ));
+    };
+    if width == 0 || height == 0 {
+        return Err("the region's width and height must be at least 1".into());
+    }
+    Ok(Region {
+        x,
+        y,
+        width,
+        height,
+    })
+}
+
 impl Default for RenderArgs {
     fn default() -> Self {
-        let settings = RenderSettings::default();
+        let settings = RenderRequest::default();
         Self {
             scene: None,
             output: PathBuf::from(DEFAULT_OUTPUT),
@@ -69,6 +104,8 @@ impl Default for RenderArgs {
             max_depth: settings.max_depth,
             seed: settings.seed,
             solver: Solver::default(),
+            view: View::default(),
+            region: None,
             half: false,
             quiet: false,
         }
@@ -81,18 +118,8 @@ fn report(err: impl miette::Diagnostic + Send + Sync + 'static) {
     eprintln!("{:?}", miette::Report::new(err));
 }
 
-/// The scene's size after the command-line overrides: a lone width or height keeps the
-/// scene's aspect ratio.
-fn override_size(scene: &mut Scene, width: Option<u32>, height: Option<u32>) {
-    let aspect = scene.height as f64 / scene.width.max(1) as f64;
-    let clamp = |v: f64| (v.round() as u32).clamp(1, Scene::MAX_SIDE);
-    match (width, height) {
-        (Some(w), Some(h)) => (scene.width, scene.height) = (w, h),
-        (Some(w), None) => (scene.width, scene.height) = (w, clamp(w as f64 * aspect)),
-        (None, Some(h)) => (scene.width, scene.height) = (clamp(h as f64 / aspect), h),
-        (None, None) => {}
-    }
-}
+/// Exit code of a render stopped by `interrupt` (as a shell reports SIGINT).
+pub const INTERRUPTED: i32 = 130;
 
 /// "4.5 M rays/s" and the like.
 fn rate(per_second: f64) -> String {
@@ -105,49 +132,65 @@ fn rate(per_second: f64) -> String {
     }
 }
 
-/// Runs `kardia render`; returns the exit code (0 success, 1 any error).
-pub fn run(args: RenderArgs) -> i32 {
-    // From here on an interrupt exits with code 130 and removes a half-written image.
-    if let Err(e) = film::install_interrupt_cleanup() {
-        eprintln!("kardia: warning: Ctrl-C will not clean up: {e}");
-    }
-    // Everything that can fail before rendering is checked first.
-    let mut format = match film::check_output_path(&args.output) {
-        Ok(f) => f,
-        Err(e) => {
-            report(e);
-            return 1;
+/// Runs `kardia render`; returns the exit code (0 success, 1 any error, [`INTERRUPTED`] when
+/// `interrupt` was cancelled: then nothing is written and no temporary file is left).
+pub fn run(args: RenderArgs, interrupt: &CancelToken) -> i32 {
+    match render(&args, interrupt) {
+        Ok(()) => 0,
+        Err(Failure::Interrupted) => {
+            if !args.quiet {
+                eprintln!("kardia: interrupted, nothing written");
+            }
+            INTERRUPTED
         }
-    };
+        Err(Failure::Reported) => 1,
+    }
+}
+
+/// How `kardia render` failed.
+enum Failure {
+    /// The error was printed.
+    Reported,
+    /// The interrupt token was cancelled.
+    Interrupted,
+}
+
+/// Prints `err` and gives up.
+fn fail(err: impl miette::Diagnostic + Send + Sync + 'static) -> Failure {
+    report(err);
+    Failure::Reported
+}
+
+fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
+    // Everything that can fail before rendering is checked first.
+    let mut format = film::check_output_path(&args.output).map_err(fail)?;
     if args.half && format == ImageFormat::ExrFloat {
         format = ImageFormat::ExrHalf;
     }
     let options = LoadOptions {
         solver: args.solver,
     };
-    let loaded = match &args.scene {
+    let scene = match &args.scene {
         Some(path) => scene::parse_file(path, &options),
         None => scene::parse(scene::DEFAULT_SCENE, "scenes/heart.scene", &options),
-    };
-    let mut scene = match loaded {
-        Ok(s) => s,
-        Err(e) => {
-            report(e);
-            return 1;
-        }
-    };
-    override_size(&mut scene, args.width, args.height);
-
-    let settings = RenderSettings {
+    }
+    .map_err(fail)?;
+    let request = RenderRequest {
+        width: args.width,
+        height: args.height,
+        camera: None,
         spp: args.spp,
-        max_depth: args.max_depth,
         seed: args.seed,
-        threads: args.threads.map_or(0, |t| t as usize),
+        max_depth: args.max_depth,
+        region: args.region,
+        view: args.view,
     };
-    let pixels = scene.width as u64 * scene.height as u64;
+    let region = request.region_in(&scene).map_err(fail)?;
+    let renderer = Renderer::new(args.threads.map_or(0, |t| t as usize)).map_err(fail)?;
+
     let bar = if !args.quiet && std::io::stderr().is_terminal() {
         let bar = indicatif::ProgressBar::with_draw_target(
-            Some(pixels),
+            Some(region.pixel_count()),
             indicatif::ProgressDrawTarget::stderr(),
         );
         if let Ok(style) = indicatif::ProgressStyle::with_template(
@@ -159,33 +202,54 @@ pub fn run(args: RenderArgs) -> i32 {
     } else {
         indicatif::ProgressBar::hidden()
     };
-    let progress = |n| bar.inc(n);
-    let written = if format == ImageFormat::Png {
+    let control = Control::new(interrupt.clone(), |p| bar.inc(p.finished));
+    let mut file = AtomicFile::create(&args.output).map_err(fail)?;
+    let rendered = if format == ImageFormat::Png {
         // Rows are compressed while the rest of the image renders.
-        film::write_png_streaming(&args.output, scene.width, scene.height, |sink| {
-            integrator::render_in_bands(&scene, &settings, &progress, &|row, rows| {
-                sink.rows(row, rows)
-            })
-            .1
-        })
+        let (rendered, written) =
+            film::encode_png_streaming(&mut file, region.width, region.height, |sink| {
+                renderer.render_in_bands(&scene, &request, &control, &|row, rows| {
+                    sink.rows(row, rows)
+                })
+            });
+        // A cancelled render leaves the PNG unfinished: say so, not what the encoder saw.
+        let rendered = rendered.map_err(|e| render_failure(e, interrupt))?;
+        written.map_err(fail)?;
+        rendered
     } else {
-        let (image, stats) = integrator::render_with_progress(&scene, &settings, &progress);
-        film::write_image_as(&image, &args.output, format).map(|()| stats)
+        let rendered = renderer
+            .render(&scene, &request, &control)
+            .map_err(|e| render_failure(e, interrupt))?;
+        film::encode(&rendered.image, format, &mut file).map_err(fail)?;
+        rendered
     };
     bar.finish_and_clear();
-    let stats = match written {
-        Ok(stats) => stats,
-        Err(e) => {
-            report(e);
-            return 1;
-        }
-    };
+    if interrupt.is_cancelled() {
+        return Err(Failure::Interrupted); // `file` is dropped: its temporary file goes
+    }
+    file.commit().map_err(fail)?;
     if !args.quiet {
+        let stats = rendered.stats;
+        let size = if region == Region::full(rendered.full_width, rendered.full_height) {
+            format!("{}×{}", region.width, region.height)
+        } else {
+            format!(
+                "{}×{} at ({}, {}) of {}×{}",
+                region.width,
+                region.height,
+                region.x,
+                region.y,
+                rendered.full_width,
+                rendered.full_height
+            )
+        };
+        let view = match args.view {
+            View::Shaded => String::new(),
+            other => format!(", {other} view"),
+        };
         eprintln!(
-            "kardia: {}×{}, {} spp, {} thread{}, {:.2} s, {} rays, {} → {}",
-            scene.width,
-            scene.height,
-            settings.spp,
+            "kardia: {size}{view}, {} spp, {} thread{}, {:.2} s, {} rays, {} → {}",
+            request.spp,
             stats.threads,
             if stats.threads == 1 { "" } else { "s" },
             stats.elapsed.as_secs_f64(),
@@ -194,7 +258,16 @@ pub fn run(args: RenderArgs) -> i32 {
             args.output.display()
         );
     }
-    0
+    Ok(())
+}
+
+/// A render error as a failure of `kardia render`.
+fn render_failure(err: RenderError, interrupt: &CancelToken) -> Failure {
+    if err == RenderError::Cancelled || interrupt.is_cancelled() {
+        Failure::Interrupted
+    } else {
+        fail(err)
+    }
 }
 
 #[cfg(test)]
@@ -252,28 +325,27 @@ mod tests {
     }
 
     #[test]
-    fn lone_size_keeps_aspect() {
-        let mut scene = Scene {
-            width: 800,
-            height: 400,
-            camera: crate::camera::Camera::new(
-                crate::geometry::DVec3::Z,
-                crate::geometry::DVec3::ZERO,
-                crate::geometry::DVec3::Y,
-                40.0,
-            )
-            .unwrap(),
-            background: crate::geometry::DVec3::ZERO,
-            ambient: crate::geometry::DVec3::ZERO,
-            lights: vec![],
-            objects: vec![],
-        };
-        override_size(&mut scene, Some(64), None);
-        assert_eq!((scene.width, scene.height), (64, 32));
-        override_size(&mut scene, None, Some(10));
-        assert_eq!((scene.width, scene.height), (20, 10));
-        override_size(&mut scene, Some(3), Some(5));
-        assert_eq!((scene.width, scene.height), (3, 5));
+    fn views_and_regions_parse() {
+        let a = Wrapper::try_parse_from(["render", "--view", "normals", "--region", "1,2,30,40"])
+            .unwrap()
+            .args;
+        assert_eq!(a.view, View::Normals);
+        assert_eq!(
+            a.region,
+            Some(Region {
+                x: 1,
+                y: 2,
+                width: 30,
+                height: 40
+            })
+        );
+        for bad in ["1,2,3", "1,2,0,4", "a,b,c,d", "1,2,3,4,5", "-1,0,2,2"] {
+            assert!(
+                Wrapper::try_parse_from(["render", "--region", bad]).is_err(),
+                "{bad}"
+            );
+        }
+        assert!(Wrapper::try_parse_from(["render", "--view", "nonsense"]).is_err());
     }
 
     #[test]

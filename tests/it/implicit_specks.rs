@@ -20,13 +20,12 @@ use kardia::analysis::Rgb8;
 use kardia::camera::Camera;
 use kardia::film::Image;
 use kardia::geometry::{DVec3, Frame};
-use kardia::integrator::{render, RenderSettings};
 use kardia::lights::Light;
 use kardia::materials::Material;
 use kardia::roots::Solver;
 use kardia::scene::{parse_file, LoadOptions, Object, Scene};
 use kardia::shapes::implicit::Implicit;
-use render_support::{centre_sampled, pixels};
+use render_support::{centre_sampled, pixels, render, RenderSettings};
 
 /// Image side in pixels; odd, so that the middle pixel row lies on the camera's horizon.
 const SIZE: u32 = 171;

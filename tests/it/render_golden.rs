@@ -11,7 +11,6 @@ use crate::render_support;
 
 use kardia::film::{write_image, Image};
 use kardia::geometry::DVec3;
-use kardia::integrator::{render, RenderSettings};
 use kardia::materials::Material;
 use kardia::scene::Scene;
 use render_support::*;

@@ -4,7 +4,6 @@
 use crate::render_support;
 
 use kardia::geometry::{DVec3, Ray};
-use kardia::integrator::{render, render_with_progress, trace_ray, RenderSettings};
 use kardia::materials::Material;
 use render_support::*;
 

@@ -39,14 +39,13 @@ use kardia::analysis::{Rgb8, SPECK_JUMP};
 use kardia::camera::Camera;
 use kardia::film::Image;
 use kardia::geometry::{Aabb, DVec3, Frame, Ray};
-use kardia::integrator::{render, RenderSettings};
 use kardia::lights::Light;
 use kardia::materials::Material;
 use kardia::roots::Solver;
 use kardia::scene::{Object, Scene};
 use kardia::shapes::heart::{gradient_f, sextic_coefficients, BOUNDS};
 use kardia::shapes::{Heart, Shape};
-use render_support::{centre_sampled, pixels};
+use render_support::{centre_sampled, pixels, render, RenderSettings};
 
 /// Image side in pixels; odd, so that a pixel row lies on the camera's horizon.
 const SIZE: u32 = 171;

@@ -5,9 +5,9 @@
 use kardia::camera::Camera;
 use kardia::film::Image;
 use kardia::geometry::DVec3;
-use kardia::integrator::{trace_ray, RenderSettings};
 use kardia::lights::Light;
 use kardia::materials::Material;
+use kardia::pipeline::{self, Control, RenderRequest, RenderStats, Renderer};
 use kardia::scene::{Object, Scene};
 use kardia::shapes::{Plane, Sphere};
 
@@ -102,4 +102,55 @@ pub fn pixels(image: &Image) -> Vec<[u8; 3]> {
         .chunks_exact(3)
         .map(|c| [c[0], c[1], c[2]])
         .collect()
+}
+
+/// How the render tests render: the request's samples, depth and seed, on `threads` threads
+/// (0: one per core), the scene's own size and camera.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderSettings {
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Maximum recursion depth.
+    pub max_depth: u32,
+    /// Seed.
+    pub seed: u64,
+    /// Worker threads.
+    pub threads: usize,
+}
+
+impl RenderSettings {
+    /// The render request these settings describe.
+    pub fn request(&self) -> RenderRequest {
+        RenderRequest {
+            spp: self.spp,
+            max_depth: self.max_depth,
+            seed: self.seed,
+            ..RenderRequest::default()
+        }
+    }
+}
+
+/// The whole image of `scene` rendered by the library's pipeline with `settings`.
+pub fn render(scene: &Scene, settings: &RenderSettings) -> Image {
+    render_with_progress(scene, settings, &|_| {}).0
+}
+
+/// [`render`], calling `progress(n)` each time `n` more pixels are finished; also returns
+/// what the render cost.
+pub fn render_with_progress(
+    scene: &Scene,
+    settings: &RenderSettings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (Image, RenderStats) {
+    let renderer = Renderer::new(settings.threads).unwrap();
+    let control = Control::new(Default::default(), |p| progress(p.finished));
+    let rendered = renderer
+        .render(scene, &settings.request(), &control)
+        .unwrap();
+    (rendered.image, rendered.stats)
+}
+
+/// The colour one world ray gets in a render with `settings`.
+pub fn trace_ray(scene: &Scene, settings: &RenderSettings, ray: &kardia::geometry::Ray) -> DVec3 {
+    pipeline::trace_ray(scene, &settings.request(), ray)
 }

@@ -1,0 +1,405 @@
+//! Encoders: an [`Image`] to PNG (8-bit sRGB) or OpenEXR (linear float) on any writer.
+
+use super::{srgb8_into, AtomicFile, Image, Vec3};
+use std::io::{Seek, Write};
+use std::path::Path;
+
+/// The file formats an image can be written in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// 8-bit RGB PNG, sRGB-encoded (`.png`).
+    Png,
+    /// OpenEXR RGB, linear, 32-bit float channels (`.exr`, the default for EXR).
+    ExrFloat,
+    /// OpenEXR RGB, linear, 16-bit half-float channels.
+    ExrHalf,
+}
+
+impl ImageFormat {
+    /// The format an output path asks for by its extension (case-insensitive): `.png` →
+    /// [`ImageFormat::Png`], `.exr` → [`ImageFormat::ExrFloat`]; anything else is an error.
+    pub fn from_path(path: &Path) -> Result<Self, OutputError> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("png") => Ok(ImageFormat::Png),
+            Some("exr") => Ok(ImageFormat::ExrFloat),
+            _ => Err(OutputError::UnknownFormat(path.display().to_string())),
+        }
+    }
+}
+
+/// Why an image could not be encoded or written.
+#[derive(Debug, thiserror::Error, miette::Diagnostic)]
+pub enum OutputError {
+    /// The extension is not .png or .exr.
+    #[error("cannot tell the image format of {0}: use a .png or .exr file name")]
+    UnknownFormat(String),
+    /// The directory to write into does not exist or is not a directory.
+    #[error("the output directory {0} does not exist")]
+    NoDirectory(String),
+    /// The output path names an existing directory.
+    #[error("the output {0} is a directory, not a file name")]
+    IsDirectory(String),
+    /// Writing a file failed.
+    #[error("cannot write {path}: {reason}")]
+    Write {
+        /// Target path.
+        path: String,
+        /// Why.
+        reason: String,
+    },
+    /// Encoding to a writer failed (the writer's error, or an image with no pixels).
+    #[error("cannot encode the image: {0}")]
+    Encode(String),
+}
+
+impl OutputError {
+    /// An encoding error restated as a failure to write `path`; other errors unchanged.
+    fn writing(self, path: &Path) -> Self {
+        match self {
+            OutputError::Encode(reason) => OutputError::Write {
+                path: path.display().to_string(),
+                reason,
+            },
+            other => other,
+        }
+    }
+}
+
+fn encode_error(e: impl std::fmt::Display) -> OutputError {
+    OutputError::Encode(e.to_string())
+}
+
+/// Writes the image atomically (temporary file beside the target, then rename) in the format
+/// its extension selects: PNG as 8-bit sRGB, EXR as linear 32-bit float.
+pub fn write_image(image: &Image, path: &Path) -> Result<(), OutputError> {
+    let format = ImageFormat::from_path(path)?;
+    write_image_as(image, path, format)
+}
+
+/// Writes the image atomically in the given format, whatever the extension. On success the
+/// target holds the complete image; on failure the target is as it was before and no
+/// temporary file is left.
+pub fn write_image_as(image: &Image, path: &Path, format: ImageFormat) -> Result<(), OutputError> {
+    let mut file = AtomicFile::create(path)?;
+    encode(image, format, &mut file).map_err(|e| e.writing(path))?;
+    file.commit()
+}
+
+/// Encodes the image in `format` into `out` (seekable because OpenEXR's writer needs it).
+pub fn encode(
+    image: &Image,
+    format: ImageFormat,
+    out: impl Write + Seek,
+) -> Result<(), OutputError> {
+    match format {
+        ImageFormat::Png => encode_png(image, out),
+        ImageFormat::ExrFloat => encode_exr(image, false, out),
+        ImageFormat::ExrHalf => encode_exr(image, true, out),
+    }
+}
+
+/// An error unless the image holds `width·height ≥ 1` pixels.
+fn check_size(image: &Image) -> Result<(), OutputError> {
+    let (w, h) = (image.width as usize, image.height as usize);
+    if w == 0 || h == 0 || image.pixels.len() != w * h {
+        return Err(OutputError::Encode(format!(
+            "the image is {}×{} but holds {} pixels",
+            image.width,
+            image.height,
+            image.pixels.len()
+        )));
+    }
+    Ok(())
+}
+
+/// Encodes the image as an 8-bit sRGB PNG (each channel clamped to `[0, 1]`) into `out`.
+pub fn encode_png(image: &Image, mut out: impl Write) -> Result<(), OutputError> {
+    use image::ImageEncoder;
+    check_size(image)?;
+    image::codecs::png::PngEncoder::new(&mut out)
+        .write_image(
+            &image.to_srgb8(),
+            image.width,
+            image.height,
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(encode_error)?;
+    out.flush().map_err(encode_error)
+}
+
+/// Encodes the image as linear-RGB OpenEXR into `out`: 32-bit float channels, or 16-bit half
+/// floats when `half` (values beyond the half range stored as `±65504`, never infinity).
+pub fn encode_exr(
+    image: &Image,
+    half: bool,
+    mut out: impl Write + Seek,
+) -> Result<(), OutputError> {
+    use exr::prelude::*;
+    check_size(image)?;
+    let w = image.width as usize;
+    let at = |v: Vec2<usize>| image.pixels[v.y() * w + v.x()];
+    let size = (w, image.height as usize);
+    if half {
+        let max = f16::MAX.to_f32();
+        let h = |c: f32| f16::from_f32(c.clamp(-max, max));
+        let px = |v: Vec2<usize>| {
+            let p = at(v);
+            (h(p.x), h(p.y), h(p.z))
+        };
+        Image::from_channels(size, SpecificChannels::rgb(px))
+            .write()
+            .to_buffered(&mut out)
+            .map_err(encode_error)?;
+    } else {
+        let px = |v: Vec2<usize>| {
+            let p = at(v);
+            (p.x, p.y, p.z)
+        };
+        Image::from_channels(size, SpecificChannels::rgb(px))
+            .write()
+            .to_buffered(&mut out)
+            .map_err(encode_error)?;
+    }
+    out.flush().map_err(encode_error)
+}
+
+/// Encodes a `width × height` PNG (8-bit sRGB, fast compression) into `out` while its rows are
+/// still being made: `produce` runs on the calling thread and hands finished runs of whole rows
+/// to the [`RowSink`] it is given, from any thread and in any order, each row exactly once;
+/// they are compressed, in order, on a thread of their own as soon as every row above them has
+/// arrived. Returns what `produce` returned, and whether the PNG was completed: an error when
+/// writing failed or rows were missing or repeated when `produce` returned (then `out` holds
+/// an unfinished PNG: write to an [`AtomicFile`] and commit only on success).
+pub fn encode_png_streaming<R>(
+    out: impl Write + Send,
+    width: u32,
+    height: u32,
+    produce: impl FnOnce(&RowSink) -> R,
+) -> (R, Result<(), OutputError>) {
+    let (sender, receiver) = std::sync::mpsc::channel();
+    std::thread::scope(|scope| {
+        let encoder = scope.spawn(move || encode_png_rows(out, width, height, receiver));
+        let sink = RowSink {
+            width: width as usize,
+            sender,
+        };
+        let result = produce(&sink);
+        drop(sink); // ends the encoder's input
+        let written = encoder
+            .join()
+            .unwrap_or_else(|_| Err("the PNG encoder panicked".to_string()))
+            .map_err(OutputError::Encode);
+        (result, written)
+    })
+}
+
+/// Where [`encode_png_streaming`]'s producer puts finished rows.
+pub struct RowSink {
+    width: usize,
+    sender: std::sync::mpsc::Sender<(u32, Vec<u8>)>,
+}
+
+impl RowSink {
+    /// Hands over whole rows from `first_row` down (`pixels.len()` a multiple of the width;
+    /// linear RGB, converted to 8-bit sRGB here, on the caller's thread). Rows after a write
+    /// error are dropped; the error is reported when the file is finished.
+    pub fn rows(&self, first_row: u32, pixels: &[Vec3]) {
+        debug_assert_eq!(pixels.len() % self.width.max(1), 0, "whole rows only");
+        let mut bytes = vec![0u8; 3 * pixels.len()];
+        srgb8_into(pixels, &mut bytes);
+        let _ = self.sender.send((first_row, bytes));
+    }
+}
+
+/// The encoder thread of [`encode_png_streaming`]: puts the runs of rows in order as they
+/// come and compresses each contiguous stretch at once.
+fn encode_png_rows(
+    mut out: impl Write,
+    width: u32,
+    height: u32,
+    runs: std::sync::mpsc::Receiver<(u32, Vec<u8>)>,
+) -> Result<(), String> {
+    if width == 0 || height == 0 {
+        return Err(format!("the image is {width}×{height}"));
+    }
+    let mut encoder = png::Encoder::new(&mut out, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(png::Compression::Fast);
+    encoder.set_filter(png::Filter::Adaptive);
+    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+    let mut stream = writer.stream_writer().map_err(|e| e.to_string())?;
+    let row_bytes = 3 * width as usize;
+    let mut waiting = std::collections::BTreeMap::new();
+    let mut next_row = 0u32;
+    for (first_row, bytes) in runs {
+        if bytes.len() % row_bytes != 0 || first_row < next_row || waiting.contains_key(&first_row)
+        {
+            return Err(format!("rows from {first_row} handed over twice or cut"));
+        }
+        waiting.insert(first_row, bytes);
+        while let Some(bytes) = waiting.remove(&next_row) {
+            stream.write_all(&bytes).map_err(|e| e.to_string())?;
+            next_row += (bytes.len() / row_bytes) as u32;
+        }
+    }
+    if next_row != height || !waiting.is_empty() {
+        return Err(format!("only rows 0..{next_row} of {height} were made"));
+    }
+    stream.finish().map_err(|e| e.to_string())?;
+    writer.finish().map_err(|e| e.to_string())?;
+    out.flush().map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::DVec3;
+
+    fn listing_len(dir: &Path) -> usize {
+        std::fs::read_dir(dir).unwrap().count()
+    }
+
+    #[test]
+    fn format_from_extension() {
+        assert_eq!(
+            ImageFormat::from_path(Path::new("a/b.PNG")).unwrap(),
+            ImageFormat::Png
+        );
+        assert_eq!(
+            ImageFormat::from_path(Path::new("x.exr")).unwrap(),
+            ImageFormat::ExrFloat
+        );
+        assert!(ImageFormat::from_path(Path::new("x.jpg")).is_err());
+        assert!(ImageFormat::from_path(Path::new("png")).is_err());
+    }
+
+    #[test]
+    fn writes_png_and_exr_and_leaves_no_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut img = Image::new(3, 2);
+        img.set(1, 0, DVec3::new(1.0, 0.5, 0.0));
+        img.set(2, 1, DVec3::new(2.0, 0.25, 0.125));
+        let png = dir.path().join("a.png");
+        write_image(&img, &png).unwrap();
+        let decoded = image::open(&png).unwrap().to_rgb8();
+        assert_eq!(decoded.dimensions(), (3, 2));
+        assert_eq!(decoded.get_pixel(1, 0).0, [255, 188, 0]);
+        let exr_path = dir.path().join("a.exr");
+        write_image(&img, &exr_path).unwrap();
+        let half = dir.path().join("h.exr");
+        write_image_as(&img, &half, ImageFormat::ExrHalf).unwrap();
+        for p in [&exr_path, &half] {
+            let read = exr::prelude::read_first_rgba_layer_from_file(
+                p,
+                |res, _| vec![(0.0f32, 0.0f32, 0.0f32); res.width() * res.height()],
+                |v, pos, (r, g, b, _a): (f32, f32, f32, f32)| v[pos.y() * 3 + pos.x()] = (r, g, b),
+            )
+            .unwrap();
+            assert_eq!(read.layer_data.channel_data.pixels[5], (2.0, 0.25, 0.125));
+        }
+        assert_eq!(listing_len(dir.path()), 3);
+    }
+
+    #[test]
+    fn encoders_write_to_memory() {
+        let mut img = Image::new(2, 2);
+        img.set(0, 0, DVec3::new(1e9, 0.5, -1.0));
+        let mut png = Vec::new();
+        encode_png(&img, &mut png).unwrap();
+        let decoded = image::load_from_memory(&png).unwrap().to_rgb8();
+        assert_eq!(decoded.get_pixel(0, 0).0, [255, 188, 0]);
+        let mut exr = std::io::Cursor::new(Vec::new());
+        encode_exr(&img, true, &mut exr).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("h.exr");
+        std::fs::write(&path, exr.into_inner()).unwrap();
+        let image = exr::prelude::read_first_rgba_layer_from_file(
+            &path,
+            |res, _| vec![(0.0f32, 0.0f32, 0.0f32); res.width() * res.height()],
+            |v, pos, (r, g, b, _a): (f32, f32, f32, f32)| v[pos.y() * 2 + pos.x()] = (r, g, b),
+        )
+        .unwrap();
+        let first = image.layer_data.channel_data.pixels[0];
+        assert_eq!(
+            first,
+            (65504.0, 0.5, -1.0),
+            "half channels saturate, finite"
+        );
+        assert!(encode_png(&Image::new(0, 3), Vec::new()).is_err());
+    }
+
+    #[test]
+    fn streamed_png_has_the_same_pixels_whatever_the_order_of_rows() {
+        let dir = tempfile::tempdir().unwrap();
+        let (w, h) = (37u32, 29u32);
+        let mut img = Image::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                let v = DVec3::new(x as f64 / 36.0, y as f64 / 28.0, ((x * y) % 7) as f64 / 5.0);
+                img.set(x, y, v);
+            }
+        }
+        let whole = dir.path().join("whole.png");
+        write_image(&img, &whole).unwrap();
+        let streamed = dir.path().join("streamed.png");
+        let row = |y: u32| &img.pixels[(y * w) as usize..((y + 1) * w) as usize];
+        let mut file = AtomicFile::create(&streamed).unwrap();
+        let (answer, written) = encode_png_streaming(&mut file, w, h, |sink| {
+            // Bottom runs first, from two threads, in runs of uneven size.
+            std::thread::scope(|s| {
+                s.spawn(|| {
+                    sink.rows(20, &img.pixels[(20 * w) as usize..]);
+                    sink.rows(10, &img.pixels[(10 * w) as usize..(20 * w) as usize]);
+                });
+                s.spawn(|| {
+                    for y in (0..10).rev() {
+                        sink.rows(y, row(y));
+                    }
+                });
+            });
+            42
+        });
+        written.unwrap();
+        file.commit().unwrap();
+        assert_eq!(answer, 42);
+        let a = image::open(&whole).unwrap().to_rgb8();
+        let b = image::open(&streamed).unwrap().to_rgb8();
+        assert_eq!(a, b);
+        assert_eq!(listing_len(dir.path()), 2, "a temporary file was left");
+    }
+
+    #[test]
+    fn streamed_png_with_missing_or_repeated_rows_fails() {
+        let img = Image::new(4, 3);
+        let (_, missing) =
+            encode_png_streaming(Vec::new(), 4, 3, |sink| sink.rows(0, &img.pixels[..8]));
+        assert!(missing.is_err());
+        let (_, twice) = encode_png_streaming(Vec::new(), 4, 3, |sink| {
+            sink.rows(0, &img.pixels);
+            sink.rows(1, &img.pixels[4..8]);
+        });
+        assert!(twice.is_err());
+        let (_, empty) = encode_png_streaming(Vec::new(), 0, 3, |_| ());
+        assert!(empty.is_err());
+    }
+
+    #[test]
+    fn failed_write_keeps_existing_target() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("keep.png");
+        std::fs::write(&target, b"old").unwrap();
+        let bad = Image {
+            width: 2,
+            height: 2,
+            pixels: vec![Vec3::ZERO; 3],
+        };
+        assert!(write_image(&bad, &target).is_err());
+        assert_eq!(std::fs::read(&target).unwrap(), b"old");
+        assert_eq!(listing_len(dir.path()), 1);
+    }
+}

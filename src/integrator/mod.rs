@@ -1,0 +1,169 @@
+//! Turning rays into pixels: the [`Shader`] trait (one primary ray in, one colour out) and its
+//! implementations, one file each — [`whitted`] (the [`View::Shaded`] image) and the study
+//! views [`normals`] and [`depth`] — plus the sampling of pixels (`sampling`) and the scheduler
+//! that spreads a region's tiles over a thread pool (`scheduler`).
+//!
+//! The render API callers use is [`crate::pipeline`]; this module is what it runs.
+//!
+//! # Adding a view
+//! Write `src/integrator/NAME.rs` with a type that implements [`Shader`] and a
+//! `new(&ShadeSetup)` constructor, add a variant to [`View`] with its name in [`View::ALL`],
+//! and one arm to the `match` in `render`.
+
+pub mod depth;
+pub mod normals;
+mod sampling;
+mod scheduler;
+pub mod whitted;
+
+pub use sampling::{strata, stratified_point, Sample};
+pub use whitted::{MAX_SHADOW_CROSSINGS, SELF_HIT_EPS};
+
+pub(crate) use scheduler::{Hooks, Job};
+
+use crate::camera::Camera;
+use crate::film::Image;
+use crate::geometry::{DVec3, Ray};
+use crate::scene::Scene;
+
+/// Side of the square image tiles, in pixels; each band of tiles one `TILE_SIZE` tall is one
+/// unit of parallel work, rendered straight into its rows of the image. Cancellation is
+/// checked before every tile.
+pub const TILE_SIZE: u32 = 16;
+
+/// One way of shading a ray: the colour (linear RGB, finite or not: the film makes it finite)
+/// seen along a primary ray for one sample of a pixel. Called from many threads at once.
+pub trait Shader: Sync {
+    /// The colour arriving along `ray` (world space, starting at the eye, unit direction) for
+    /// the pixel sample `sample` (its random numbers and ray counter).
+    fn radiance(&self, ray: &Ray, sample: &mut Sample) -> DVec3;
+}
+
+/// What a shader is built from for one render.
+#[derive(Debug, Clone, Copy)]
+pub struct ShadeSetup<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// The camera the render sees through (the scene's or the request's).
+    pub camera: &'a Camera,
+    /// Samples per pixel (≥ 1).
+    pub spp: u32,
+    /// Maximum depth of reflection and refraction (0 = primary hits only).
+    pub max_depth: u32,
+}
+
+/// Which image a render makes: the shaded picture or a study view of the geometry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum View {
+    /// Whitted shading: lights, shadows, reflection, refraction ([`whitted`]).
+    #[default]
+    Shaded,
+    /// The outward unit normal of the first hit as a colour, `(n + 1) / 2` ([`normals`]).
+    Normals,
+    /// The distance to the first hit as a grey level, `exp(−d / d₀)` ([`depth`]).
+    Depth,
+}
+
+impl View {
+    /// Every view with its name (as `kardia render --view NAME` takes it).
+    pub const ALL: &'static [(View, &'static str)] = &[
+        (View::Shaded, "shaded"),
+        (View::Normals, "normals"),
+        (View::Depth, "depth"),
+    ];
+
+    /// The view's name.
+    pub fn name(self) -> &'static str {
+        Self::ALL
+            .iter()
+            .find(|(v, _)| *v == self)
+            .map_or("?", |(_, n)| n)
+    }
+}
+
+impl std::fmt::Display for View {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for View {
+    type Err = String;
+
+    /// Parses a view's name (see [`View::ALL`]), ignoring case.
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .iter()
+            .find(|(_, n)| n.eq_ignore_ascii_case(s))
+            .map(|(view, _)| *view)
+            .ok_or_else(|| {
+                let names: Vec<_> = Self::ALL.iter().map(|(_, n)| *n).collect();
+                format!("unknown view '{s}': expected one of {}", names.join(", "))
+            })
+    }
+}
+
+/// Renders `job` in `view` on `pool`: the region's image and the rays traced, or `None` when
+/// cancelled.
+pub(crate) fn render(
+    pool: &rayon::ThreadPool,
+    view: View,
+    setup: &ShadeSetup,
+    job: &Job,
+    hooks: &Hooks,
+) -> Option<(Image, u64)> {
+    match view {
+        View::Shaded => scheduler::run(pool, &whitted::Whitted::new(setup), job, hooks),
+        View::Normals => scheduler::run(pool, &normals::Normals::new(setup), job, hooks),
+        View::Depth => scheduler::run(pool, &depth::Depth::new(setup), job, hooks),
+    }
+}
+
+/// The colour `view` gives one world ray (which starts off any surface), as in a render with
+/// `setup`; the random numbers (a spherical light's sample point) come from `seed`, as for a
+/// pixel's first sample. Meant for tests and probes.
+pub fn trace_ray(view: View, setup: &ShadeSetup, seed: u64, ray: &Ray) -> DVec3 {
+    let mut sample = Sample::new(seed, 0, 1);
+    match view {
+        View::Shaded => whitted::Whitted::new(setup).radiance(ray, &mut sample),
+        View::Normals => normals::Normals::new(setup).radiance(ray, &mut sample),
+        View::Depth => depth::Depth::new(setup).radiance(ray, &mut sample),
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::materials::Material;
+    use crate::scene::Object;
+    use crate::shapes::Sphere;
+
+    /// A unit sphere at the origin seen from z = 5, 8×8 pixels, no lights.
+    pub(crate) fn unit_sphere_scene() -> Scene {
+        Scene {
+            width: 8,
+            height: 8,
+            camera: Camera::new(DVec3::new(0.0, 0.0, 5.0), DVec3::ZERO, DVec3::Y, 40.0).unwrap(),
+            background: DVec3::ZERO,
+            ambient: DVec3::ZERO,
+            lights: vec![],
+            objects: vec![Object::new(
+                Box::new(Sphere::new(DVec3::ZERO, 1.0).unwrap()),
+                Material::default(),
+                "SPHERE",
+                1,
+            )],
+        }
+    }
+
+    #[test]
+    fn views_by_name() {
+        for (view, name) in View::ALL {
+            assert_eq!(name.parse::<View>().unwrap(), *view);
+            assert_eq!(view.to_string(), *name);
+        }
+        assert_eq!("NORMALS".parse::<View>().unwrap(), View::Normals);
+        assert!("nonsense".parse::<View>().is_err());
+        assert_eq!(View::default(), View::Shaded);
+    }
+}

@@ -1,0 +1,56 @@
+//! False-colour normals, the [`View::Normals`](super::View::Normals) study view: each pixel
+//! shows the outward unit normal `n` of the first surface its rays meet as the linear colour
+//! `(n + 1) / 2` (so +x is red, +y green, +z blue; a back side shows the normal facing away
+//! from the camera). Rays that hit nothing are black. No lights, no shadows, no secondary rays.
+
+use super::sampling::Sample;
+use super::{ShadeSetup, Shader};
+use crate::geometry::{DVec3, Ray};
+use crate::scene::Scene;
+
+/// The normals view of one scene.
+pub struct Normals<'a> {
+    scene: &'a Scene,
+}
+
+impl<'a> Normals<'a> {
+    /// The view of `setup.scene` (nothing else of the setup matters).
+    pub fn new(setup: &ShadeSetup<'a>) -> Self {
+        Self { scene: setup.scene }
+    }
+}
+
+impl Shader for Normals<'_> {
+    fn radiance(&self, ray: &Ray, sample: &mut Sample) -> DVec3 {
+        sample.count_ray();
+        match self.scene.intersect(ray, 0.0, f64::INFINITY) {
+            Some(hit) => (hit.normal + DVec3::ONE) * 0.5,
+            None => DVec3::ZERO,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrator::tests::unit_sphere_scene;
+
+    #[test]
+    fn facing_normal_is_blue_and_misses_are_black() {
+        let scene = unit_sphere_scene();
+        let setup = ShadeSetup {
+            scene: &scene,
+            camera: &scene.camera,
+            spp: 1,
+            max_depth: 0,
+        };
+        let view = Normals::new(&setup);
+        let mut sample = Sample::new(0, 0, 1);
+        let towards = Ray::new(DVec3::new(0.0, 0.0, 5.0), -DVec3::Z);
+        let c = view.radiance(&towards, &mut sample);
+        assert!((c - DVec3::new(0.5, 0.5, 1.0)).length() < 1e-12, "{c}");
+        let away = Ray::new(DVec3::new(0.0, 0.0, 5.0), DVec3::Z);
+        assert_eq!(view.radiance(&away, &mut sample), DVec3::ZERO);
+        assert_eq!(sample.rays, 2);
+    }
+}

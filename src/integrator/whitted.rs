@@ -1,0 +1,300 @@
+//! Whitted shading, the [`View::Shaded`](super::View::Shaded) view: direct light with shadows,
+//! mirror reflection and refraction.
+//!
+//! # Shading model
+//! At a hit point with material `m`, unit normal `n` turned toward the incoming ray
+//! (surfaces are two-sided) and diffuse colour `c` (`m.diffuse_at(p)`, or `m.inside` on the
+//! back side when set), the colour is
+//!
+//! ```text
+//! ambient·c + Σ_lights colour·V·(c·max(0, n·l) + ks·max(0, n·h)^shininess)
+//!           + kr'·trace(reflected) + kt'·trace(refracted)
+//! ```
+//!
+//! with `h` the Blinn half vector and `V` the light's visibility along a shadow ray:
+//! 1 when unobstructed, 0 behind an opaque object, and behind transmissive objects the
+//! product of `kt` for every surface crossed and of `exp(−attenuation·length)` for every
+//! stretch travelled inside (so glass tints and dims shadows instead of blocking them).
+//! Shadow rays go straight (no refraction).
+//!
+//! `kr' = kr + kt·F` and `kt' = kt·(1 − F)`, where `F` is the exact unpolarised Fresnel
+//! reflectance of the interface (0 when `ior = 1`); under total internal reflection
+//! `kr' = kr + kt` and `kt' = 0`. So `kt` is the weight of the dielectric interface as a
+//! whole and `kr` an extra mirror weight. Whether a ray enters or leaves an object is decided
+//! by the geometric normal: a hit on the back side is a ray leaving the object, and the whole
+//! colour found there is dimmed by Beer–Lambert absorption `exp(−attenuation·d)` over the
+//! distance `d` travelled inside. Recursion stops at the
+//! render's `max_depth`.
+//!
+//! A spherical light is sampled on the disc through its centre facing the shaded point;
+//! the pixel's samples take the disc's strata in a per-pixel rotated order, so soft shadows
+//! smooth out as `spp` grows and stay deterministic for a seed.
+//!
+//! # Self-intersection
+//! A secondary ray starts on a surface; it ignores hits closer than [`SELF_HIT_EPS`] times
+//! the scale of the numbers that located its origin (the largest coordinate of the hit point
+//! and of the incoming ray's origin, and the incoming segment's length). The guard thus
+//! follows the scene's scale: a heart 10⁻³ across and one 10³ across are treated alike.
+
+use super::sampling::{basis, concentric_disc, strata, Sample};
+use super::{ShadeSetup, Shader};
+use crate::geometry::{DVec3, Ray};
+use crate::lights::Light;
+use crate::scene::Scene;
+
+/// Relative self-intersection guard for secondary and shadow rays (see the module docs).
+pub const SELF_HIT_EPS: f64 = 1e-9;
+
+/// Most surfaces a shadow ray passes through before the light counts as blocked.
+pub const MAX_SHADOW_CROSSINGS: u32 = 64;
+
+/// `SELF_HIT_EPS` scaled to the numbers that produced a point (see the module docs).
+#[inline]
+fn guard(point: DVec3, origin: DVec3, travelled: f64) -> f64 {
+    let scale = point
+        .abs()
+        .max_element()
+        .max(origin.abs().max_element())
+        .max(travelled);
+    (SELF_HIT_EPS * scale).max(f64::MIN_POSITIVE)
+}
+
+/// Direction of the ray through an interface by Snell's law, `d` unit and `n` the unit
+/// normal on the incoming side (`d·n < 0`), `eta = n_incoming / n_outgoing`; `None` under
+/// total internal reflection.
+fn refract(d: DVec3, n: DVec3, eta: f64) -> Option<(DVec3, f64)> {
+    let cos_i = -d.dot(n);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some(((eta * d + (eta * cos_i - cos_t) * n).normalize(), cos_t))
+}
+
+/// Exact unpolarised Fresnel reflectance of a dielectric interface for the given cosines
+/// and `eta = n_incoming / n_outgoing`.
+fn fresnel(cos_i: f64, cos_t: f64, eta: f64) -> f64 {
+    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    (0.5 * (rs * rs + rp * rp)).clamp(0.0, 1.0)
+}
+
+/// `exp(−a·d)` per channel; exactly 1 when there is no absorption.
+#[inline]
+fn beer_lambert(attenuation: DVec3, distance: f64) -> DVec3 {
+    if attenuation == DVec3::ZERO {
+        DVec3::ONE
+    } else {
+        (-attenuation * distance).exp()
+    }
+}
+
+/// Whitted shading of one scene, fixed for one render.
+pub struct Whitted<'a> {
+    scene: &'a Scene,
+    /// Per light: its shadow rays per pixel sample and the [`strata`] of `spp` times that.
+    light_grids: Vec<(u32, (u32, u32))>,
+    max_depth: u32,
+}
+
+impl Shader for Whitted<'_> {
+    fn radiance(&self, ray: &Ray, sample: &mut Sample) -> DVec3 {
+        self.trace(ray, 0.0, 0, sample)
+    }
+}
+
+impl<'a> Whitted<'a> {
+    /// The shader of `setup.scene` for `setup.spp` samples a pixel (which fixes the strata
+    /// of spherical lights) and recursion to `setup.max_depth`.
+    pub fn new(setup: &ShadeSetup<'a>) -> Self {
+        let spp = setup.spp.max(1);
+        let light_grids = setup
+            .scene
+            .lights
+            .iter()
+            .map(|light| {
+                let rays = if light.radius > 0.0 {
+                    light.samples.max(1)
+                } else {
+                    1
+                };
+                (rays, strata(spp.saturating_mul(rays)))
+            })
+            .collect();
+        Self {
+            scene: setup.scene,
+            light_grids,
+            max_depth: setup.max_depth,
+        }
+    }
+
+    /// The colour arriving along `ray` from its first hit beyond `t_min`.
+    fn trace(&self, ray: &Ray, t_min: f64, depth: u32, s: &mut Sample) -> DVec3 {
+        s.count_ray();
+        let scene = self.scene;
+        let Some(hit) = scene.intersect(ray, t_min, f64::INFINITY) else {
+            return scene.background;
+        };
+        let m = &scene.objects[hit.object].material;
+        let dir_len = ray.dir.length();
+        let d = ray.dir / dir_len;
+        let travelled = hit.t * dir_len;
+        let p = hit.point;
+        let front = hit.normal.dot(d) < 0.0;
+        let n = if front { hit.normal } else { -hit.normal };
+        let eps = guard(p, ray.origin, travelled);
+
+        let base = match (front, m.inside) {
+            (false, Some(inside)) => inside,
+            _ => m.diffuse_at(p),
+        };
+        let mut colour = scene.ambient * base;
+        for (index, light) in scene.lights.iter().enumerate() {
+            let (rays, grid) = self.light_grids[index];
+            let mut lit = DVec3::ZERO;
+            for ray in 0..rays {
+                let target = self.light_sample(light, index, (ray, rays), grid, p, s);
+                let to_light = target - p;
+                let dist = to_light.length();
+                if dist <= eps {
+                    continue;
+                }
+                let l = to_light / dist;
+                let n_dot_l = n.dot(l);
+                if n_dot_l <= 0.0 {
+                    continue;
+                }
+                let visibility = self.transmittance(p, l, eps, dist, s);
+                if visibility == DVec3::ZERO {
+                    continue;
+                }
+                let mut f = base * n_dot_l;
+                if m.specular > 0.0 {
+                    let h = (l - d).normalize_or_zero();
+                    f += DVec3::splat(m.specular * n.dot(h).max(0.0).powf(m.shininess));
+                }
+                lit += visibility * f;
+            }
+            colour += light.colour * lit / rays as f64;
+        }
+
+        if depth < self.max_depth {
+            let mut kr = m.reflect;
+            let mut kt = 0.0;
+            let mut refracted = None;
+            if m.transmit > 0.0 {
+                let eta = if front { 1.0 / m.ior } else { m.ior };
+                match refract(d, n, eta) {
+                    Some((t_dir, cos_t)) => {
+                        let f = fresnel(-d.dot(n), cos_t, eta);
+                        kr += m.transmit * f;
+                        kt = m.transmit * (1.0 - f);
+                        refracted = Some(t_dir);
+                    }
+                    None => kr += m.transmit,
+                }
+            }
+            if kr > 0.0 {
+                let r = d - 2.0 * d.dot(n) * n;
+                colour += kr * self.trace(&Ray::new(p, r), eps, depth + 1, s);
+            }
+            if let (Some(t_dir), true) = (refracted, kt > 0.0) {
+                colour += kt * self.trace(&Ray::new(p, t_dir), eps, depth + 1, s);
+            }
+        }
+
+        if !front {
+            // The ray travelled inside this object to reach its back side.
+            colour *= beer_lambert(m.attenuation, travelled);
+        }
+        colour
+    }
+
+    /// The point of `light` (number `index` in the scene) that shadow ray `ray` of `rays`
+    /// from `p` aims at: the centre of a point light, a stratified point of the disc facing
+    /// `p` for a spherical one (`grid`: the light's strata, see `Whitted::light_grids`).
+    fn light_sample(
+        &self,
+        light: &Light,
+        index: usize,
+        rays: (u32, u32),
+        grid: (u32, u32),
+        p: DVec3,
+        s: &mut Sample,
+    ) -> DVec3 {
+        if light.radius <= 0.0 {
+            return light.position;
+        }
+        let w = (light.position - p).normalize_or_zero();
+        if w == DVec3::ZERO {
+            return light.position;
+        }
+        let (u, v) = s.light_point(index, rays, grid);
+        let (a, b) = concentric_disc(u, v);
+        let (e1, e2) = basis(w);
+        light.position + light.radius * (a * e1 + b * e2)
+    }
+
+    /// The fraction of light (per channel) that reaches `p` along the unit direction `l`
+    /// from `dist` away, through any transmissive surfaces on the way.
+    fn transmittance(&self, p: DVec3, l: DVec3, eps: f64, dist: f64, s: &mut Sample) -> DVec3 {
+        let scene = self.scene;
+        let mut through = DVec3::ONE;
+        let mut origin = p;
+        let mut t_min = eps;
+        let mut remaining = dist;
+        for _ in 0..MAX_SHADOW_CROSSINGS {
+            s.count_ray();
+            let ray = Ray::new(origin, l);
+            let Some(hit) = scene.intersect(&ray, t_min, remaining) else {
+                return through;
+            };
+            let m = &scene.objects[hit.object].material;
+            if m.transmit <= 0.0 {
+                return DVec3::ZERO;
+            }
+            through *= m.transmit;
+            if hit.normal.dot(l) > 0.0 {
+                // Leaving the object: absorbed along the stretch inside.
+                through *= beer_lambert(m.attenuation, hit.t);
+            }
+            if through.max_element() <= 0.0 {
+                return DVec3::ZERO;
+            }
+            t_min = guard(hit.point, origin, hit.t);
+            origin = hit.point;
+            remaining -= hit.t;
+        }
+        DVec3::ZERO
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn snell_and_fresnel() {
+        let n = DVec3::Z;
+        let d = DVec3::new(1.0, 0.0, -1.0).normalize();
+        let (t, cos_t) = refract(d, n, 1.0 / 1.5).unwrap();
+        let sin_i = d.x;
+        let sin_t = t.x;
+        assert!((sin_i - 1.5 * sin_t).abs() < 1e-12);
+        assert!((cos_t + t.z).abs() < 1e-12);
+        // Leaving glass at 45° exceeds the critical angle (41.8°).
+        assert!(refract(d, n, 1.5).is_none());
+        // Normal incidence: ((n1 − n2)/(n1 + n2))².
+        assert!((fresnel(1.0, 1.0, 1.0 / 1.5) - 0.04).abs() < 1e-12);
+        assert_eq!(fresnel(0.3, 0.3, 1.0), 0.0);
+    }
+
+    #[test]
+    fn guard_scales_with_the_scene() {
+        let small = guard(DVec3::splat(1e-3), DVec3::splat(2e-3), 1e-3);
+        let big = guard(DVec3::splat(1e3), DVec3::splat(2e3), 1e3);
+        assert!((big / small - 1e6).abs() < 1e-3);
+        assert!(guard(DVec3::ZERO, DVec3::ZERO, 0.0) > 0.0);
+    }
+}
