@@ -1,6 +1,7 @@
 //! `kardia explore`.
 
 use crate::explore::{self, Options};
+use crate::pipeline::CancelToken;
 use clap::Args;
 use std::net::IpAddr;
 use std::path::PathBuf;
@@ -24,8 +25,9 @@ pub struct ExploreArgs {
     pub threads: Option<u32>,
 }
 
-/// Runs `kardia explore`; returns the exit code (0 after Ctrl-C, 1 on any error).
-pub fn run(args: ExploreArgs) -> i32 {
+/// Runs `kardia explore` until `interrupt` (Ctrl-C); returns the exit code (0 after
+/// Ctrl-C, 1 on any error).
+pub fn run(args: ExploreArgs, interrupt: &CancelToken) -> i32 {
     let mut options = Options {
         host: args.host,
         port: args.port,
@@ -57,12 +59,19 @@ pub fn run(args: ExploreArgs) -> i32 {
         );
     }
     let open = args.open;
-    let result = explore::run(options, |url| {
+    let interrupt = interrupt.clone();
+    let interrupted = async move {
+        while !interrupt.is_cancelled() {
+            tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+        }
+    };
+    let ready = |url: &str| {
         println!("kardia explore: {url}  (Ctrl-C stops)");
         if open {
             open_browser(url);
         }
-    });
+    };
+    let result = explore::run(options, ready, interrupted);
     match result {
         Ok(()) => {
             eprintln!("kardia explore: stopped");

@@ -42,6 +42,6 @@ pub fn main(interrupt: &CancelToken) -> i32 {
         Some(Command::Render(a)) => render::run(a, interrupt),
         Some(Command::Roots(a)) => roots::run(a),
         Some(Command::Probe(a)) => probe::run(a),
-        Some(Command::Explore(a)) => explore::run(a),
+        Some(Command::Explore(a)) => explore::run(a, interrupt),
     }
 }

@@ -77,7 +77,7 @@ pub struct Options {
     pub host: IpAddr,
     /// Port (0: any free port).
     pub port: u16,
-    /// Render threads per pass (0: one per core).
+    /// Render threads, shared by every page (0: one per core).
     pub threads: usize,
     /// Limits per client.
     pub limits: Limits,
@@ -107,6 +107,9 @@ pub enum ExploreError {
         /// The operating system's reason.
         reason: String,
     },
+    /// The render threads could not be started.
+    #[error(transparent)]
+    Pool(#[from] crate::pipeline::PoolError),
     /// The server failed while running.
     #[error("the server stopped: {0}")]
     Serve(String),
@@ -116,8 +119,12 @@ pub enum ExploreError {
 #[derive(Debug)]
 pub(crate) struct Shared {
     pub(crate) options: Options,
+    pub(crate) renderer: Arc<crate::pipeline::Renderer>,
     pub(crate) port: u16,
     pub(crate) clients: AtomicUsize,
+    pub(crate) renders: AtomicUsize,
+    /// Becomes `true` when the server stops: every session closes its page.
+    pub(crate) stopping: tokio::sync::watch::Receiver<bool>,
 }
 
 /// A bound explorer server, not yet serving.
@@ -125,6 +132,7 @@ pub(crate) struct Shared {
 pub struct Server {
     listener: tokio::net::TcpListener,
     shared: Arc<Shared>,
+    stop: tokio::sync::watch::Sender<bool>,
 }
 
 impl Server {
@@ -146,12 +154,18 @@ impl Server {
                 reason: e.to_string(),
             })?
             .port();
+        let renderer = Arc::new(crate::pipeline::Renderer::new(options.threads)?);
+        let (stop, stopping) = tokio::sync::watch::channel(false);
         Ok(Self {
             listener,
+            stop,
             shared: Arc::new(Shared {
+                stopping,
+                renderer,
                 options,
                 port,
                 clients: AtomicUsize::new(0),
+                renders: AtomicUsize::new(0),
             }),
         })
     }
@@ -174,23 +188,53 @@ impl Server {
         format!("http://{shown}:{}/", self.shared.port)
     }
 
-    /// Serves until `shutdown` completes; then stops accepting, cancels every render and
-    /// returns.
+    /// How many pages are connected and how many renders are running now.
+    pub fn monitor(&self) -> Monitor {
+        Monitor(self.shared.clone())
+    }
+
+    /// Serves until `shutdown` completes; then stops accepting, closes every page (cancelling
+    /// its renders) and returns.
     pub async fn serve(
         self,
         shutdown: impl Future<Output = ()> + Send + 'static,
     ) -> Result<(), ExploreError> {
         let app = router(self.shared);
+        let stop = self.stop;
         axum::serve(self.listener, app)
-            .with_graceful_shutdown(shutdown)
+            .with_graceful_shutdown(async move {
+                shutdown.await;
+                let _ = stop.send(true);
+            })
             .await
             .map_err(|e| ExploreError::Serve(e.to_string()))
     }
 }
 
-/// Runs the explorer until Ctrl-C: builds a runtime, binds, calls `ready(url)` once it
-/// listens, serves. Returns when interrupted (cleanly) or on failure.
-pub fn run(options: Options, ready: impl FnOnce(&str)) -> Result<(), ExploreError> {
+/// A view of a running server's load, for tests and monitoring.
+#[derive(Debug, Clone)]
+pub struct Monitor(Arc<Shared>);
+
+impl Monitor {
+    /// Pages connected now.
+    pub fn clients(&self) -> usize {
+        self.0.clients.load(Ordering::SeqCst)
+    }
+
+    /// Renders (view passes and saves) running now.
+    pub fn renders(&self) -> usize {
+        self.0.renders.load(Ordering::SeqCst)
+    }
+}
+
+/// Runs the explorer until `shutdown` completes (the CLI: Ctrl-C): builds a runtime, binds,
+/// calls `ready(url)` once it listens, serves, closes every page. Returns when stopped or on
+/// failure.
+pub fn run(
+    options: Options,
+    ready: impl FnOnce(&str),
+    shutdown: impl Future<Output = ()> + Send + 'static,
+) -> Result<(), ExploreError> {
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -199,11 +243,7 @@ pub fn run(options: Options, ready: impl FnOnce(&str)) -> Result<(), ExploreErro
     runtime.block_on(async move {
         let server = Server::bind(options).await?;
         ready(&server.url());
-        server
-            .serve(async {
-                let _ = tokio::signal::ctrl_c().await;
-            })
-            .await
+        server.serve(shutdown).await
     })
 }
 

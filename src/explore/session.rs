@@ -9,10 +9,12 @@ use super::render::{render_pass, share, CancelToken, PassRequest, SharedScene};
 use super::{gallery, Limits, Shared};
 use crate::camera::Camera;
 use crate::film::Image;
+use crate::pipeline::View;
 use crate::scene::{self, LoadOptions, Scene};
 use axum::extract::ws::{CloseFrame, Message, WebSocket};
 use futures_util::{SinkExt, StreamExt};
 use glam::Vec3;
+use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio::sync::{mpsc, watch};
@@ -72,13 +74,21 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
     let _ = out.send(Message::Text(hello.to_json().into())).await;
 
     let (jobs, job_rx) = watch::channel::<Option<ViewJob>>(None);
-    let threads = shared.options.threads;
-    let renderer = tokio::spawn(render_views(job_rx, out.clone(), limits.clone(), threads));
+    let renderer = tokio::spawn(render_views(job_rx, out.clone(), shared.clone()));
     let save_cancel = CancelToken::new();
     let mut save_task: Option<tokio::task::JoinHandle<()>> = None;
     let mut rate = RateLimit::new(limits.max_messages_per_second);
 
-    while let Some(received) = stream.next().await {
+    let mut stopping = shared.stopping.clone();
+    loop {
+        let received = tokio::select! {
+            received = stream.next() => received,
+            _ = stopping.changed() => {
+                let _ = out.send(close(1001, "the server is stopping")).await;
+                break;
+            }
+        };
+        let Some(received) = received else { break };
         let text = match received {
             Ok(Message::Text(text)) => text,
             Ok(Message::Binary(_)) => {
@@ -205,7 +215,7 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                     seq,
                     scene,
                     (width, height, spp),
-                    threads,
+                    shared.clone(),
                     save_cancel.clone(),
                     out.clone(),
                 )));
@@ -439,9 +449,9 @@ fn plan(width: u32, height: u32, max_spp: u32) -> Vec<Pass> {
 async fn render_views(
     mut jobs: watch::Receiver<Option<ViewJob>>,
     out: Outbox,
-    limits: Limits,
-    threads: usize,
+    shared: Arc<Shared>,
 ) {
+    let limits = &shared.options.limits;
     let mut cache: Option<SceneCache> = None;
     loop {
         let job = jobs.borrow_and_update().clone();
@@ -484,11 +494,12 @@ async fn render_views(
                 camera: camera.clone(),
                 spp: pass.spp,
                 seed: pass.seed,
-                threads,
+                view: View::Shaded,
             };
-            let (scene_ref, cancel_ref) = (scene.clone(), cancel.clone());
-            let mut task =
-                tokio::task::spawn_blocking(move || render_pass(&scene_ref, &request, &cancel_ref));
+            let (scene_ref, cancel_ref, busy) = (scene.clone(), cancel.clone(), Busy::new(&shared));
+            let mut task = tokio::task::spawn_blocking(move || {
+                render_pass(&busy.0.renderer, &scene_ref, &request, &cancel_ref)
+            });
             let result = tokio::select! {
                 result = &mut task => result,
                 next = jobs.changed() => {
@@ -561,6 +572,22 @@ async fn wait_for_next(jobs: &mut watch::Receiver<Option<ViewJob>>) -> bool {
     }
 }
 
+/// Counts a render as running for as long as it lives (moved into the render's thread).
+struct Busy(Arc<Shared>);
+
+impl Busy {
+    fn new(shared: &Arc<Shared>) -> Self {
+        shared.renders.fetch_add(1, Ordering::SeqCst);
+        Self(shared.clone())
+    }
+}
+
+impl Drop for Busy {
+    fn drop(&mut self) {
+        self.0.renders.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
 /// The image as RGBA8 (sRGB, opaque).
 fn rgba(image: &Image) -> Vec<u8> {
     let rgb = image.to_srgb8();
@@ -577,11 +604,13 @@ async fn save(
     seq: u64,
     text: String,
     (width, height, spp): (u32, u32, u32),
-    threads: usize,
+    shared: Arc<Shared>,
     cancel: CancelToken,
     out: Outbox,
 ) {
+    let busy = Busy::new(&shared);
     let work = tokio::task::spawn_blocking(move || -> Result<(Vec<u8>, f64), String> {
+        let renderer = &busy.0.renderer;
         let scene: Scene = scene::parse(&text, "explore.scene", &LoadOptions::default())
             .map_err(|e| e.to_string())?;
         let camera = scene.camera.clone();
@@ -592,10 +621,13 @@ async fn save(
             camera,
             spp,
             seed: 0,
-            threads,
+            view: View::Shaded,
         };
-        let result = render_pass(&shared, &request, &cancel).map_err(|e| e.to_string())?;
-        let png = encode_png(&result.image).map_err(|e| format!("cannot encode the PNG: {e}"))?;
+        let result =
+            render_pass(renderer, &shared, &request, &cancel).map_err(|e| e.to_string())?;
+        let mut png = vec![];
+        crate::film::encode_png(&result.image, &mut png)
+            .map_err(|e| format!("cannot encode the PNG: {e}"))?;
         Ok((png, result.elapsed.as_secs_f64() * 1e3))
     })
     .await;
@@ -617,19 +649,6 @@ async fn save(
         Err(e) => error_message(Some(seq), format!("save failed: {e}")),
     };
     let _ = out.send(message).await;
-}
-
-/// The image as an 8-bit sRGB PNG file.
-fn encode_png(image: &Image) -> Result<Vec<u8>, png::EncodingError> {
-    let mut bytes = vec![];
-    {
-        let mut encoder = png::Encoder::new(&mut bytes, image.width, image.height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        let mut writer = encoder.write_header()?;
-        writer.write_image_data(&image.to_srgb8())?;
-    }
-    Ok(bytes)
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@ mod heart_support;
 mod render_support;
 
 mod cli_render;
+mod explore;
 mod heart_geometry;
 mod heart_hard_cases;
 mod heart_solvers;
