@@ -5,6 +5,7 @@ mod render_support;
 
 mod cli_render;
 mod explore;
+mod explore_browser;
 mod heart_geometry;
 mod heart_hard_cases;
 mod heart_solvers;

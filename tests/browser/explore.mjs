@@ -1,0 +1,135 @@
+// Browser tests of `kardia explore` in Debian's chromium, driven by playwright-core (which
+// downloads no browser). Usage: node tests/browser/explore.mjs URL
+// Run by tests/it/explore_browser.rs, which starts the server on 127.0.0.1:0.
+import { chromium } from "playwright-core";
+import { mkdtempSync, rmSync } from "node:fs";
+import { tmpdir } from "node:os";
+import { join } from "node:path";
+import assert from "node:assert/strict";
+
+const url = process.argv[2];
+if (!url) throw new Error("usage: node tests/browser/explore.mjs URL");
+
+const profile = mkdtempSync(join(tmpdir(), "kardia-chromium-"));
+const context = await chromium.launchPersistentContext(profile, {
+  executablePath: process.env.CHROMIUM || "/usr/bin/chromium",
+  headless: true,
+  args: [
+    "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+  ],
+  viewport: { width: 1000, height: 640 },
+});
+const page = context.pages()[0] || (await context.newPage());
+const pageErrors = [];
+page.on("pageerror", (e) => pageErrors.push(e.message));
+
+let passed = 0, failed = 0;
+async function check(name, body) {
+  const start = Date.now();
+  try {
+    await body();
+    passed += 1;
+    console.log(`ok - ${name} (${Date.now() - start} ms)`);
+  } catch (e) {
+    failed += 1;
+    console.log(`not ok - ${name}: ${e.stack || e}`);
+    await page.screenshot({ path: join(tmpdir(), `kardia-failed-${passed + failed}.png`) }).catch(() => {});
+  }
+}
+
+// The canvas's pixels summarised: mean colour, fraction of "red" pixels, and a sample grid.
+const canvasStats = () => page.evaluate(() => {
+  const c = document.getElementById("view");
+  const data = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+  let r = 0, g = 0, b = 0, red = 0;
+  const n = data.length / 4;
+  for (let i = 0; i < data.length; i += 4) {
+    r += data[i]; g += data[i + 1]; b += data[i + 2];
+    if (data[i] > 120 && data[i] > 2 * data[i + 1] && data[i] > 2 * data[i + 2]) red += 1;
+  }
+  const grid = [];
+  for (let y = 0; y < 16; y++) for (let x = 0; x < 16; x++) {
+    const i = (Math.floor(((y + 0.5) * c.height) / 16) * c.width + Math.floor(((x + 0.5) * c.width) / 16)) * 4;
+    grid.push(data[i], data[i + 1], data[i + 2]);
+  }
+  return { width: c.width, height: c.height, mean: [r / n, g / n, b / n], red: red / n, grid };
+});
+const difference = (a, b) => a.grid.reduce((s, v, i) => s + Math.abs(v - b.grid[i]), 0) / a.grid.length;
+
+// Waits for a full-size frame of a request newer than `afterSeq`.
+async function fullFrameAfter(afterSeq, timeout = 60000) {
+  await page.waitForFunction((after) => window.kardia.frames.some(
+    (f) => f.seq > after && f.width === f.view_width && f.height === f.view_height), afterSeq, { timeout });
+  return page.evaluate(() => window.kardia.sent());
+}
+const sentSeq = () => page.evaluate(() => window.kardia.sent());
+
+await check("the page loads and the heart appears", async () => {
+  await page.goto(url);
+  await fullFrameAfter(0);
+  const stats = await canvasStats();
+  assert.ok(stats.red > 0.08, `red fraction ${stats.red}`);
+  const status = await page.textContent("#status");
+  assert.match(status, /\d+×\d+ · \d+ spp · \d+ ms\/pass · [\d.]+ M rays\/s/);
+});
+
+await check("a drag changes the view", async () => {
+  const before = await canvasStats();
+  const seq = await sentSeq();
+  const box = await page.locator("#view").boundingBox();
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await page.mouse.down();
+  for (let i = 1; i <= 10; i++) await page.mouse.move(box.x + box.width / 2 + 15 * i, box.y + box.height / 2 + 3 * i);
+  await page.mouse.up();
+  await fullFrameAfter(seq);
+  const last = await sentSeq();
+  await fullFrameAfter(last - 1);
+  const after = await canvasStats();
+  assert.ok(difference(before, after) > 8, `mean difference ${difference(before, after)}`);
+  const text = await page.inputValue("#scene-text");
+  assert.doesNotMatch(text.split("\n").find((l) => /^CAMERA/i.test(l)), /\(6, 1\.2, 0\.9\)/, "the CAMERA line follows the view");
+});
+
+await check("a bad equation shows its error and position, a good one recovers", async () => {
+  await page.click("#mode-equation");
+  await page.click('#gallery button[data-preset="sphere16"]');
+  await fullFrameAfter((await sentSeq()) - 1);
+  const good = await canvasStats();
+  await page.fill("#equation", "x^2 + y^2 + * z^2 - 1");
+  await page.waitForSelector("#problem:not([hidden])");
+  const problem = await page.evaluate(() => window.kardia.lastProblem);
+  assert.match(problem.message, /^explore\.scene:8:\d+: invalid equation: expected a number, x, y, z or '\(' here, not '\*'/);
+  assert.equal(await page.textContent("#equation-marked mark"), "*");
+  assert.ok((await page.textContent("#problem")).includes("╰── here"));
+  const kept = await canvasStats();
+  assert.ok(difference(good, kept) < 1, "the last good image stays");
+  const seq = await sentSeq();
+  await page.fill("#equation", "x^2 + y^2 + z^2 - 1");
+  await fullFrameAfter(seq - 1);
+  assert.ok(await page.isHidden("#problem"));
+  assert.ok(await page.isHidden("#equation-marked"));
+});
+
+await check("a preset slider changes the image", async () => {
+  await page.click('#gallery button[data-preset="torus"]');
+  await fullFrameAfter((await sentSeq()) - 1);
+  await page.waitForFunction(() => document.getElementById("equation").value.includes("4*1^2"));
+  const before = await canvasStats();
+  await page.evaluate(() => {
+    const r = document.getElementById("param-1");
+    r.value = "0.8";
+    r.dispatchEvent(new Event("input", { bubbles: true }));
+  });
+  const seq = await sentSeq();
+  await fullFrameAfter(seq - 1);
+  const after = await canvasStats();
+  assert.ok(difference(before, after) > 8, `mean difference ${difference(before, after)}`);
+  await page.waitForFunction(() => document.getElementById("equation").value.includes("0.8^2"));
+});
+
+assert.deepEqual(pageErrors, [], "no script errors on the page");
+await context.close();
+rmSync(profile, { recursive: true, force: true });
+console.log(`${passed} passed, ${failed} failed`);
+process.exit(failed === 0 && pageErrors.length === 0 ? 0 : 1);
