@@ -4,7 +4,12 @@
 # times, ratios, rays per second and peak memory; then checks the targets of issue 5 and that
 # both renderers cover the same pixels. Usage:
 #
-#   bench/compare.sh [RUNS] [SIZE]        (defaults: 5 runs, 1600×1600)
+#   bench/compare.sh [RUNS] [SIZE] [typed]   (defaults: 5 runs, 1600×1600)
+#
+# With `typed` as third argument it compares the typed surfaces instead (torus, Barth's
+# sextic, Chmutov's octic, Taubin's heart, each clipped to a ball): kardia's IMPLICIT against
+# POV-Ray's `polynomial … sturm` with the same monomials (from kardia's own expansion, by the
+# povpoly example), clipped_by the same sphere, one thread, same camera and light.
 #
 # Installs what it needs with apt-get (povray, GNU time) and builds the release binaries.
 # Each configuration runs RUNS times, interleaved with the others so that machine noise hits
@@ -26,7 +31,7 @@ apt_install() {
 command -v povray >/dev/null 2>&1 || apt_install povray
 [ -x /usr/bin/time ] || apt_install time
 
-cargo build --release --quiet --bin kardia --example imgcompare
+cargo build --release --quiet --bin kardia --example imgcompare --example povpoly
 KARDIA=target/release/kardia
 IMGCOMPARE=target/release/examples/imgcompare
 if [ -n "${KEEP:-}" ]; then
@@ -70,6 +75,112 @@ timed() {
   echo "$wall $peak $(rays_of "$name" "$log") $(awk -v u="$user" -v s="$sys" 'BEGIN {print u + s}')" >>"$work/$name.times"
 }
 
+
+median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
+col() { awk -v c="$2" '{print $c}' "$work/$1.times" | median; }
+
+# The typed surfaces: name | preset and parameters | clip radius | uniform scale | camera.
+TYPED_SURFACES=(
+  "torus|torus 1 0.3|1.4|1|(4.2, 0.5, 2.6)"
+  "barth_sextic|barth_sextic|2|0.6|(4.5, 1.2, 0.9)"
+  "chmutov8|chmutov 8|1.8|0.7|(4.5, 1.2, 0.9)"
+  "taubin_heart|taubin_heart|1.5|1|(4.5, 1.2, 0.6)"
+)
+
+# Writes $work/NAME.scene and $work/NAME.pov for one TYPED_SURFACES entry: the same picture
+# (kardia's (x, y, z) is POV-Ray's <x, z, y>), one point light with shadows, black background.
+typed_files() { # ENTRY
+  local name preset bound scale cam
+  IFS='|' read -r name preset bound scale cam <<<"$1"
+  local c=${cam//[() ]/}
+  local cx cy cz
+  IFS=, read -r cx cy cz <<<"$c"
+  cat >"$work/$name.scene" <<SCENE
+SIZE $SIZE $SIZE
+CAMERA $cam (0, 0, 0) (0, 0, 1) 35
+BACKGROUND (0, 0, 0)
+AMBIENT (0.1, 0.1, 0.1)
+LIGHT (5, -3, 4) (1, 1, 1)
+IMPLICIT $preset (0, 0, 0) ($scale, 0, 0) (0, $scale, 0) (0, 0, $scale) (0.8, 0.1, 0.1) SPECULAR 0.4 40 BOUND $bound
+SCENE
+  # shellcheck disable=SC2086
+  local poly
+  poly=$("$POVPOLY" $preset)
+  cat >"$work/$name.pov" <<POV
+#version 3.7;
+global_settings { assumed_gamma 1.0 ambient_light rgb 1 }
+background { rgb 0 }
+camera {
+  perspective
+  location <$cx, $cz, $cy>
+  look_at <0, 0, 0>
+  sky <0, 1, 0>
+  right x * image_width / image_height
+  angle 35
+}
+light_source { <5, 4, -3> color rgb 1 }
+polynomial {
+  $poly
+  sturm
+  clipped_by { sphere { <0, 0, 0>, $bound } }
+  bounded_by { sphere { <0, 0, 0>, $bound } }
+  texture {
+    pigment { rgb <0.8, 0.1, 0.1> }
+    finish { ambient 0.1 diffuse 1 phong 0.4 phong_size 40 }
+  }
+  scale $scale
+}
+POV
+}
+
+typed_main() {
+  POVPOLY=target/release/examples/povpoly
+  local entry name
+  for entry in "${TYPED_SURFACES[@]}"; do typed_files "$entry"; done
+  echo "$(povray --version 2>&1 | grep -m1 '^POV-Ray') | kardia $(git describe --always --dirty 2>/dev/null || echo '?')" >&2
+  for i in $(seq "$RUNS"); do
+    echo "run $i of $RUNS…" >&2
+    for entry in "${TYPED_SURFACES[@]}"; do
+      name=${entry%%|*}
+      cmd=(povray +I"$work/$name.pov" +O"$work/pov-$name.png" +W"$SIZE" +H"$SIZE" +WT1 -D -V +FN)
+      timed "pov-$name"
+      cmd=("$KARDIA" render "$work/$name.scene" -o "$work/kardia-$name.png" --spp 1 --threads 1 --seed 0)
+      timed "kardia-$name"
+    done
+  done
+  printf '\n%s×%s typed surfaces clipped to a ball, one light with shadows, 1 sample per pixel,\n' "$SIZE" "$SIZE"
+  printf 'one thread, %s runs each, medians of whole-process wall time, CPU time, peak memory\n\n' "$RUNS"
+  printf '| surface | POV-Ray wall (s) | kardia wall (s) | POV-Ray time / kardia | POV-Ray CPU (s) | kardia CPU (s) | peak memory POV-Ray / kardia (MiB) | same framing |\n'
+  printf '|---|---|---|---|---|---|---|---|\n'
+  local status=0
+  for entry in "${TYPED_SURFACES[@]}"; do
+    name=${entry%%|*}
+    "$KARDIA" render "$work/$name.scene" -o "$work/kardia-$name-seed1.png" --spp 1 --seed 1 --quiet
+    local noise out differ pov_area k_area framing
+    noise=$("$IMGCOMPARE" "$work/kardia-$name.png" "$work/kardia-$name-seed1.png" | sed -n 's/^silhouettes differ on \([0-9]*\) pixels.*/\1/p')
+    out=$("$IMGCOMPARE" "$work/pov-$name.png" "$work/kardia-$name.png")
+    pov_area=$(echo "$out" | sed -n '1s/.*: \([0-9]*\) object pixels.*/\1/p')
+    k_area=$(echo "$out" | sed -n '2s/.*: \([0-9]*\) object pixels.*/\1/p')
+    differ=$(echo "$out" | sed -n 's/^silhouettes differ on \([0-9]*\) pixels.*/\1/p')
+    if awk -v d="$differ" -v n="$noise" -v a="$pov_area" -v b="$k_area" \
+      'BEGIN {e = (a > b) ? a - b : b - a; exit !(a > 0 && d <= n && e <= 0.002 * a)}'; then
+      framing="PASS ($differ differ, jitter noise $noise)"
+    else
+      framing="FAIL ($differ differ, jitter noise $noise; areas $pov_area, $k_area)"
+      status=1
+    fi
+    awk -v l="$name" -v pw="$(col "pov-$name" 1)" -v kw="$(col "kardia-$name" 1)" \
+      -v pc="$(col "pov-$name" 4)" -v kc="$(col "kardia-$name" 4)" \
+      -v pm="$(col "pov-$name" 2)" -v km="$(col "kardia-$name" 2)" -v f="$framing" \
+      'BEGIN {printf "| %s | %.2f | %.2f | %.2f× | %.2f | %.2f | %.1f / %.1f | %s |\n", l, pw, kw, pw / kw, pc, kc, pm / 1024, km / 1024, f}'
+  done
+  echo
+  echo "Target (issue 13): each typed surface ≥ 15× POV-Ray on one thread (reported, not enforced)."
+  return $status
+}
+
+[ "${3:-}" = typed ] && { typed_main; exit $?; }
+
 SOLVERS=$("$KARDIA" render --help | sed -n 's/.*\[default: \([a-z]*\)\].*possible values: \([a-z, ]*\)\].*/\1 \2/p' | head -n 1 | tr -d ',')
 DEFAULT=${SOLVERS%% *}
 SOLVERS=$(echo "$SOLVERS" | tr ' ' '\n' | awk 'NF && !seen[$0]++' | tr '\n' ' ')
@@ -91,8 +202,6 @@ for i in $(seq "$RUNS"); do
   done
 done
 
-median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
-col() { awk -v c="$2" '{print $c}' "$work/$1.times" | median; }
 
 printf '\n%s×%s heart with shadows, 1 sample per pixel, %s runs each, medians of whole-process\n' "$SIZE" "$SIZE" "$RUNS"
 printf 'wall time (GNU time %%e), CPU time (%%U + %%S) and peak resident memory (%%M)\n\n'

@@ -1,8 +1,14 @@
-//! `first_root` on the shared heart ray corpus (`kardia::roots::heart_corpus`: camera rays
-//! through an axis-aligned heart, each restricted to its bounding box, hits and misses), for
-//! every strategy. The throughput line gives calls per second: ns per call = 1e9 / that.
+//! `first_root` on two fixed corpora, for every strategy: the heart's
+//! (`kardia::shapes::heart::heart_corpus`: camera rays through an axis-aligned heart, each
+//! restricted to its bounding box, hits and misses) and the typed surfaces'
+//! (`kardia::shapes::implicit::typed_corpus`: the queries the generic implicit path puts to
+//! the solver for camera rays through a torus, Barth's sextic, Chmutov's octic and a sphere
+//! written with degree 16), one benchmark per degree. The throughput line gives calls per
+//! second: ns per call = 1e9 / that.
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use kardia::roots::{heart_corpus, Solver};
+use kardia::roots::Solver;
+use kardia::shapes::heart::heart_corpus;
+use kardia::shapes::implicit::{typed_corpus, TYPED_SURFACES};
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
@@ -24,6 +30,30 @@ fn bench(c: &mut Criterion) {
                 hits
             })
         });
+    }
+    group.finish();
+
+    let typed = typed_corpus();
+    let mut group = c.benchmark_group("first_root_typed");
+    for (surface, degree) in TYPED_SURFACES {
+        let rays: Vec<_> = typed.iter().filter(|r| r.surface == surface).collect();
+        group.throughput(Throughput::Elements(rays.len() as u64));
+        for &(solver, name) in Solver::ALL {
+            group.bench_function(format!("degree {degree}/{name}"), |b| {
+                b.iter(|| {
+                    let mut hits = 0usize;
+                    for r in &rays {
+                        if solver
+                            .first_root(black_box(&r.coeffs), r.lo, r.hi)
+                            .is_some()
+                        {
+                            hits += 1;
+                        }
+                    }
+                    hits
+                })
+            });
+        }
     }
     group.finish();
 }

@@ -61,18 +61,67 @@ impl Material {
 
     /// The diffuse colour at world point `p` (the checker pattern applied, if any). Cells
     /// are `[k·size, (k+1)·size)` per axis, shifted by [`Material::CHECKER_OFFSET`] cells.
+    /// Any `p` and `size` give one of the two colours: cell indices beyond 2⁵³ (where every
+    /// f64 is an even whole number) count as even, and so do non-finite ones.
     pub fn diffuse_at(&self, p: DVec3) -> DVec3 {
         match self.checker {
             None => self.diffuse,
             Some((other, size)) => {
                 let c = (p / size + Self::CHECKER_OFFSET).floor();
-                let parity = (c.x as i64 + c.y as i64 + c.z as i64).rem_euclid(2);
-                if parity == 0 {
+                // The parity of each index in floating point: exact for every whole f64, with
+                // no conversion to an integer that could saturate and overflow when summed.
+                let odd = |k: f64| k.is_finite() && k.rem_euclid(2.0) == 1.0;
+                let odd_cells = [c.x, c.y, c.z].into_iter().filter(|&k| odd(k)).count();
+                if odd_cells % 2 == 0 {
                     self.diffuse
                 } else {
                     other
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn checker(size: f64) -> Material {
+        Material {
+            checker: Some((DVec3::ONE, size)),
+            ..Material::diffuse(DVec3::ZERO)
+        }
+    }
+
+    #[test]
+    fn checker_cells_alternate() {
+        let m = checker(0.5);
+        assert_eq!(m.diffuse_at(DVec3::new(0.1, 0.1, 0.1)), DVec3::ZERO);
+        assert_eq!(m.diffuse_at(DVec3::new(0.6, 0.1, 0.1)), DVec3::ONE);
+        assert_eq!(m.diffuse_at(DVec3::new(0.6, 0.6, 0.1)), DVec3::ZERO);
+        assert_eq!(m.diffuse_at(DVec3::new(-0.4, 0.1, 0.1)), DVec3::ONE);
+        assert_eq!(m.diffuse_at(DVec3::new(-0.4, -0.4, -0.4)), DVec3::ONE);
+    }
+
+    /// The fuzzer's find: a cell size of 11e-308 made the cell index saturate at i64::MAX
+    /// and the parity sum overflow (a panic with overflow checks, a wrong colour without).
+    #[test]
+    fn huge_cell_indices_neither_overflow_nor_wrap() {
+        let m = checker(11e-308);
+        for p in [
+            DVec3::new(3.0, -0.5, -1.0),
+            DVec3::new(1e300, 1e300, 1e300),
+            DVec3::splat(f64::MAX),
+            DVec3::new(f64::INFINITY, f64::NAN, 0.0),
+        ] {
+            let c = m.diffuse_at(p);
+            assert!(c == DVec3::ZERO || c == DVec3::ONE, "{p}: {c}");
+        }
+        // Indices beyond 2^53 are even whole numbers: only the small one decides.
+        let m = checker(1.0);
+        let big = 2f64.powi(60);
+        assert_eq!(m.diffuse_at(DVec3::new(big, big, 0.5)), DVec3::ZERO);
+        assert_eq!(m.diffuse_at(DVec3::new(big, big, 1.5)), DVec3::ONE);
+        assert_eq!(m.diffuse_at(DVec3::new(5e-324, 0.5, 0.5)), DVec3::ZERO);
     }
 }

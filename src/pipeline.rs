@@ -27,7 +27,9 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// What to render, beyond the scene. `Default` is the scene as written: its SIZE and CAMERA,
-/// 4 samples a pixel, seed 0, depth 8, the whole image, shaded.
+/// 4 samples a pixel, seed 0, depth 8, the whole image, shaded. (The root solver is not here:
+/// it is chosen when the scene is loaded, [`crate::scene::LoadOptions::solver`], because each
+/// surface is built with it.)
 #[derive(Debug, Clone, PartialEq)]
 pub struct RenderRequest {
     /// Width of the full image in pixels (1 ..= [`Scene::MAX_SIDE`]); `None`: the scene's, or

@@ -4,10 +4,14 @@
 //! spaces, tabs or commas; `d` need not be unit length). Output, one line per input line:
 //! `{"hit":true,"t":…,"point":[x,y,z],"normal":[x,y,z],"object":"HEART","line":N}` (t in units
 //! of the given d; point and unit outward normal in world space; line the scene-file line of the
-//! object), or `{"hit":false}`, or `{"error":"…"}` for a line that is not a ray.
+//! object), or `{"hit":false}`, or `{"error":"…"}` for a line that is not a ray: not UTF-8,
+//! not six numbers, a number outside the scene language's coordinate range (±1e6, see
+//! [`crate::scene::limits`]), a zero or too short direction, or a line longer than
+//! [`MAX_LINE`] bytes. Every input line gets exactly one answer, whatever it holds.
 
 use crate::geometry::{DVec3, Ray};
 use crate::roots::Solver;
+use crate::scene::limits::{self, show};
 use crate::scene::{self, LoadOptions, Scene};
 use clap::Args;
 use std::io::{self, BufRead, BufReader, Write};
@@ -91,6 +95,10 @@ pub fn run(args: ProbeArgs) -> i32 {
     }
 }
 
+/// Longest input line answered as a ray, in bytes without its line ending; a longer line
+/// is answered with an error (and not kept in memory).
+pub const MAX_LINE: usize = 4096;
+
 /// Answers every line of `input` with one JSON line on `out`; output is flushed whenever the
 /// input has no more data buffered, so an interactive caller gets each answer at once.
 pub fn probe_stream<R: io::Read>(
@@ -101,18 +109,20 @@ pub fn probe_stream<R: io::Read>(
     let mut out = io::BufWriter::new(out);
     let mut raw = Vec::new();
     let mut number = 0usize;
-    loop {
-        raw.clear();
-        if input.read_until(b'\n', &mut raw)? == 0 {
-            break;
-        }
+    while let Some(too_long) = read_line_capped(&mut input, &mut raw, MAX_LINE)? {
         number += 1;
-        let answer = match std::str::from_utf8(&raw) {
-            Ok(text) => match parse_ray(text) {
-                Ok(ray) => hit_json(scene, &ray),
-                Err(why) => error_json(&format!("line {number}: {why}")),
-            },
-            Err(_) => error_json(&format!("line {number}: not valid UTF-8 text")),
+        let answer = if too_long {
+            error_json(&format!(
+                "line {number}: longer than {MAX_LINE} bytes, so not a ray"
+            ))
+        } else {
+            match std::str::from_utf8(&raw) {
+                Ok(text) => match parse_ray(text) {
+                    Ok(ray) => hit_json(scene, &ray),
+                    Err(why) => error_json(&format!("line {number}: {why}")),
+                },
+                Err(_) => error_json(&format!("line {number}: not valid UTF-8 text")),
+            }
         };
         writeln!(out, "{answer}")?;
         if input.buffer().is_empty() {
@@ -120,6 +130,44 @@ pub fn probe_stream<R: io::Read>(
         }
     }
     out.flush()
+}
+
+/// Reads one line (up to and including `\n`, or to the end of the input) into `line`,
+/// keeping at most `cap` bytes before the `\n`: `None` at the end of the input, else whether
+/// the line was longer (then `line` is empty and the rest of it was skipped).
+fn read_line_capped<R: BufRead>(
+    input: &mut R,
+    line: &mut Vec<u8>,
+    cap: usize,
+) -> io::Result<Option<bool>> {
+    line.clear();
+    let mut read_any = false;
+    let mut too_long = false;
+    loop {
+        let available = match input.fill_buf() {
+            Ok(b) => b,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if available.is_empty() {
+            return Ok(read_any.then_some(too_long));
+        }
+        read_any = true;
+        let newline = available.iter().position(|&b| b == b'\n');
+        let chunk = &available[..newline.map_or(available.len(), |i| i + 1)];
+        let content = chunk.len() - usize::from(newline.is_some());
+        if !too_long && line.len() + content <= cap {
+            line.extend_from_slice(chunk);
+        } else {
+            too_long = true;
+            line.clear();
+        }
+        let used = chunk.len();
+        input.consume(used);
+        if newline.is_some() {
+            return Ok(Some(too_long));
+        }
+    }
 }
 
 /// Parses `ox oy oz dx dy dz` (whitespace- or comma-separated finite numbers, non-zero
@@ -138,11 +186,18 @@ pub fn parse_ray(line: &str) -> Result<Ray, String> {
     }
     let mut v = [0.0; 6];
     for (slot, field) in v.iter_mut().zip(&fields) {
+        let shown = shorten(field);
         let x: f64 = field
             .parse()
-            .map_err(|_| format!("'{field}' is not a number"))?;
+            .map_err(|_| format!("'{shown}' is not a number"))?;
         if !x.is_finite() {
-            return Err(format!("'{field}' is not a finite number"));
+            return Err(format!("'{shown}' is not a finite number"));
+        }
+        if !limits::COORDINATE.contains(x) {
+            return Err(format!(
+                "'{shown}' is outside the valid range of a coordinate, {}",
+                limits::COORDINATE
+            ));
         }
         *slot = x;
     }
@@ -150,6 +205,13 @@ pub fn parse_ray(line: &str) -> Result<Ray, String> {
     let dir = DVec3::new(v[3], v[4], v[5]);
     if dir == DVec3::ZERO {
         return Err("the direction (dx, dy, dz) must not be zero".into());
+    }
+    if !limits::DIRECTION_LENGTH.contains(dir.length()) {
+        return Err(format!(
+            "the direction (dx, dy, dz) is too short: its length must be {}, not {}",
+            limits::DIRECTION_LENGTH,
+            show(dir.length())
+        ));
     }
     Ok(Ray::new(origin, dir))
 }
@@ -194,6 +256,14 @@ fn json_vec(v: DVec3) -> String {
         json_number(v.y),
         json_number(v.z)
     )
+}
+
+/// At most 30 characters of `field`, with `…` when cut.
+fn shorten(field: &str) -> String {
+    match field.char_indices().nth(30) {
+        Some((i, _)) => format!("{}…", &field[..i]),
+        None => field.to_string(),
+    }
 }
 
 /// A JSON string literal.
@@ -335,6 +405,51 @@ mod tests {
         // The front of the heart at Y = 0, Z = 0.1 is at X ≈ 0.70.
         assert!((t(lines[0]) - 5.3).abs() < 0.02, "{}", lines[0]);
         assert!((t(lines[0]) - 2.0 * t(lines[5])).abs() < 1e-12);
+    }
+
+    #[test]
+    fn lines_are_capped_at_max_line_bytes() {
+        let mut input = vec![b'1'; MAX_LINE];
+        input.extend_from_slice(b"\r\n");
+        input.extend_from_slice(&vec![b'2'; MAX_LINE + 1]);
+        input.extend_from_slice(b"\nend");
+        let mut reader = BufReader::with_capacity(64, &input[..]);
+        let mut line = Vec::new();
+        // The `\r` counts as content: MAX_LINE + 1 bytes before the `\n`.
+        assert_eq!(
+            read_line_capped(&mut reader, &mut line, MAX_LINE + 1).unwrap(),
+            Some(false)
+        );
+        assert_eq!(line.len(), MAX_LINE + 2);
+        assert_eq!(
+            read_line_capped(&mut reader, &mut line, MAX_LINE).unwrap(),
+            Some(true)
+        );
+        assert!(line.is_empty());
+        assert_eq!(
+            read_line_capped(&mut reader, &mut line, MAX_LINE).unwrap(),
+            Some(false)
+        );
+        assert_eq!(line, b"end");
+        assert_eq!(
+            read_line_capped(&mut reader, &mut line, MAX_LINE).unwrap(),
+            None
+        );
+    }
+
+    #[test]
+    fn rays_outside_the_coordinate_range_are_refused() {
+        assert!(parse_ray("1e6 -1e6 0 1e-6 0 0").is_ok());
+        let e = parse_ray("1000000.0000000001 0 0 1 0 0").unwrap_err();
+        assert!(
+            e.contains("outside the valid range of a coordinate, -1e6 to 1e6"),
+            "{e}"
+        );
+        let e = parse_ray("0 0 0 1e-7 0 0").unwrap_err();
+        assert!(e.contains("too short"), "{e}");
+        let long = "9".repeat(500);
+        let e = parse_ray(&format!("{long} 0 0 1 0 0")).unwrap_err();
+        assert!(e.len() < 120, "{e}");
     }
 
     #[test]

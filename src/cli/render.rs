@@ -1,7 +1,9 @@
 //! `kardia render`: arguments → [`crate::pipeline`] → an image file, and a summary line.
 
 use crate::film::{self, AtomicFile, ImageFormat};
-use crate::pipeline::{CancelToken, Control, Region, RenderError, RenderRequest, Renderer, View};
+use crate::pipeline::{
+    CancelToken, Control, Region, RenderError, RenderRequest, Rendered, Renderer, View,
+};
 use crate::roots::Solver;
 use crate::scene::{self, LoadOptions, Scene};
 use clap::builder::{PossibleValuesParser, TypedValueParser};
@@ -161,6 +163,7 @@ fn fail(err: impl miette::Diagnostic + Send + Sync + 'static) -> Failure {
     Failure::Reported
 }
 
+/// `kardia render` itself: check the output, load, render into an atomic file, commit, print.
 fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
     // Everything that can fail before rendering is checked first.
     let mut format = film::check_output_path(&args.output).map_err(fail)?;
@@ -204,26 +207,12 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
     };
     let control = Control::new(interrupt.clone(), |p| bar.inc(p.finished));
     let mut file = AtomicFile::create(&args.output).map_err(fail)?;
-    let rendered = if format == ImageFormat::Png {
-        // Rows are compressed while the rest of the image renders.
-        let (rendered, written) =
-            film::encode_png_streaming(&mut file, region.width, region.height, |sink| {
-                renderer.render_in_bands(&scene, &request, &control, &|row, rows| {
-                    sink.rows(row, rows)
-                })
-            });
-        // A cancelled render leaves the PNG unfinished: say so, not what the encoder saw.
-        let rendered = rendered.map_err(|e| render_failure(e, interrupt))?;
-        written.map_err(fail)?;
-        rendered
-    } else {
-        let rendered = renderer
-            .render(&scene, &request, &control)
-            .map_err(|e| render_failure(e, interrupt))?;
-        film::encode(&rendered.image, format, &mut file).map_err(fail)?;
-        rendered
-    };
+    let rendered = render_into(&renderer, &scene, &request, &control, format, &mut file);
     bar.finish_and_clear();
+    let rendered = rendered.map_err(|e| match e {
+        Failure::Reported if interrupt.is_cancelled() => Failure::Interrupted,
+        other => other,
+    })?;
     if interrupt.is_cancelled() {
         return Err(Failure::Interrupted); // `file` is dropped: its temporary file goes
     }
@@ -261,9 +250,38 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Renders `request` and encodes it in `format` into `file` (PNG rows are compressed while
+/// the rest of the image renders).
+fn render_into(
+    renderer: &Renderer,
+    scene: &Scene,
+    request: &RenderRequest,
+    control: &Control,
+    format: ImageFormat,
+    file: &mut AtomicFile,
+) -> Result<Rendered, Failure> {
+    if format == ImageFormat::Png {
+        let region = request.region_in(scene).map_err(fail)?;
+        let (rendered, written) =
+            film::encode_png_streaming(file, region.width, region.height, |sink| {
+                renderer.render_in_bands(scene, request, control, &|row, rows| sink.rows(row, rows))
+            });
+        // A cancelled render leaves the PNG unfinished: say so, not what the encoder saw.
+        let rendered = rendered.map_err(render_failure)?;
+        written.map_err(fail)?;
+        Ok(rendered)
+    } else {
+        let rendered = renderer
+            .render(scene, request, control)
+            .map_err(render_failure)?;
+        film::encode(&rendered.image, format, file).map_err(fail)?;
+        Ok(rendered)
+    }
+}
+
 /// A render error as a failure of `kardia render`.
-fn render_failure(err: RenderError, interrupt: &CancelToken) -> Failure {
-    if err == RenderError::Cancelled || interrupt.is_cancelled() {
+fn render_failure(err: RenderError) -> Failure {
+    if err == RenderError::Cancelled {
         Failure::Interrupted
     } else {
         fail(err)

@@ -152,6 +152,10 @@ impl Region {
 /// pixel is finite.
 #[inline]
 pub fn to_stored(value: DVec3) -> Vec3 {
+    let rounded = value.as_vec3();
+    if rounded.is_finite() {
+        return rounded;
+    }
     let channel = |v: f64| {
         if v.is_nan() {
             0.0

@@ -8,7 +8,7 @@
 //! # Adding a view
 //! Write `src/integrator/NAME.rs` with a type that implements [`Shader`] and a
 //! `new(&ShadeSetup)` constructor, add a variant to [`View`] with its name in [`View::ALL`],
-//! and one arm to the `match` in `render`.
+//! and one arm to the `match` in `with_shader`.
 
 pub mod depth;
 pub mod normals;
@@ -103,6 +103,26 @@ impl std::str::FromStr for View {
     }
 }
 
+/// Something to do with a view's shader, whatever its type: [`with_shader`] builds the shader
+/// and hands it over, so the code that uses it is compiled for each view (no dynamic dispatch
+/// per ray).
+pub(crate) trait WithShader {
+    /// What the work gives.
+    type Output;
+    /// Does the work with `shader`.
+    fn run<S: Shader>(self, shader: &S) -> Self::Output;
+}
+
+/// Builds `view`'s shader for `setup` and hands it to `work`. The one place that maps a
+/// [`View`] to its implementation.
+pub(crate) fn with_shader<W: WithShader>(view: View, setup: &ShadeSetup, work: W) -> W::Output {
+    match view {
+        View::Shaded => work.run(&whitted::Whitted::new(setup)),
+        View::Normals => work.run(&normals::Normals::new(setup)),
+        View::Depth => work.run(&depth::Depth::new(setup)),
+    }
+}
+
 /// Renders `job` in `view` on `pool`: the region's image and the rays traced, or `None` when
 /// cancelled.
 pub(crate) fn render(
@@ -112,23 +132,35 @@ pub(crate) fn render(
     job: &Job,
     hooks: &Hooks,
 ) -> Option<(Image, u64)> {
-    match view {
-        View::Shaded => scheduler::run(pool, &whitted::Whitted::new(setup), job, hooks),
-        View::Normals => scheduler::run(pool, &normals::Normals::new(setup), job, hooks),
-        View::Depth => scheduler::run(pool, &depth::Depth::new(setup), job, hooks),
+    struct Render<'a> {
+        pool: &'a rayon::ThreadPool,
+        job: &'a Job<'a>,
+        hooks: &'a Hooks<'a>,
     }
+    impl WithShader for Render<'_> {
+        type Output = Option<(Image, u64)>;
+        fn run<S: Shader>(self, shader: &S) -> Self::Output {
+            scheduler::run(self.pool, shader, self.job, self.hooks)
+        }
+    }
+    with_shader(view, setup, Render { pool, job, hooks })
 }
 
 /// The colour `view` gives one world ray (which starts off any surface), as in a render with
 /// `setup`; the random numbers (a spherical light's sample point) come from `seed`, as for a
 /// pixel's first sample. Meant for tests and probes.
 pub fn trace_ray(view: View, setup: &ShadeSetup, seed: u64, ray: &Ray) -> DVec3 {
-    let mut sample = Sample::new(seed, 0, 1);
-    match view {
-        View::Shaded => whitted::Whitted::new(setup).radiance(ray, &mut sample),
-        View::Normals => normals::Normals::new(setup).radiance(ray, &mut sample),
-        View::Depth => depth::Depth::new(setup).radiance(ray, &mut sample),
+    struct Trace<'a> {
+        seed: u64,
+        ray: &'a Ray,
     }
+    impl WithShader for Trace<'_> {
+        type Output = DVec3;
+        fn run<S: Shader>(self, shader: &S) -> DVec3 {
+            shader.radiance(self.ray, &mut Sample::new(self.seed, 0, 1))
+        }
+    }
+    with_shader(view, setup, Trace { seed, ray })
 }
 
 #[cfg(test)]

@@ -27,8 +27,8 @@
 //! it used are exact for the given coefficients, so the answer is the exact one: the same
 //! hit/miss the full method gives away from numerically multiple roots.
 
-use super::cluster::refine_simple;
 use super::prep::{horner, Prepared};
+use super::refine::refine_simple;
 
 /// Halvings after which a piece that still has more than one sign variation is left to the
 /// full method (a numerically multiple root or an unresolvable cluster).

@@ -38,13 +38,10 @@
 
 mod bernstein;
 mod cluster;
-mod corpus;
 mod prep;
+mod refine;
 mod sturm;
 mod yuksel;
-
-#[doc(hidden)]
-pub use corpus::{heart_corpus, heart_hard_rays, CorpusRay};
 
 /// Every distinct real root of the polynomial in the half-open interval `(lo, hi]`, ascending.
 /// A multiple root is reported once. Degree 0 to 16. Non-finite coefficients, or `lo ≥ hi`,

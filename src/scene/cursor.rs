@@ -4,7 +4,7 @@
 use std::ops::Range;
 
 use super::lexer::{Token, TokenKind};
-use super::parser::{PROPERTIES, SURFACE_USAGE};
+use super::limits::{self, Limits};
 use super::SceneError;
 use crate::geometry::DVec3;
 
@@ -112,10 +112,13 @@ pub(super) struct Cursor<'a> {
     pub(super) line: usize,
     /// Byte offset where the next line starts.
     pub(super) next_line: usize,
+    /// The keyword of the statement being parsed, upper case (empty before it is known).
+    pub(super) keyword: &'static str,
     /// Usage of the statement being parsed, shown as help.
     pub(super) usage: &'static str,
-    /// True while a `<surface>` is parsed: its usage is added to the help.
-    pub(super) in_surface: bool,
+    /// Set while a part with a grammar of its own is read (a `<surface>`): its usage,
+    /// shown in the help after the statement's.
+    pub(super) part_usage: Option<&'static str>,
 }
 
 impl<'a> Cursor<'a> {
@@ -155,6 +158,11 @@ impl<'a> Cursor<'a> {
         a.start..b.end
     }
 
+    /// The span of the statement's keyword (its first token).
+    pub(super) fn statement_keyword_span(&self) -> Span {
+        self.tokens.first().map_or(0..0, |t| t.span.clone())
+    }
+
     /// The whole statement written so far (keyword to last token).
     pub(super) fn statement_span(&self) -> Span {
         let first = self.tokens.first().map_or(0, |t| t.span.start);
@@ -183,12 +191,9 @@ impl<'a> Cursor<'a> {
     }
 
     pub(super) fn usage_help(&self) -> Option<String> {
-        (!self.usage.is_empty()).then(|| {
-            if self.in_surface {
-                format!("usage: {}\n{SURFACE_USAGE}", self.usage)
-            } else {
-                format!("usage: {}", self.usage)
-            }
+        (!self.usage.is_empty()).then(|| match self.part_usage {
+            Some(part) => format!("usage: {}\n{part}", self.usage),
+            None => format!("usage: {}", self.usage),
         })
     }
 
@@ -246,52 +251,37 @@ impl<'a> Cursor<'a> {
         }
     }
 
-    /// A number `> 0`.
-    pub(super) fn positive(&mut self, what: &str) -> Result<(f64, Span)> {
+    /// A number within `limits`; outside them, an error that states the range. Every
+    /// bounded number of the scene language is read here, through [`Cursor::number`].
+    pub(super) fn number_in(&mut self, what: &str, limits: &Limits) -> Result<(f64, Span)> {
         let (x, span) = self.number(what)?;
-        if x > 0.0 {
-            Ok((x, span))
-        } else {
-            Err(self.fail(
-                span,
-                format!("{what} must be greater than 0, not {x}"),
-                "must be > 0",
-            ))
-        }
+        self.check(x, &span, what, limits)?;
+        Ok((x, span))
     }
 
-    /// A number in `[lo, hi]`.
-    pub(super) fn in_range(&mut self, what: &str, lo: f64, hi: f64) -> Result<(f64, Span)> {
-        let (x, span) = self.number(what)?;
-        if (lo..=hi).contains(&x) {
-            Ok((x, span))
-        } else if hi == f64::MAX {
-            Err(self.fail(
-                span,
-                format!("{what} must be at least {lo}, not {x}"),
-                format!("must be ≥ {lo}"),
-            ))
-        } else {
-            Err(self.fail(
-                span,
-                format!("{what} must be between {lo} and {hi}, not {x}"),
-                format!("must be in [{lo}, {hi}]"),
-            ))
-        }
+    /// A whole number within `limits` (whole ones, of at most `u32::MAX`).
+    pub(super) fn whole_in(&mut self, what: &str, limits: &Limits) -> Result<(u32, Span)> {
+        debug_assert!(limits.whole && limits.max <= u32::MAX as f64);
+        let (x, span) = self.number_in(what, limits)?;
+        Ok((x as u32, span))
     }
 
-    /// A whole number in `[lo, hi]`.
-    pub(super) fn whole(&mut self, what: &str, lo: u32, hi: u32) -> Result<(u32, Span)> {
-        let (x, span) = self.number(what)?;
-        if x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 {
-            Ok((x as u32, span))
-        } else {
-            Err(self.fail(
-                span,
-                format!("{what} must be a whole number from {lo} to {hi}, not {x}"),
-                format!("must be a whole number in {lo}..={hi}"),
-            ))
+    /// Fails unless `x` (written at `span`) is within `limits`.
+    pub(super) fn check(&self, x: f64, span: &Span, what: &str, limits: &Limits) -> Result<()> {
+        if limits.contains(x) {
+            return Ok(());
         }
+        let (requirement, label) = limits.violation(x);
+        let range = if limits.whole || limits.between {
+            String::new()
+        } else {
+            format!(" (the valid range is {limits})")
+        };
+        Err(self.fail(
+            span.clone(),
+            format!("{what} must be {requirement}, not {}{range}", show_value(x)),
+            label,
+        ))
     }
 
     /// A vector `(a, b, c)`; commas are optional. `names` name the components in messages.
@@ -354,14 +344,19 @@ impl<'a> Cursor<'a> {
         Err(self.unexpected(&format!("`)` to close {what}")))
     }
 
-    /// A point.
+    /// A point, each coordinate within [`limits::COORDINATE`].
     pub(super) fn point(&mut self, what: &str) -> Result<VecArg> {
-        self.vector(what, ["x", "y", "z"])
+        let a = self.vector(what, ["x", "y", "z"])?;
+        for (i, name) in ["x", "y", "z"].iter().enumerate() {
+            let part = format!("the {name} component of {what}");
+            self.check(a.v[i], &a.parts[i], &part, &limits::COORDINATE)?;
+        }
+        Ok(a)
     }
 
-    /// A non-zero vector.
+    /// A direction: a point-like vector whose length is within [`limits::DIRECTION_LENGTH`].
     pub(super) fn direction(&mut self, what: &str) -> Result<VecArg> {
-        let a = self.vector(what, ["x", "y", "z"])?;
+        let a = self.point(what)?;
         if a.v == DVec3::ZERO {
             return Err(self.fail(
                 a.span,
@@ -369,23 +364,42 @@ impl<'a> Cursor<'a> {
                 "zero-length vector",
             ));
         }
+        let length = a.v.length();
+        if !limits::DIRECTION_LENGTH.contains(length) {
+            return Err(self.fail(
+                a.span,
+                format!(
+                    "{what} is too short to give a direction: its length must be {}, not {}",
+                    limits::DIRECTION_LENGTH,
+                    show_value(length)
+                ),
+                "too short",
+            ));
+        }
         Ok(a)
     }
 
-    /// A colour with non-negative components.
-    pub(super) fn colour(&mut self, what: &str) -> Result<VecArg> {
+    /// A colour, each component within `limits` (which start at 0).
+    pub(super) fn colour(&mut self, what: &str, limits: &Limits) -> Result<VecArg> {
         let a = self.vector(what, ["r", "g", "b"])?;
         for (i, name) in ["red", "green", "blue"].iter().enumerate() {
             if a.v[i] < 0.0 {
                 return Err(self.fail(
                     a.parts[i].clone(),
                     format!(
-                        "the {name} component of {what} must not be negative, not {}",
-                        a.v[i]
+                        "the {name} component of {what} must not be negative, not {} (the \
+                         valid range is {limits})",
+                        show_value(a.v[i])
                     ),
                     "negative colour component",
                 ));
             }
+            self.check(
+                a.v[i],
+                &a.parts[i],
+                &format!("the {name} component of {what}"),
+                limits,
+            )?;
         }
         Ok(a)
     }
@@ -397,50 +411,16 @@ impl<'a> Cursor<'a> {
             Some(_) => Err(self.unexpected("end of line")),
         }
     }
+}
 
-    /// The end of a statement whose last part was a surface: explains stray words.
-    pub(super) fn end_after_surface(&mut self) -> Result<()> {
-        self.in_surface = true;
-        let r = self.end_after_surface_inner();
-        self.in_surface = false;
-        r
-    }
-
-    pub(super) fn end_after_surface_inner(&self) -> Result<()> {
-        let Some(t) = self.peek() else {
-            return Ok(());
-        };
-        if let Some(word) = self.peek_word() {
-            if word.eq_ignore_ascii_case("BOUND") {
-                return Err(self.fail(
-                    t.span,
-                    "BOUND applies only to IMPLICIT surfaces",
-                    "not allowed here",
-                ));
-            }
-            if parse_number(word) == Err(NumberError::NotANumber) {
-                let found = self.describe(Some(&t));
-                let message = format!("expected a surface property or end of line, found {found}");
-                if let Some(s) = suggest(word, PROPERTIES.iter().map(|p| p.0)) {
-                    return Err(self.fail_help(
-                        t.span,
-                        message,
-                        "unknown surface property",
-                        format!("did you mean {s}?\n{SURFACE_USAGE}"),
-                    ));
-                }
-                return Err(self.fail(t.span, message, "unknown surface property"));
-            }
-        }
-        if t.kind == TokenKind::Open && self.usage.starts_with("POLYGON") {
-            return Err(self.fail(
-                t.span,
-                "expected a surface property or end of line, found `(`: is there one vertex \
-                 more than the polygon's vertex count n?",
-                "unexpected vector",
-            ));
-        }
-        Err(self.unexpected("a surface property or end of line"))
+/// A value as messages write it: as written for short numbers (`-1`, `2.5`, `40000`), in
+/// exponent form for long ones (`1e308`, `5e-324`).
+pub(super) fn show_value(x: f64) -> String {
+    let plain = format!("{x}");
+    if plain.len() <= 12 {
+        plain
+    } else {
+        format!("{x:e}")
     }
 }
 

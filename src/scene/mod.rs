@@ -4,7 +4,9 @@
 mod cursor;
 mod error;
 mod lexer;
+pub mod limits;
 mod parser;
+mod surface;
 
 pub use error::{InvalidScene, SceneError};
 pub use parser::{parse, parse_file, DEFAULT_SIZE};
@@ -76,11 +78,12 @@ pub struct SceneHit {
 /// A complete scene, ready to render.
 #[derive(Debug)]
 pub struct Scene {
-    /// Image width in pixels (1 ..= 32768).
+    /// The scene's SIZE: the default image width in pixels (1 ..= 32768). A render of
+    /// another size says so in its request (`pipeline::RenderRequest`), not by changing this.
     pub width: u32,
-    /// Image height in pixels (1 ..= 32768).
+    /// The scene's SIZE: the default image height in pixels (1 ..= 32768).
     pub height: u32,
-    /// The camera.
+    /// The scene's CAMERA (a render may look through another, `pipeline::RenderRequest`).
     pub camera: Camera,
     /// Colour of rays that hit nothing (linear RGB).
     pub background: DVec3,

@@ -1,13 +1,15 @@
 //! The scene-file parser: one statement per line (see docs/scene-format.md), each read by
-//! a [`Cursor`] over the line's tokens (lexer.rs, cursor.rs). Every error
-//! points at the part of the line that is wrong and says what was expected there.
+//! its row of [`STATEMENTS`] (keyword, usage line, reader) with a [`Cursor`] over the
+//! line's tokens (lexer.rs, cursor.rs); surfaces by surface.rs. Every error points at the
+//! part of the line that is wrong and says what was expected there.
 
-use std::collections::HashMap;
 use std::ops::Range;
 
 use super::cursor::{parse_number, shorten, suggest, Cursor, NumberError, Source, VecArg};
 use super::error::{ceil_boundary, floor_boundary};
 use super::lexer::{lex_line, Token, TokenKind};
+use super::limits::{self, Limits};
+use super::surface::{end_after_surface, is_reserved, property, surface, Materials};
 use super::{LoadOptions, Object, Scene, SceneError};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::{DVec3, Frame, FrameError};
@@ -22,50 +24,104 @@ type Result<T> = std::result::Result<T, SceneError>;
 /// Image size used when a scene has no `SIZE` statement.
 pub const DEFAULT_SIZE: (u32, u32) = (800, 600);
 
-/// Every statement keyword with its usage line (shown as help under errors).
-pub(crate) const STATEMENTS: &[(&str, &str)] = &[
-    ("SIZE", "SIZE width height"),
-    ("CAMERA", "CAMERA (eye) (look_at) (up) fov"),
-    ("BACKGROUND", "BACKGROUND (r, g, b)"),
-    ("AMBIENT", "AMBIENT (r, g, b)"),
-    ("LIGHT", "LIGHT (position) (r, g, b) [radius [SAMPLES n]]"),
-    ("MATERIAL", "MATERIAL name <surface>"),
-    ("SPHERE", "SPHERE (centre) radius <surface>"),
-    ("PLANE", "PLANE (point) (normal) <surface>"),
-    ("BOX", "BOX (corner) (edge1) (edge2) (edge3) <surface>"),
-    ("POLYGON", "POLYGON n (v1) (v2) … (vn) <surface>"),
-    ("ELLIPSOID", "ELLIPSOID (centre) (u) (v) (w) <surface>"),
-    ("HEART", "HEART (position) (u) (v) (w) <surface>"),
-    (
-        "IMPLICIT",
-        "IMPLICIT \"equation\" (position) (u) (v) (w) <surface> [BOUND r]\n   \
-         or: IMPLICIT preset [params…] (position) (u) (v) (w) <surface> [BOUND r]",
-    ),
+/// One statement: its keyword (upper case), its usage line (shown as help under errors)
+/// and the reader of the rest of its line (the cursor is just after the keyword).
+pub(super) struct Statement {
+    /// The keyword, upper case.
+    pub keyword: &'static str,
+    /// How it is written.
+    pub usage: &'static str,
+    /// Reads the statement into the scene being built.
+    pub read: fn(&mut Builder, &mut Cursor) -> Result<()>,
+}
+
+/// Every statement of the scene language.
+pub(super) const STATEMENTS: &[Statement] = &[
+    Statement {
+        keyword: "SIZE",
+        usage: "SIZE width height",
+        read: Builder::size,
+    },
+    Statement {
+        keyword: "CAMERA",
+        usage: "CAMERA (eye) (look_at) (up) fov",
+        read: Builder::camera,
+    },
+    Statement {
+        keyword: "BACKGROUND",
+        usage: "BACKGROUND (r, g, b)",
+        read: Builder::background,
+    },
+    Statement {
+        keyword: "AMBIENT",
+        usage: "AMBIENT (r, g, b)",
+        read: Builder::ambient,
+    },
+    Statement {
+        keyword: "LIGHT",
+        usage: "LIGHT (position) (r, g, b) [radius [SAMPLES n]]",
+        read: Builder::light,
+    },
+    Statement {
+        keyword: "MATERIAL",
+        usage: "MATERIAL name <surface>",
+        read: Builder::material,
+    },
+    Statement {
+        keyword: "SPHERE",
+        usage: "SPHERE (centre) radius <surface>",
+        read: Builder::sphere,
+    },
+    Statement {
+        keyword: "PLANE",
+        usage: "PLANE (point) (normal) <surface>",
+        read: Builder::plane,
+    },
+    Statement {
+        keyword: "BOX",
+        usage: "BOX (corner) (edge1) (edge2) (edge3) <surface>",
+        read: Builder::parallelepiped,
+    },
+    Statement {
+        keyword: "POLYGON",
+        usage: "POLYGON n (v1) (v2) … (vn) <surface>",
+        read: Builder::polygon,
+    },
+    Statement {
+        keyword: "ELLIPSOID",
+        usage: "ELLIPSOID (centre) (u) (v) (w) <surface>",
+        read: Builder::ellipsoid,
+    },
+    Statement {
+        keyword: "HEART",
+        usage: "HEART (position) (u) (v) (w) <surface>",
+        read: Builder::heart,
+    },
+    Statement {
+        keyword: "IMPLICIT",
+        usage: "IMPLICIT \"equation\" (position) (u) (v) (w) <surface> [BOUND r]\n   \
+                or: IMPLICIT preset [params…] (position) (u) (v) (w) <surface> [BOUND r]",
+        read: Builder::implicit,
+    },
 ];
 
-/// Every surface-property keyword with its usage.
-pub(crate) const PROPERTIES: &[(&str, &str)] = &[
-    ("SPECULAR", "SPECULAR ks exponent"),
-    ("REFLECT", "REFLECT kr"),
-    ("TRANSMIT", "TRANSMIT kt"),
-    ("IOR", "IOR n"),
-    ("ATTENUATION", "ATTENUATION (r, g, b)"),
-    ("CHECKER", "CHECKER (r, g, b) size"),
-    ("INSIDE", "INSIDE (r, g, b)"),
+/// The valid range of each preset parameter, by preset and position (presets without
+/// parameters are absent).
+const PRESET_PARAMETERS: &[(&str, &[Limits])] = &[
+    ("torus", &[limits::LENGTH, limits::LENGTH]),
+    ("kummer", &[limits::KUMMER_MU]),
+    ("chmutov", &[limits::CHMUTOV_DEGREE]),
 ];
-
-/// What `<surface>` stands for in the usage lines.
-pub(super) const SURFACE_USAGE: &str =
-    "<surface> is a diffuse colour (r, g, b) or the name of a MATERIAL \
-     defined earlier, then optionally SPECULAR ks exponent, REFLECT kr, TRANSMIT kt, IOR n, \
-     ATTENUATION (r, g, b), CHECKER (r, g, b) size, INSIDE (r, g, b)";
 
 /// Parses scene text (the format is described in docs/scene-format.md); `name` is used in
 /// error messages (usually the file path). The first mistake is returned as a
 /// [`SceneError`] that points at the offending part of its line.
 pub fn parse(text: &str, name: &str, options: &LoadOptions) -> Result<Scene> {
     let src = Source { text, name };
-    let mut builder = Builder::default();
+    let mut builder = Builder {
+        options: *options,
+        ..Builder::default()
+    };
     let mut offset = 0;
     let mut last_token_end = 0;
     for (i, raw) in text.split('\n').enumerate() {
@@ -83,10 +139,11 @@ pub fn parse(text: &str, name: &str, options: &LoadOptions) -> Result<Scene> {
             pos: 0,
             line: i + 1,
             next_line: offset.min(text.len()),
+            keyword: "",
             usage: "",
-            in_surface: false,
+            part_usage: None,
         };
-        builder.statement(&mut cur, options)?;
+        builder.statement(&mut cur)?;
     }
     builder.finish(src, last_token_end)
 }
@@ -114,12 +171,10 @@ pub(crate) fn equation_span(text: &str, inner: Span, e: &EquationError) -> Span 
     start..end.max(start)
 }
 
-/// A material defined by `MATERIAL`, with its line.
-type Materials = HashMap<String, (Material, usize)>;
-
 /// The scene being assembled, statement by statement.
 #[derive(Default)]
-struct Builder {
+pub(super) struct Builder {
+    options: LoadOptions,
     size: Option<((u32, u32), usize)>,
     camera: Option<(Camera, usize)>,
     background: Option<(DVec3, usize)>,
@@ -130,92 +185,99 @@ struct Builder {
 }
 
 impl Builder {
-    fn statement(&mut self, cur: &mut Cursor, options: &LoadOptions) -> Result<()> {
+    /// One statement: finds its row of [`STATEMENTS`] and lets it read the line.
+    fn statement(&mut self, cur: &mut Cursor) -> Result<()> {
         let first = cur.peek().expect("lines without tokens are skipped");
         let word = match first.kind {
             TokenKind::Word => cur.text(&first),
             _ => return Err(cur.unexpected("a keyword at the start of the statement")),
         };
-        let upper = word.to_ascii_uppercase();
-        let Some(&(keyword, usage)) = STATEMENTS.iter().find(|(k, _)| *k == upper) else {
+        let Some(statement) = STATEMENTS
+            .iter()
+            .find(|s| s.keyword.eq_ignore_ascii_case(word))
+        else {
             return Err(unknown_keyword(cur, &first, word));
         };
-        cur.usage = usage;
+        cur.keyword = statement.keyword;
+        cur.usage = statement.usage;
         cur.pos = 1;
-        let kw = first.span.clone();
-        match keyword {
-            "SIZE" => {
-                let (w, _) = cur.whole("the image width", 1, Scene::MAX_SIDE)?;
-                let (h, _) = cur.whole("the image height", 1, Scene::MAX_SIDE)?;
-                cur.end()?;
-                once(cur, &kw, "SIZE", &self.size)?;
-                self.size = Some(((w, h), cur.line));
-            }
-            "CAMERA" => {
-                let eye = cur.point("the eye position")?;
-                let look = cur.point("the look-at point")?;
-                let up = cur.direction("the up vector")?;
-                let (fov, fov_span) = cur.number("the field of view in degrees")?;
-                cur.end()?;
-                let camera = Camera::new(eye.v, look.v, up.v, fov).map_err(|e| {
-                    let (span, label) = match e {
-                        CameraError::NotFinite => (cur.statement_span(), "not finite"),
-                        CameraError::NoViewDirection => (
-                            Cursor::join(&eye.span, &look.span),
-                            "eye and look-at are the same point",
-                        ),
-                        CameraError::BadUp => (up.span.clone(), "parallel to the view direction"),
-                        CameraError::BadFov(_) => (fov_span.clone(), "must be in (0, 180)"),
-                    };
-                    cur.fail(span, format!("degenerate camera: {e}"), label)
-                })?;
-                once(cur, &kw, "CAMERA", &self.camera)?;
-                self.camera = Some((camera, cur.line));
-            }
-            "BACKGROUND" | "AMBIENT" => {
-                let c = cur.colour(if keyword == "AMBIENT" {
-                    "the ambient light"
-                } else {
-                    "the background colour"
-                })?;
-                cur.end()?;
-                let slot = if keyword == "AMBIENT" {
-                    &mut self.ambient
-                } else {
-                    &mut self.background
-                };
-                once(cur, &kw, keyword, slot)?;
-                *slot = Some((c.v, cur.line));
-            }
-            "LIGHT" => {
-                let position = cur.point("the light's position")?;
-                let colour = cur.colour("the light's colour")?;
-                let radius = if cur.peek().is_some() {
-                    cur.in_range("the light's radius", 0.0, f64::MAX)?.0
-                } else {
-                    0.0
-                };
-                let samples = if cur
-                    .peek_word()
-                    .is_some_and(|w| w.eq_ignore_ascii_case("SAMPLES"))
-                {
-                    cur.pos += 1;
-                    cur.whole("the light's shadow samples", 1, Light::MAX_SAMPLES)?
-                        .0
-                } else {
-                    1
-                };
-                cur.end()?;
-                self.lights.push(Light {
-                    position: position.v,
-                    colour: colour.v,
-                    radius,
-                    samples,
-                });
-            }
-            "MATERIAL" => self.material(cur)?,
-            _ => self.object(cur, keyword, &kw, options)?,
-        }
+        (statement.read)(self, cur)
+    }
+
+    fn size(&mut self, cur: &mut Cursor) -> Result<()> {
+        let (w, _) = cur.whole_in("the image width", &limits::IMAGE_SIDE)?;
+        let (h, _) = cur.whole_in("the image height", &limits::IMAGE_SIDE)?;
+        cur.end()?;
+        once(cur, &self.size)?;
+        self.size = Some(((w, h), cur.line));
+        Ok(())
+    }
+
+    fn camera(&mut self, cur: &mut Cursor) -> Result<()> {
+        let eye = cur.point("the eye position")?;
+        let look = cur.point("the look-at point")?;
+        let up = cur.direction("the up vector")?;
+        let (fov, fov_span) = cur.number("the field of view in degrees")?;
+        cur.end()?;
+        let camera = Camera::new(eye.v, look.v, up.v, fov).map_err(|e| {
+            let (span, label) = match e {
+                CameraError::NotFinite => (cur.statement_span(), "not finite"),
+                CameraError::NoViewDirection => (
+                    Cursor::join(&eye.span, &look.span),
+                    "eye and look-at are the same point",
+                ),
+                CameraError::BadUp => (up.span.clone(), "parallel to the view direction"),
+                CameraError::BadFov(_) => (fov_span.clone(), "must be in (0, 180)"),
+            };
+            cur.fail(span, format!("degenerate camera: {e}"), label)
+        })?;
+        once(cur, &self.camera)?;
+        self.camera = Some((camera, cur.line));
+        Ok(())
+    }
+
+    fn background(&mut self, cur: &mut Cursor) -> Result<()> {
+        let c = cur.colour("the background colour", &limits::COLOUR)?;
+        cur.end()?;
+        once(cur, &self.background)?;
+        self.background = Some((c.v, cur.line));
+        Ok(())
+    }
+
+    fn ambient(&mut self, cur: &mut Cursor) -> Result<()> {
+        let c = cur.colour("the ambient light", &limits::COLOUR)?;
+        cur.end()?;
+        once(cur, &self.ambient)?;
+        self.ambient = Some((c.v, cur.line));
+        Ok(())
+    }
+
+    fn light(&mut self, cur: &mut Cursor) -> Result<()> {
+        let position = cur.point("the light's position")?;
+        let colour = cur.colour("the light's colour", &limits::INTENSITY)?;
+        let radius = if cur.peek().is_some() {
+            cur.number_in("the light's radius", &limits::LIGHT_RADIUS)?
+                .0
+        } else {
+            0.0
+        };
+        let samples = if cur
+            .peek_word()
+            .is_some_and(|w| w.eq_ignore_ascii_case("SAMPLES"))
+        {
+            cur.pos += 1;
+            cur.whole_in("the light's shadow samples", &limits::LIGHT_SAMPLES)?
+                .0
+        } else {
+            1
+        };
+        cur.end()?;
+        self.lights.push(Light {
+            position: position.v,
+            colour: colour.v,
+            radius,
+            samples,
+        });
         Ok(())
     }
 
@@ -242,8 +304,7 @@ impl Builder {
                 "invalid name",
             ));
         }
-        let upper = name.to_ascii_uppercase();
-        if upper == "BOUND" || PROPERTIES.iter().any(|p| p.0 == upper) {
+        if is_reserved(name) {
             return Err(cur.fail(
                 t.span,
                 format!("`{name}` is a surface-property keyword and cannot name a material"),
@@ -259,124 +320,122 @@ impl Builder {
         }
         cur.pos += 1;
         let m = surface(cur, &self.materials)?;
-        cur.end_after_surface()?;
+        end_after_surface(cur)?;
         self.materials.insert(name.to_string(), (m, cur.line));
         Ok(())
     }
 
-    fn object(
-        &mut self,
-        cur: &mut Cursor,
-        keyword: &'static str,
-        kw: &Span,
-        options: &LoadOptions,
-    ) -> Result<()> {
-        let shape_error = |cur: &Cursor, span: Span, e: ShapeError| {
-            cur.fail(
-                span,
-                format!("invalid {}: {e}", keyword.to_ascii_lowercase()),
-                "invalid shape",
-            )
-        };
-        let (shape, material): (Box<dyn Shape>, Material) = match keyword {
-            "SPHERE" => {
-                let c = cur.point("the sphere's centre")?;
-                let (r, _) = cur.positive("the sphere's radius")?;
-                let m = surface(cur, &self.materials)?;
-                cur.end_after_surface()?;
-                let s = Sphere::new(c.v, r).map_err(|e| shape_error(cur, kw.clone(), e))?;
-                (Box::new(s), m)
-            }
-            "PLANE" => {
-                let p = cur.point("a point on the plane")?;
-                let n = cur.direction("the plane's normal")?;
-                let m = surface(cur, &self.materials)?;
-                cur.end_after_surface()?;
-                let s = Plane::new(p.v, n.v).map_err(|e| shape_error(cur, n.span.clone(), e))?;
-                (Box::new(s), m)
-            }
-            "POLYGON" => {
-                let (count, count_span) = cur.number("the number of vertices")?;
-                if !(count.fract() == 0.0 && count >= 3.0) {
-                    return Err(cur.fail(
-                        count_span,
-                        format!(
-                            "a polygon needs a whole number of at least 3 vertices, not {count}"
-                        ),
-                        "must be a whole number ≥ 3",
-                    ));
-                }
-                let n = count.min(u32::MAX as f64) as u32;
-                let mut verts = Vec::new();
-                for k in 1..=n {
-                    let what = format!("vertex {k} of {n}");
-                    if cur.peek_kind() != Some(TokenKind::Open) {
-                        return Err(cur.fail(
-                            cur.here(),
-                            format!(
-                                "expected {what}, a vector (x, y, z), found {}: the polygon \
-                                 was declared with {n} vertices",
-                                cur.describe(cur.peek().as_ref())
-                            ),
-                            format!("expected {what}"),
-                        ));
-                    }
-                    verts.push(cur.point(&what)?);
-                }
-                let m = surface(cur, &self.materials)?;
-                cur.end_after_surface()?;
-                let s = Polygon::new(verts.iter().map(|a| a.v).collect()).map_err(|e| {
-                    // Point at the vertex the message names, else at all of them.
-                    let span = match vertex_named_in(&e.0, verts.len()) {
-                        Some(k) => verts[k - 1].span.clone(),
-                        None => Cursor::join(&verts[0].span, &verts[verts.len() - 1].span),
-                    };
-                    shape_error(cur, span, e)
-                })?;
-                (Box::new(s), m)
-            }
-            "BOX" | "ELLIPSOID" | "HEART" => {
-                let (origin, names) = match keyword {
-                    "BOX" => ("the box's corner", ["edge1", "edge2", "edge3"]),
-                    "ELLIPSOID" => ("the ellipsoid's centre", ["u", "v", "w"]),
-                    _ => ("the heart's position", ["u", "v", "w"]),
-                };
-                let p = cur.point(origin)?;
-                let (u, v, w) = basis(cur, names)?;
-                let m = surface(cur, &self.materials)?;
-                cur.end_after_surface()?;
-                check_frame(cur, &p, [&u, &v, &w], names)?;
-                let span = Cursor::join(&u.span, &w.span);
-                let s: Box<dyn Shape> = match keyword {
-                    "BOX" => Box::new(
-                        Parallelepiped::new(p.v, u.v, v.v, w.v)
-                            .map_err(|e| shape_error(cur, span, e))?,
-                    ),
-                    "ELLIPSOID" => Box::new(
-                        Ellipsoid::new(p.v, u.v, v.v, w.v)
-                            .map_err(|e| shape_error(cur, span, e))?,
-                    ),
-                    _ => Box::new(
-                        Heart::new(p.v, u.v, v.v, w.v)
-                            .map_err(|e| shape_error(cur, span, e))?
-                            .with_solver(options.solver),
-                    ),
-                };
-                (s, m)
-            }
-            "IMPLICIT" => self.implicit(cur, options)?,
-            _ => unreachable!("every statement keyword is handled"),
-        };
+    /// Adds the object the current statement describes.
+    fn add(&mut self, cur: &Cursor, shape: Box<dyn Shape>, material: Material) -> Result<()> {
         self.objects
-            .push(Object::new(shape, material, keyword, cur.line));
+            .push(Object::new(shape, material, cur.keyword, cur.line));
         Ok(())
     }
 
-    fn implicit(
-        &mut self,
+    fn sphere(&mut self, cur: &mut Cursor) -> Result<()> {
+        let c = cur.point("the sphere's centre")?;
+        let (r, _) = cur.number_in("the sphere's radius", &limits::LENGTH)?;
+        let m = surface(cur, &self.materials)?;
+        end_after_surface(cur)?;
+        let keyword = cur.statement_keyword_span();
+        let s = Sphere::new(c.v, r).map_err(|e| shape_error(cur, keyword, e))?;
+        self.add(cur, Box::new(s), m)
+    }
+
+    fn plane(&mut self, cur: &mut Cursor) -> Result<()> {
+        let p = cur.point("a point on the plane")?;
+        let n = cur.direction("the plane's normal")?;
+        let m = surface(cur, &self.materials)?;
+        end_after_surface(cur)?;
+        let s = Plane::new(p.v, n.v).map_err(|e| shape_error(cur, n.span.clone(), e))?;
+        self.add(cur, Box::new(s), m)
+    }
+
+    fn polygon(&mut self, cur: &mut Cursor) -> Result<()> {
+        let (count, count_span) = cur.number("the number of vertices")?;
+        if !(count.fract() == 0.0 && count >= 3.0) {
+            return Err(cur.fail(
+                count_span,
+                format!("a polygon needs a whole number of at least 3 vertices, not {count}"),
+                "must be a whole number ≥ 3",
+            ));
+        }
+        cur.check(
+            count,
+            &count_span,
+            "the number of vertices",
+            &limits::POLYGON_VERTICES,
+        )?;
+        let n = count as u32;
+        let mut verts = Vec::new();
+        for k in 1..=n {
+            let what = format!("vertex {k} of {n}");
+            if cur.peek_kind() != Some(TokenKind::Open) {
+                return Err(cur.fail(
+                    cur.here(),
+                    format!(
+                        "expected {what}, a vector (x, y, z), found {}: the polygon \
+                         was declared with {n} vertices",
+                        cur.describe(cur.peek().as_ref())
+                    ),
+                    format!("expected {what}"),
+                ));
+            }
+            verts.push(cur.point(&what)?);
+        }
+        let m = surface(cur, &self.materials)?;
+        end_after_surface(cur)?;
+        let s = Polygon::new(verts.iter().map(|a| a.v).collect()).map_err(|e| {
+            // Point at the vertex the message names, else at all of them.
+            let span = match vertex_named_in(&e.0, verts.len()) {
+                Some(k) => verts[k - 1].span.clone(),
+                None => Cursor::join(&verts[0].span, &verts[verts.len() - 1].span),
+            };
+            shape_error(cur, span, e)
+        })?;
+        self.add(cur, Box::new(s), m)
+    }
+
+    /// The position, basis and surface of a basis-placed shape, with its frame checked;
+    /// the span returned covers the basis vectors.
+    fn placed(
+        &self,
         cur: &mut Cursor,
-        options: &LoadOptions,
-    ) -> Result<(Box<dyn Shape>, Material)> {
+        origin: &str,
+        names: [&str; 3],
+    ) -> Result<([DVec3; 4], Span, Material)> {
+        let p = cur.point(origin)?;
+        let (u, v, w) = basis(cur, names)?;
+        let m = surface(cur, &self.materials)?;
+        end_after_surface(cur)?;
+        check_frame(cur, &p, [&u, &v, &w], names)?;
+        Ok(([p.v, u.v, v.v, w.v], Cursor::join(&u.span, &w.span), m))
+    }
+
+    fn parallelepiped(&mut self, cur: &mut Cursor) -> Result<()> {
+        let names = ["edge1", "edge2", "edge3"];
+        let ([p, u, v, w], span, m) = self.placed(cur, "the box's corner", names)?;
+        let s = Parallelepiped::new(p, u, v, w).map_err(|e| shape_error(cur, span, e))?;
+        self.add(cur, Box::new(s), m)
+    }
+
+    fn ellipsoid(&mut self, cur: &mut Cursor) -> Result<()> {
+        let names = ["u", "v", "w"];
+        let ([p, u, v, w], span, m) = self.placed(cur, "the ellipsoid's centre", names)?;
+        let s = Ellipsoid::new(p, u, v, w).map_err(|e| shape_error(cur, span, e))?;
+        self.add(cur, Box::new(s), m)
+    }
+
+    fn heart(&mut self, cur: &mut Cursor) -> Result<()> {
+        let names = ["u", "v", "w"];
+        let ([p, u, v, w], span, m) = self.placed(cur, "the heart's position", names)?;
+        let s = Heart::new(p, u, v, w)
+            .map_err(|e| shape_error(cur, span, e))?
+            .with_solver(self.options.solver);
+        self.add(cur, Box::new(s), m)
+    }
+
+    fn implicit(&mut self, cur: &mut Cursor) -> Result<()> {
         enum EquationSource {
             Quoted(Span),
             Preset(Span),
@@ -414,6 +473,7 @@ impl Builder {
                 };
                 cur.pos += 1;
                 let mut params = Vec::new();
+                let mut spans = Vec::new();
                 let mut last = t.span.clone();
                 while cur.peek_kind() == Some(TokenKind::Word) {
                     let (x, span) =
@@ -429,6 +489,7 @@ impl Builder {
                         ));
                     }
                     params.push(x);
+                    spans.push(span.clone());
                     last = span;
                 }
                 if params.len() < count {
@@ -441,6 +502,14 @@ impl Builder {
                         ),
                         "missing parameter",
                     ));
+                }
+                let ranges = PRESET_PARAMETERS
+                    .iter()
+                    .find(|p| p.0 == name)
+                    .map_or(&[][..], |p| p.1);
+                for (k, (&x, limits)) in params.iter().zip(ranges).enumerate() {
+                    let what = format!("parameter {} of {name}", k + 1);
+                    cur.check(x, &spans[k], &what, limits)?;
                 }
                 let span = t.span.start..last.end;
                 let eq = preset_equation(name, &params).map_err(|m| {
@@ -464,10 +533,10 @@ impl Builder {
             .is_some_and(|w| w.eq_ignore_ascii_case("BOUND"))
         {
             cur.pos += 1;
-            bound = Some(cur.positive("the bounding radius")?.0);
+            bound = Some(cur.number_in("the bounding radius", &limits::LENGTH)?.0);
             cur.end()?;
         } else {
-            cur.end_after_surface()?;
+            end_after_surface(cur)?;
         }
         let frame = check_frame(cur, &p, [&u, &v, &w], names)?;
         let shape = Implicit::new(&equation, frame, bound).map_err(|e| match &source {
@@ -482,7 +551,7 @@ impl Builder {
                 "invalid preset",
             ),
         })?;
-        Ok((Box::new(shape.with_solver(options.solver)), m))
+        self.add(cur, Box::new(shape.with_solver(self.options.solver)), m)
     }
 
     /// The scene; `end` is where the last statement ends (for a missing-camera error).
@@ -507,13 +576,22 @@ impl Builder {
         })
     }
 }
+/// An error about an invalid shape of the current statement, at `span`.
+fn shape_error(cur: &Cursor, span: Span, e: ShapeError) -> SceneError {
+    cur.fail(
+        span,
+        format!("invalid {}: {e}", cur.keyword.to_ascii_lowercase()),
+        "invalid shape",
+    )
+}
 
 /// Fails when a once-only statement was already given.
-fn once<T>(cur: &Cursor, kw: &Span, keyword: &str, slot: &Option<(T, usize)>) -> Result<()> {
+fn once<T>(cur: &Cursor, slot: &Option<(T, usize)>) -> Result<()> {
+    let keyword = cur.keyword;
     match slot {
         None => Ok(()),
         Some((_, line)) => Err(cur.fail_help(
-            kw.clone(),
+            cur.statement_keyword_span(),
             format!("{keyword} is given twice (first on line {line})"),
             "repeated statement",
             format!("a scene has at most one {keyword}; remove one of them"),
@@ -554,157 +632,19 @@ fn vertex_named_in(message: &str, count: usize) -> Option<usize> {
     let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
     digits.parse().ok().filter(|&k| (1..=count).contains(&k))
 }
-
-/// `<surface>`: a colour or a material name, then optional properties.
-fn surface(cur: &mut Cursor, materials: &Materials) -> Result<Material> {
-    cur.in_surface = true;
-    let m = surface_inner(cur, materials);
-    cur.in_surface = false;
-    m
-}
-
-fn surface_inner(cur: &mut Cursor, materials: &Materials) -> Result<Material> {
-    const EXPECTED: &str = "a diffuse colour (r, g, b) or a material name";
-    let Some(t) = cur.peek() else {
-        if cur.usage.starts_with("POLYGON") {
-            return Err(cur.fail(
-                cur.here(),
-                format!(
-                    "expected {EXPECTED}, found end of line: are there fewer vertices than the \
-                     polygon's vertex count n (so that the colour was read as the last vertex)?"
-                ),
-                format!("expected {EXPECTED}"),
-            ));
-        }
-        return Err(cur.unexpected(EXPECTED));
-    };
-    let mut m = match t.kind {
-        TokenKind::Open => Material::diffuse(cur.colour("the diffuse colour")?.v),
-        TokenKind::Word => {
-            let word = cur.text(&t);
-            if parse_number(word) != Err(NumberError::NotANumber) {
-                return Err(cur.unexpected(EXPECTED));
-            }
-            let upper = word.to_ascii_uppercase();
-            if upper == "BOUND" || PROPERTIES.iter().any(|p| p.0 == upper) {
-                return Err(cur.fail(
-                    t.span,
-                    format!("expected {EXPECTED} before {upper}, found {upper}"),
-                    "surface properties follow the colour",
-                ));
-            }
-            match materials.get(word) {
-                Some((m, _)) => {
-                    cur.pos += 1;
-                    m.clone()
-                }
-                None => return Err(unknown_material(cur, &t, word, materials)),
-            }
-        }
-        _ => return Err(cur.unexpected(EXPECTED)),
-    };
-    let mut seen: Vec<&str> = Vec::new();
-    while let Some(word) = cur.peek_word() {
-        let upper = word.to_ascii_uppercase();
-        let Some(&(prop, _)) = PROPERTIES.iter().find(|p| p.0 == upper) else {
-            break;
-        };
-        let span = cur.here();
-        if seen.contains(&prop) {
-            return Err(cur.fail(
-                span,
-                format!("{prop} is given twice for this surface"),
-                "repeated property",
-            ));
-        }
-        seen.push(prop);
-        cur.pos += 1;
-        match prop {
-            "SPECULAR" => {
-                m.specular = cur.in_range("the specular weight ks", 0.0, f64::MAX)?.0;
-                m.shininess = cur.in_range("the specular exponent", 1.0, f64::MAX)?.0;
-            }
-            "REFLECT" => m.reflect = cur.in_range("the reflection weight kr", 0.0, 1.0)?.0,
-            "TRANSMIT" => m.transmit = cur.in_range("the transmission weight kt", 0.0, 1.0)?.0,
-            "IOR" => m.ior = cur.positive("the index of refraction")?.0,
-            "ATTENUATION" => m.attenuation = cur.colour("the attenuation")?.v,
-            "CHECKER" => {
-                let c = cur.colour("the checker's second colour")?;
-                let (size, _) = cur.positive("the checker's cell size")?;
-                m.checker = Some((c.v, size));
-            }
-            "INSIDE" => m.inside = Some(cur.colour("the inside colour")?.v),
-            _ => unreachable!("every property is handled"),
-        }
-    }
-    Ok(m)
-}
-
-/// The error for a surface naming a material that is not (yet) defined.
-fn unknown_material(cur: &Cursor, t: &Token, word: &str, materials: &Materials) -> SceneError {
-    let message = format!("unknown material `{}`", shorten(word, 30));
-    let help = if let Some(line) = defined_later(cur, word) {
-        format!(
-            "`{word}` is defined on line {line}, after this use: a MATERIAL must come before the \
-             objects that use it"
-        )
-    } else if let Some(name) = materials.keys().find(|k| k.eq_ignore_ascii_case(word)) {
-        format!("did you mean `{name}`? (material names are case-sensitive)")
-    } else if materials.is_empty() {
-        "no MATERIAL is defined before this line; write a colour (r, g, b) or define one with \
-         `MATERIAL name <surface>`"
-            .into()
-    } else {
-        let mut names: Vec<&str> = materials.keys().map(String::as_str).collect();
-        names.sort_unstable();
-        match suggest(word, names.iter().copied()) {
-            Some(s) => format!("did you mean `{s}`?"),
-            None => format!("materials defined so far: {}", names.join(", ")),
-        }
-    };
-    cur.fail_help(
-        t.span.clone(),
-        message,
-        "not defined before this line",
-        help,
-    )
-}
-
-/// The line of a later `MATERIAL name …` statement, if any.
-fn defined_later(cur: &Cursor, name: &str) -> Option<usize> {
-    let text = cur.src.text;
-    let mut offset = cur.next_line;
-    let mut line = cur.line + 1;
-    while offset < text.len() {
-        let end = text[offset..].find('\n').map_or(text.len(), |i| offset + i);
-        if let Ok(toks) = lex_line(text, offset, end) {
-            if toks.len() >= 2
-                && text[toks[0].span.clone()].eq_ignore_ascii_case("MATERIAL")
-                && &text[toks[1].span.clone()] == name
-            {
-                return Some(line);
-            }
-        }
-        offset = end + 1;
-        line += 1;
-    }
-    None
-}
-
 /// The error for a statement starting with an unknown word.
 fn unknown_keyword(cur: &Cursor, t: &Token, word: &str) -> SceneError {
-    let upper = word.to_ascii_uppercase();
     let span = t.span.clone();
-    if let Some(&(p, _)) = PROPERTIES.iter().find(|p| p.0 == upper) {
+    if let Some(p) = property(word) {
         return cur.fail_help(
             span,
-            format!("{p} is a surface property, not a statement"),
+            format!("{} is a surface property, not a statement", p.keyword),
             "not a statement",
             "surface properties follow an object's colour on the same line, e.g. \
              `SPHERE (0, 0, 0) 1 (0.8, 0.1, 0.1) SPECULAR 0.5 40`",
         );
     }
-    let names = STATEMENTS.iter().map(|s| s.0);
+    let names = STATEMENTS.iter().map(|s| s.keyword);
     let help = match suggest(word, names.clone()) {
         Some(s) => format!("did you mean {s}?"),
         None => format!("keywords: {}", names.collect::<Vec<_>>().join(", ")),
@@ -727,7 +667,6 @@ fn unknown_keyword(cur: &Cursor, t: &Token, word: &str) -> SceneError {
         help,
     )
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;

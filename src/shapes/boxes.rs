@@ -1,8 +1,9 @@
 //! A parallelepiped: a corner and three edge vectors.
 
+use super::placed::{ObjectShape, Placed, Placement, PlacementNames};
 use super::sphere::{BOUNDS_PAD, SURFACE_SNAP};
-use super::{Shape, ShapeError};
-use crate::geometry::{Aabb, DVec3, Frame, FrameError, Ray};
+use super::ShapeError;
+use crate::geometry::{Aabb, DVec3, Ray};
 
 /// The solid `corner + a·e1 + b·e2 + c·e3`, `a, b, c ∈ [0, 1]` (the edges need not be
 /// orthogonal); its surface is the six faces, normals face outward.
@@ -10,63 +11,54 @@ use crate::geometry::{Aabb, DVec3, Frame, FrameError, Ray};
 /// Intersected in object space, where it is the unit cube `[0, 1]³`; a ray starting inside gets
 /// its exit point. At edges and corners the normal is that of the face nearest (in world
 /// distance) to the point.
+pub type Parallelepiped = Placed<UnitCube>;
+
+/// The object space of a [`Parallelepiped`]: the unit cube `[0, 1]³`, with what its placement
+/// makes of its faces in the world.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Parallelepiped {
-    frame: Frame,
+pub struct UnitCube {
     /// Unit world normals of the faces `a = 1`, `b = 1`, `c = 1`; the faces `a = 0` etc.
     /// have the opposite normals.
     face_normals: [DVec3; 3],
     /// World distance between the two faces `a = 0` and `a = 1` (and likewise for b, c).
     thickness: [f64; 3],
-    /// ∞-norm of `M⁻¹`, to bound the rounding of object-space ray origins.
-    inv_norm: f64,
 }
 
 impl Parallelepiped {
     /// A box from one corner and three edge vectors (world units) that must be finite and
     /// linearly independent (the box must not be flat).
     pub fn new(corner: DVec3, e1: DVec3, e2: DVec3, e3: DVec3) -> Result<Self, ShapeError> {
-        let frame = Frame::new(corner, e1, e2, e3).map_err(|e| match e {
-            FrameError::NotFinite => {
-                ShapeError("the box's corner and edge vectors must all be finite".into())
-            }
-            FrameError::Singular => ShapeError(
-                "the box's three edge vectors lie in one plane (or nearly so, or one is zero), \
-                 so the box would be flat"
-                    .into(),
-            ),
-        })?;
+        let names = PlacementNames {
+            shape: "box",
+            position: "corner",
+            vectors: "edge",
+        };
+        let at = Placement::named(corner, e1, e2, e3, names)?;
         let mut face_normals = [DVec3::ZERO; 3];
         let mut thickness = [0.0; 3];
         for axis in 0..3 {
             // Row `axis` of M⁻¹ is the world gradient of the object coordinate along `axis`.
-            let g = frame.normal_matrix.col(axis);
+            let g = at.frame().normal_matrix.col(axis);
             let len = g.length();
             face_normals[axis] = g / len;
             thickness[axis] = 1.0 / len;
         }
-        let inv_norm = (0..3)
-            .map(|i| frame.m_inv.row(i).abs().element_sum())
-            .fold(0.0, f64::max);
-        Ok(Self {
-            frame,
-            face_normals,
-            thickness,
-            inv_norm,
-        })
+        Ok(Placed::place(
+            at,
+            UnitCube {
+                face_normals,
+                thickness,
+            },
+        ))
     }
 }
 
-impl Shape for Parallelepiped {
-    fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
-        let o = self.frame.ray_to_object(ray);
+impl ObjectShape for UnitCube {
+    fn intersect(&self, at: &Placement, ray: &Ray, o: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
         // Bound on the rounding of the object-space origin: a face within it of the origin is
         // treated as passing exactly through it (t = 0), so rays leaving the surface, even at
         // grazing angles, never re-hit the face they start on.
-        let tol = SURFACE_SNAP
-            * (1.0
-                + self.inv_norm
-                    * (ray.origin.abs().max_element() + self.frame.position.abs().max_element()));
+        let tol = SURFACE_SNAP * (1.0 + at.origin_reach(ray.origin));
         let mut t_near = f64::NEG_INFINITY;
         let mut t_far = f64::INFINITY;
         for axis in 0..3 {
@@ -94,10 +86,9 @@ impl Shape for Parallelepiped {
             .find(|&t| t > t_min && t < t_max)
     }
 
-    fn normal(&self, p: DVec3) -> DVec3 {
+    fn normal(&self, _: &Placement, po: DVec3) -> DVec3 {
         // The face whose plane is nearest in world distance; ties (edges, corners) go to the
         // first. Never NaN: the candidates are precomputed unit vectors.
-        let po = self.frame.point_to_object(p);
         let mut best = (f64::INFINITY, -self.face_normals[0]);
         for axis in 0..3 {
             let h = self.thickness[axis];
@@ -111,9 +102,8 @@ impl Shape for Parallelepiped {
         best.1
     }
 
-    fn bounds(&self) -> Aabb {
-        self.frame
-            .bounds_to_world(&Aabb::new(DVec3::ZERO, DVec3::ONE))
+    fn bounds(&self, at: &Placement) -> Aabb {
+        at.bounds_to_world(&Aabb::new(DVec3::ZERO, DVec3::ONE))
             .padded(BOUNDS_PAD)
     }
 }
@@ -121,6 +111,7 @@ impl Shape for Parallelepiped {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shapes::Shape;
 
     fn cube() -> Parallelepiped {
         // [1,3] × [2,4] × [3,5]

@@ -1,71 +1,62 @@
 //! An ellipsoid: the unit sphere placed by a centre and three axis vectors.
 
+use super::placed::{ObjectShape, Placed, Placement, PlacementNames};
 use super::sphere::{first_root_in, sphere_roots, BOUNDS_PAD, SURFACE_SNAP};
-use super::{Shape, ShapeError};
-use crate::geometry::{Aabb, DVec3, Frame, FrameError, Ray};
+use super::ShapeError;
+use crate::geometry::{Aabb, DVec3, Ray};
 
 /// The surface `centre + M·s`, `|s| = 1`, `M = [u v w]`: the unit sphere mapped by the frame,
 /// so `u`, `v`, `w` are semi-axis vectors (world units) that need not be orthogonal. Normals
 /// face outward (away from the centre).
+pub type Ellipsoid = Placed<UnitSphere>;
+
+/// The object space of an [`Ellipsoid`]: the unit sphere about the origin.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Ellipsoid {
-    frame: Frame,
-    /// ∞-norm of `M⁻¹`, to bound the rounding of object-space ray origins.
-    inv_norm: f64,
-}
+pub struct UnitSphere;
 
 impl Ellipsoid {
     /// An ellipsoid with centre and semi-axis vectors `u`, `v`, `w`: all finite, and the three
     /// vectors linearly independent (the ellipsoid must not be flat).
     pub fn new(centre: DVec3, u: DVec3, v: DVec3, w: DVec3) -> Result<Self, ShapeError> {
-        let frame = Frame::new(centre, u, v, w).map_err(|e| match e {
-            FrameError::NotFinite => {
-                ShapeError("the ellipsoid's centre and axis vectors must all be finite".into())
-            }
-            FrameError::Singular => ShapeError(
-                "the ellipsoid's three axis vectors lie in one plane (or nearly so, or one is \
-                 zero), so the ellipsoid would be flat"
-                    .into(),
-            ),
-        })?;
-        let inv_norm = (0..3)
-            .map(|i| frame.m_inv.row(i).abs().element_sum())
-            .fold(0.0, f64::max);
-        Ok(Self { frame, inv_norm })
+        let names = PlacementNames {
+            shape: "ellipsoid",
+            position: "centre",
+            vectors: "axis",
+        };
+        Ok(Placed::place(
+            Placement::named(centre, u, v, w, names)?,
+            UnitSphere,
+        ))
     }
 }
 
-impl Shape for Ellipsoid {
-    fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
-        let o = self.frame.ray_to_object(ray);
+impl ObjectShape for UnitSphere {
+    fn intersect(&self, at: &Placement, ray: &Ray, o: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
         // Bound on the rounding of the object-space origin (the world origin, the subtraction,
         // then M⁻¹); see SURFACE_SNAP.
-        let origin_err = SURFACE_SNAP
-            * self.inv_norm
-            * (ray.origin.abs().max_element() + self.frame.position.abs().max_element());
+        let origin_err = SURFACE_SNAP * at.origin_reach(ray.origin);
         let roots = sphere_roots(o.origin, o.dir, 1.0, origin_err)?;
         first_root_in(roots, t_min, t_max)
     }
 
-    fn normal(&self, p: DVec3) -> DVec3 {
+    fn normal(&self, at: &Placement, s: DVec3) -> DVec3 {
         // Gradient of |M⁻¹(p − c)|² is 2·M⁻ᵀ·s; rescale s first so tiny values cannot
         // underflow, and fall back to a fixed axis at the centre itself.
-        let s = self.frame.point_to_object(p);
         let scale = s.abs().max_element();
         if scale > 0.0 && scale.is_finite() {
-            let n = (self.frame.normal_matrix * (s / scale)).normalize_or_zero();
+            let n = (at.frame().normal_matrix * (s / scale)).normalize_or_zero();
             if n != DVec3::ZERO {
                 return n;
             }
         }
-        self.frame.normal_to_world(DVec3::Z)
+        at.frame().normal_to_world(DVec3::Z)
     }
 
-    fn bounds(&self) -> Aabb {
+    fn bounds(&self, at: &Placement) -> Aabb {
         // Tight: coordinate i of centre + M·s over |s| = 1 ranges over ± |row i of M|.
-        let m = &self.frame.m;
+        let m = &at.frame().m;
         let ext = DVec3::new(m.row(0).length(), m.row(1).length(), m.row(2).length());
-        let c = self.frame.position;
+        let c = at.frame().position;
         Aabb::new(c - ext, c + ext).padded(BOUNDS_PAD)
     }
 }
@@ -73,6 +64,7 @@ impl Shape for Ellipsoid {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shapes::Shape;
 
     fn egg() -> Ellipsoid {
         Ellipsoid::new(

@@ -7,6 +7,7 @@ mod boxes;
 mod ellipsoid;
 pub mod heart;
 pub mod implicit;
+pub mod placed;
 mod plane;
 mod polygon;
 mod sphere;

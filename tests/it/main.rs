@@ -1,11 +1,13 @@
 //! All integration tests, one module per area, linked into one test binary.
 
+mod fuzz_support;
 mod heart_support;
 mod render_support;
 
 mod cli_render;
 mod explore;
 mod explore_browser;
+mod fuzz_scenes;
 mod heart_geometry;
 mod heart_hard_cases;
 mod heart_solvers;
@@ -14,14 +16,17 @@ mod implicit_measure;
 mod implicit_render;
 mod implicit_scene;
 mod implicit_specks;
+mod pipeline;
 mod probe_cli;
 mod render_golden;
 mod render_shading;
 mod roots_cli;
 mod roots_heart;
+mod roots_reference;
 mod roots_sturm;
 mod scene_errors;
 mod scene_files;
 mod scene_fuzz;
+mod scene_ranges;
 mod shapes_props;
 mod specks;

@@ -153,3 +153,161 @@ fn probe_reports_a_bad_scene() {
     assert!(out.is_empty());
     assert!(err.contains(":7:"), "the error names line 7: {err}");
 }
+
+/// Runs `kardia probe` on the test scene with raw bytes on stdin; returns (exit code,
+/// stdout lines).
+fn probe_bytes(stdin: &[u8]) -> (i32, Vec<String>) {
+    probe_scene_bytes(SCENE, stdin)
+}
+
+/// Runs `kardia probe` on the scene `text` with raw bytes on stdin; returns (exit code,
+/// stdout lines).
+fn probe_scene_bytes(text: &str, stdin: &[u8]) -> (i32, Vec<String>) {
+    let mut scene = tempfile::Builder::new()
+        .suffix(".scene")
+        .tempfile()
+        .unwrap();
+    scene.write_all(text.as_bytes()).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_kardia"))
+        .arg("probe")
+        .arg(scene.path())
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut input = child.stdin.take().unwrap();
+    let bytes = stdin.to_vec();
+    let writer = std::thread::spawn(move || input.write_all(&bytes));
+    let out = child.wait_with_output().unwrap();
+    writer.join().unwrap().unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        text.lines().map(str::to_string).collect(),
+    )
+}
+
+#[test]
+fn probe_answers_huge_binary_and_extreme_lines_with_errors() {
+    let mut input = Vec::new();
+    input.extend_from_slice(&vec![b'7'; 1 << 20]); // A 1 MiB line.
+    input.push(b'\n');
+    input.extend_from_slice(b"6 0 0.1 -1 0 \xff\xfe\n"); // Not UTF-8.
+    input.extend_from_slice(b"1e308 0 0 -1 0 0\n");
+    input.extend_from_slice(b"6 0 0 -5e-324 0 0\n");
+    input.extend_from_slice(b"6 0 0 -1 0 0 7 8 9 10\n");
+    input.extend_from_slice(b"nan 0 0 -1 0 0\n");
+    input.extend_from_slice(&vec![b' '; 10_000]);
+    input.extend_from_slice(b"\n\0\0\0\n"); // Spaces (too long), then NULs (one field).
+    input.extend_from_slice(b"6 0 0.1 -1 0 0"); // Last line without a newline.
+    let (code, lines) = probe_bytes(&input);
+    assert_eq!(code, 0);
+    assert_eq!(lines.len(), 9, "{lines:#?}");
+    let expect = [
+        "line 1: longer than 4096 bytes",
+        "line 2: not valid UTF-8",
+        "line 3: '1e308' is outside the valid range of a coordinate, -1e6 to 1e6",
+        "line 4: the direction (dx, dy, dz) is too short",
+        "line 5: expected 6 numbers",
+        "line 6: 'nan' is not a finite number",
+        "line 7: longer than 4096 bytes",
+        "line 8: expected 6 numbers 'ox oy oz dx dy dz', found 1 field",
+    ];
+    for (line, want) in lines.iter().zip(expect) {
+        assert!(
+            line.starts_with(&format!("{{\"error\":\"{want}")),
+            "{line} should start with {want}"
+        );
+    }
+    assert!(lines[8].starts_with(r#"{"hit":true,"#), "{}", lines[8]);
+}
+
+/// Lines for the probe fuzzer: rays built from extreme and ordinary numbers, garbage,
+/// non-UTF-8 bytes, huge lines and odd separators.
+fn fuzz_line(rng: &mut impl rand::Rng) -> Vec<u8> {
+    use crate::fuzz_support::EXTREMES;
+    let number = |rng: &mut dyn rand::RngCore| -> String {
+        match rng.next_u32() % 4 {
+            0 => EXTREMES[rng.next_u32() as usize % EXTREMES.len()].to_string(),
+            1 => format!(
+                "{:?}",
+                (rng.next_u32() as f64 / u32::MAX as f64 - 0.5) * 20.0
+            ),
+            2 => [
+                "1e6",
+                "-1e6",
+                "1000000.0000000001",
+                "1e-6",
+                "9.999999999999999e-7",
+            ][rng.next_u32() as usize % 5]
+                .to_string(),
+            _ => format!("{}", rng.next_u32() % 10),
+        }
+    };
+    match rng.random_range(0..10) {
+        0 => (0..rng.random_range(0..200))
+            .map(|_| rng.random())
+            .collect(),
+        1 => vec![b'1'; rng.random_range(4000..5000)],
+        2 => {
+            let sep = [" ", "\t", ",", " , ", "\r", "\u{a0}"][rng.random_range(0..6)];
+            let n = rng.random_range(0..9);
+            (0..n)
+                .map(|_| number(rng))
+                .collect::<Vec<_>>()
+                .join(sep)
+                .into_bytes()
+        }
+        _ => {
+            // A ray from outside the objects towards them, with one number replaced.
+            let mut v: Vec<String> = [6.0, 0.0, 0.1, -1.0, 0.0, 0.0]
+                .iter()
+                .map(|x: &f64| format!("{:?}", x + (rng.random::<f64>() - 0.5) * 0.5))
+                .collect();
+            let at = rng.random_range(0..6);
+            v[at] = number(rng);
+            v.join(" ").into_bytes()
+        }
+    }
+}
+
+/// 20 000 fuzzed lines against three scenes (one with every keyword): every line gets one
+/// well-formed answer (a hit with finite numbers, a miss, or an error), and the probe exits
+/// normally.
+#[test]
+fn probe_answers_every_fuzzed_line() {
+    use rand::SeedableRng;
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(10);
+    let scenes = [
+        crate::fuzz_support::EVERY_KEYWORD,
+        SCENE,
+        include_str!("../../scenes/menagerie.scene"),
+    ];
+    for text in scenes {
+        let mut input = Vec::new();
+        let count = 20_000 / scenes.len();
+        for _ in 0..count {
+            let line = fuzz_line(&mut rng);
+            let line: Vec<u8> = line.into_iter().filter(|&b| b != b'\n').collect();
+            input.extend_from_slice(&line);
+            input.push(b'\n');
+        }
+        let (code, lines) = probe_scene_bytes(text, &input);
+        assert_eq!(code, 0);
+        assert_eq!(lines.len(), count);
+        for line in &lines {
+            let ok = line == r#"{"hit":false}"#
+                || (line.starts_with(r#"{"error":""#) && line.ends_with("\"}"))
+                || (line.starts_with(r#"{"hit":true,"t":"#)
+                    && line.ends_with('}')
+                    && number(line, "t") > 0.0
+                    && triple(line, "point").iter().all(|x| x.is_finite())
+                    && triple(line, "normal").iter().all(|x| x.is_finite()));
+            assert!(ok, "{line}");
+            if line.starts_with(r#"{"hit""#) {
+                assert!(!line.contains("NaN") && !line.contains("inf"), "{line}");
+            }
+        }
+    }
+}

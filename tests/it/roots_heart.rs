@@ -1,10 +1,8 @@
 //! The root finders on real heart polynomials from camera rays (the shared corpus), checked
 //! against an independent reference: the heart function sampled in 3D along the ray.
 
-use kardia::roots::{
-    first_root, first_root_yuksel, heart_corpus, heart_hard_rays, sturm_roots, CorpusRay, Solver,
-};
-use kardia::shapes::heart::heart_fn;
+use kardia::roots::{first_root, first_root_yuksel, sturm_roots, Solver};
+use kardia::shapes::heart::{heart_corpus, heart_fn, heart_hard_rays, CorpusRay};
 
 /// First sign change of `heart_fn` along the ray in `(lo, hi]` (4000 samples, then bisection),
 /// or `None`. Blind to roots without a sign change (tangent rays: double roots).

@@ -1,7 +1,7 @@
 //! The paper's implicit heart, `(2X² + Y² + Z² − 1)³ − (0.1X² + Y²)·Z³ = 0`, placed in the
 //! world by a position and a basis `u, v, w` (the scene line `HEART (position) (u) (v) (w)`).
 //!
-//! A ray's path through [`Heart::intersect`](Shape::intersect):
+//! A ray's path through [`Heart::intersect`](super::Shape::intersect):
 //! 1. into object space with `M⁻¹` (direction not renormalised, so `t` is shared);
 //! 2. clipped to the object-space box [`surface::BOUNDS`] (the exact extents plus a margin),
 //!    then to the hull of its spans above `Z = 0` and inside the ellipsoid
@@ -21,12 +21,16 @@
 //!    from `g`; a root at or before the ray's own origin (a ray leaving the surface) is
 //!    skipped. The search then resumes past the skipped root.
 //!
-//! The normal ([`Shape::normal`]) is `∇g` (parallel to `∇f` on the surface, but well-defined
+//! The normal ([`super::Shape::normal`]) is `∇g` (parallel to `∇f` on the surface, but well-defined
 //! and well-conditioned on the equator curve), with `∇f` and then the axis as fallbacks at the
 //! two singular points, mapped to world space by `(M⁻¹)ᵀ`.
 
+mod corpus;
 mod polish;
 mod surface;
+
+#[doc(hidden)]
+pub use corpus::{heart_corpus, heart_hard_rays, CorpusRay};
 
 use polish::{earlier_crossing, polish};
 
@@ -35,7 +39,8 @@ pub use surface::{
     sextic_coefficients, BOUNDS, BOUNDS_MARGIN, EXTENTS, S_X, S_Y, S_Z,
 };
 
-use super::{Shape, ShapeError};
+use super::placed::{ObjectShape, Placed, Placement};
+use super::ShapeError;
 use crate::geometry::{Aabb, DVec3, Frame, Ray};
 use crate::roots::Solver;
 
@@ -56,13 +61,13 @@ const POLISH_WINDOW: f64 = 1e-2;
 const MAX_SKIPS: usize = 6;
 
 /// A heart placed in the world; see the module doc.
+pub type Heart = Placed<HeartShape>;
+
+/// The object-space heart `f = 0` of the module doc, with the root-isolation strategy its
+/// intersections use.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Heart {
-    frame: Frame,
+pub struct HeartShape {
     solver: Solver,
-    /// `‖M⁻¹‖∞·‖position‖∞`: how large the world position is in object units, which bounds the
-    /// rounding of an object-space ray origin.
-    position_scale: f64,
 }
 
 impl Heart {
@@ -74,31 +79,18 @@ impl Heart {
 
     /// A heart placed by an already validated frame.
     pub fn from_frame(frame: Frame) -> Self {
-        let m = frame.m_inv;
-        let norm_inf = (0..3)
-            .map(|r| m.row(r).abs().element_sum())
-            .fold(0.0, f64::max);
-        Self {
-            frame,
-            solver: Solver::default(),
-            position_scale: norm_inf * frame.position.abs().max_element(),
-        }
+        Placed::place(Placement::new(frame), HeartShape::default())
     }
 
     /// The same heart, intersected with the given root-isolation strategy.
     pub fn with_solver(mut self, solver: Solver) -> Self {
-        self.solver = solver;
+        self.object_mut().solver = solver;
         self
-    }
-
-    /// The placement of the heart.
-    pub fn frame(&self) -> &Frame {
-        &self.frame
     }
 
     /// The root-isolation strategy in use.
     pub fn solver(&self) -> Solver {
-        self.solver
+        self.object().solver
     }
 
     /// The object-space distance along a ray from `origin_obj` within which roots are taken to
@@ -106,30 +98,64 @@ impl Heart {
     /// object units, counting the world position) that its own rounding exceeds that.
     #[inline]
     pub fn self_hit_guard(&self, origin_obj: DVec3) -> f64 {
-        let reach = origin_obj.abs().max_element() + self.position_scale;
-        SELF_HIT_GUARD.max(1024.0 * f64::EPSILON * reach)
+        HeartShape::self_hit_guard(self.placement(), origin_obj)
     }
 
-    /// [`Shape::intersect`] with the first-root query supplied by the caller (tests use it to
-    /// check the geometry independently of the solver). `first_root(c, lo, hi)` must return
-    /// the smallest root in `(lo, hi]` of `c0 + c1·s + … + c6·s⁶`, if any.
+    /// [`Shape::intersect`](super::Shape::intersect) with the first-root query supplied by
+    /// the caller (tests use it to check the geometry independently of the solver).
+    /// `first_root(c, lo, hi)` must return the smallest root in `(lo, hi]` of
+    /// `c0 + c1·s + … + c6·s⁶`, if any.
     pub fn intersect_with(
         &self,
         ray: &Ray,
         t_min: f64,
         t_max: f64,
+        first_root: impl FnMut(&[f64; 7], f64, f64) -> Option<f64>,
+    ) -> Option<f64> {
+        let local = self.placement().ray_to_object(ray);
+        HeartShape::intersect_with(self.placement(), &local, t_min, t_max, first_root)
+    }
+}
+
+impl Default for HeartShape {
+    /// The heart with the default strategy.
+    fn default() -> Self {
+        Self {
+            solver: Solver::default(),
+        }
+    }
+}
+
+impl HeartShape {
+    /// The heart intersected with `solver`.
+    pub fn with_solver(solver: Solver) -> Self {
+        Self { solver }
+    }
+
+    /// See [`Heart::self_hit_guard`].
+    #[inline]
+    fn self_hit_guard(at: &Placement, origin_obj: DVec3) -> f64 {
+        let reach = origin_obj.abs().max_element() + at.position_reach();
+        SELF_HIT_GUARD.max(1024.0 * f64::EPSILON * reach)
+    }
+
+    /// See [`Heart::intersect_with`]; `r` is the ray in object space.
+    fn intersect_with(
+        at: &Placement,
+        r: &Ray,
+        t_min: f64,
+        t_max: f64,
         mut first_root: impl FnMut(&[f64; 7], f64, f64) -> Option<f64>,
     ) -> Option<f64> {
-        let r = self.frame.ray_to_object(ray);
         // |d|, without the underflow or overflow of squaring tiny or huge components.
         let scale = r.dir.abs().max_element();
         let dir_len = scale * (r.dir / scale).length();
         if !(dir_len > 0.0 && dir_len.is_finite() && r.origin.is_finite()) {
             return None;
         }
-        let t_lo = t_min.max(self.self_hit_guard(r.origin) / dir_len);
-        let (t0, t1) = BOUNDS.clip(&r, t_lo, t_max)?;
-        let (t0, t1) = clip_lower_half(&r, t0, t1)?;
+        let t_lo = t_min.max(Self::self_hit_guard(at, r.origin) / dir_len);
+        let (t0, t1) = BOUNDS.clip(r, t_lo, t_max)?;
+        let (t0, t1) = clip_lower_half(r, t0, t1)?;
         let len = t1 - t0;
         if !(len > 0.0 && len.is_finite()) {
             return None;
@@ -237,24 +263,28 @@ fn clip_lower_half(r: &Ray, t0: f64, t1: f64) -> Option<(f64, f64)> {
     Some((t0 + u0, t0 + u1))
 }
 
-impl Shape for Heart {
-    fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+impl ObjectShape for HeartShape {
+    #[inline]
+    fn intersect(
+        &self,
+        at: &Placement,
+        _: &Ray,
+        local: &Ray,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<f64> {
         let solver = self.solver;
-        self.intersect_with(ray, t_min, t_max, |c, lo, hi| solver.first_root(c, lo, hi))
+        Self::intersect_with(at, local, t_min, t_max, |c, lo, hi| {
+            solver.first_root(c, lo, hi)
+        })
     }
 
-    fn normal(&self, p: DVec3) -> DVec3 {
-        let q = self.frame.point_to_object(p);
-        let n = outward_direction(q);
-        let world = self.frame.normal_matrix * n;
-        match surface::rescaled(world) {
-            Some(w) => w.normalize(),
-            // Unreachable for an invertible frame; keeps the never-NaN promise regardless.
-            None => DVec3::Z,
-        }
+    fn normal(&self, at: &Placement, q: DVec3) -> DVec3 {
+        // Never NaN: `+Z` for a zero direction, unreachable for an invertible frame.
+        at.normal_to_world(outward_direction(q))
     }
 
-    fn bounds(&self) -> Aabb {
-        self.frame.bounds_to_world(&BOUNDS)
+    fn bounds(&self, at: &Placement) -> Aabb {
+        at.bounds_to_world(&BOUNDS)
     }
 }

@@ -21,18 +21,23 @@
 //! at its equator curve. Any other way of typing the heart goes through the generic path.
 
 pub mod coef;
+mod corpus;
 pub mod dd;
 pub mod equation;
 pub mod extent;
 pub mod poly;
 pub mod presets;
 
-use super::{Heart, Shape};
+use super::heart::HeartShape;
+use super::placed::{ObjectShape, Placed, Placement};
 use crate::geometry::{Aabb, DVec3, Frame, Ray};
 use crate::roots::Solver;
 use dd::Dd;
 use poly::{Compiled, Poly, Uni};
 pub use presets::{Preset, HEART_EQUATION};
+
+#[doc(hidden)]
+pub use corpus::{typed_corpus, TypedRay, TYPED_SURFACES};
 
 /// Highest total degree accepted for an equation.
 pub const MAX_DEGREE: usize = 16;
@@ -246,14 +251,17 @@ impl Surface {
 #[derive(Debug, Clone)]
 enum Kind {
     Generic(Box<Surface>),
-    Heart(Box<Heart>),
+    Heart(HeartShape),
 }
 
 /// An implicit polynomial surface `p(x, y, z) = 0` in object space, placed by a [`Frame`],
 /// clipped to the object-space sphere of radius `bound` about the origin.
+pub type Implicit = Placed<ImplicitShape>;
+
+/// The object space of an [`Implicit`]: the surface, its clip radius and the root-isolation
+/// strategy its intersections use.
 #[derive(Debug, Clone)]
-pub struct Implicit {
-    frame: Frame,
+pub struct ImplicitShape {
     solver: Solver,
     bound: f64,
     kind: Kind,
@@ -332,16 +340,18 @@ impl Implicit {
         let grad = [0, 1, 2].map(|v| Compiled::new(&poly.derivative(v)));
         let object_box = extent::zero_set_box(&f, bound)
             .map(|(lo, hi)| Aabb::new(DVec3::from_array(lo), DVec3::from_array(hi)));
-        Ok(Self {
-            frame,
-            solver: Solver::default(),
-            bound,
-            kind: Kind::Generic(Box::new(Surface {
-                f,
-                grad,
-                object_box,
-            })),
-        })
+        Ok(Placed::place(
+            Placement::new(frame),
+            ImplicitShape {
+                solver: Solver::default(),
+                bound,
+                kind: Kind::Generic(Box::new(Surface {
+                    f,
+                    grad,
+                    object_box,
+                })),
+            },
+        ))
     }
 
     /// A named preset (see [`PRESETS`]) placed with `frame`; `bound` overrides the preset's
@@ -357,43 +367,39 @@ impl Implicit {
     }
 
     fn heart(frame: Frame, bound: f64) -> Self {
-        let heart = Heart::new(
-            frame.position,
-            frame.m.x_axis,
-            frame.m.y_axis,
-            frame.m.z_axis,
+        Placed::place(
+            Placement::new(frame),
+            ImplicitShape {
+                solver: Solver::default(),
+                bound,
+                kind: Kind::Heart(HeartShape::default()),
+            },
         )
-        .expect("a valid frame makes a valid heart");
-        Self {
-            frame,
-            solver: Solver::default(),
-            bound,
-            kind: Kind::Heart(Box::new(heart)),
-        }
     }
 
     /// The same surface, intersected with the given root-isolation strategy.
     pub fn with_solver(mut self, solver: Solver) -> Self {
-        self.solver = solver;
-        if let Kind::Heart(h) = self.kind {
-            self.kind = Kind::Heart(Box::new(h.with_solver(solver)));
+        let shape = self.object_mut();
+        shape.solver = solver;
+        if let Kind::Heart(h) = &mut shape.kind {
+            *h = HeartShape::with_solver(solver);
         }
         self
     }
 
     /// The object-space clip radius.
     pub fn bound(&self) -> f64 {
-        self.bound
+        self.object().bound
     }
 
-    /// True when this is the `heart` preset, delegated to [`Heart`].
+    /// True when this is the `heart` preset, delegated to [`super::Heart`]'s object space.
     pub fn is_heart(&self) -> bool {
-        matches!(self.kind, Kind::Heart(_))
+        matches!(self.object().kind, Kind::Heart(_))
     }
 
     /// Total degree of the polynomial.
     pub fn degree(&self) -> usize {
-        match &self.kind {
+        match &self.object().kind {
             Kind::Generic(s) => s.f.degree,
             Kind::Heart(_) => 6,
         }
@@ -401,7 +407,7 @@ impl Implicit {
 
     /// The polynomial's value at an object-space point (negative inside, positive outside).
     pub fn value(&self, p: DVec3) -> f64 {
-        match &self.kind {
+        match &self.object().kind {
             Kind::Generic(s) => s.f.eval(p.to_array()),
             Kind::Heart(_) => super::heart::heart_fn(p),
         }
@@ -409,7 +415,7 @@ impl Implicit {
 
     /// The symbolic gradient at an object-space point (may be zero at singular points).
     pub fn gradient(&self, p: DVec3) -> DVec3 {
-        match &self.kind {
+        match &self.object().kind {
             Kind::Generic(s) => {
                 let q = p.to_array();
                 DVec3::new(s.grad[0].eval(q), s.grad[1].eval(q), s.grad[2].eval(q))
@@ -426,10 +432,33 @@ impl Implicit {
         }
     }
 
-    /// The chord of the world ray through the clip sphere: `(t_mid, t_half, object-space
-    /// midpoint, object-space half-chord vector)`, or `None` if the ray's line misses it.
-    fn chord(&self, ray: &Ray) -> Option<(f64, f64, DVec3, DVec3)> {
-        let r = self.frame.ray_to_object(ray);
+    /// The per-ray polynomial over the clip chord, or `None` when the ray's line misses the
+    /// clip sphere. For the `heart` preset this is the generic composition of the heart's
+    /// expanded equation (the shape itself intersects through [`super::Heart`]'s object
+    /// space).
+    pub fn ray_polynomial(&self, ray: &Ray) -> Option<RayPolynomial> {
+        self.object()
+            .ray_polynomial(&self.placement().ray_to_object(ray))
+    }
+
+    /// The first first-root query an intersection of the world ray (from `t = 0`) puts to
+    /// the solver on the generic path: the normalised coefficients (ascending) and the
+    /// interval `(lo, hi]`, or `None` when the ray misses the clip sphere or the surface's box
+    /// (and for the `heart` preset, which intersects through the heart's own path). For the
+    /// root-finder corpora of benchmarks and tests.
+    #[doc(hidden)]
+    pub fn solver_query(&self, ray: &Ray) -> Option<(Vec<f64>, f64, f64)> {
+        self.object()
+            .solver_query(&self.placement().ray_to_object(ray))
+    }
+}
+
+impl ImplicitShape {
+    /// The chord of the ray (in object space) through the clip sphere: `(t_mid, t_half,
+    /// object-space midpoint, object-space half-chord vector)`, or `None` if the ray's line
+    /// misses it.
+    #[inline]
+    fn chord(&self, r: &Ray) -> Option<(f64, f64, DVec3, DVec3)> {
         let dd = r.dir.length_squared();
         if !(dd > 0.0 && dd.is_finite()) {
             return None;
@@ -444,10 +473,19 @@ impl Implicit {
         Some((t_mid, t_half, mid, r.dir * t_half))
     }
 
-    /// The per-ray polynomial over the clip chord, or `None` when the ray's line misses the
-    /// clip sphere. For the `heart` preset this is the generic composition of the heart's
-    /// expanded equation (the shape itself intersects through [`Heart`]).
-    pub fn ray_polynomial(&self, ray: &Ray) -> Option<RayPolynomial> {
+    /// See [`Implicit::solver_query`]; `ray` in object space.
+    fn solver_query(&self, ray: &Ray) -> Option<(Vec<f64>, f64, f64)> {
+        match &self.kind {
+            Kind::Generic(s) => {
+                let q = self.first_query(s, ray, 0.0, f64::INFINITY)?;
+                Some((q.c[..=q.deg].to_vec(), q.s_lo, q.s_hi))
+            }
+            Kind::Heart(_) => None,
+        }
+    }
+
+    /// See [`Implicit::ray_polynomial`]; `ray` in object space.
+    fn ray_polynomial(&self, ray: &Ray) -> Option<RayPolynomial> {
         let (t_mid, t_half, mid, e) = self.chord(ray)?;
         let coeffs: Vec<f64> = match &self.kind {
             Kind::Generic(s) => s.f.compose(mid.to_array(), e.to_array())[..=s.f.degree].to_vec(),
@@ -460,7 +498,11 @@ impl Implicit {
         })
     }
 
-    fn intersect_generic(&self, s: &Surface, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+    /// The first query the generic path puts to the solver for the ray (object space) in
+    /// `(t_min, t_max)`, or `None` when the ray misses the clip sphere or the surface's box
+    /// there.
+    #[inline]
+    fn first_query(&self, s: &Surface, ray: &Ray, t_min: f64, t_max: f64) -> Option<Query> {
         let (t_mid, t_half, mid, e) = self.chord(ray)?;
         let guard = if t_min >= 0.0 {
             t_min.max(SELF_HIT_GUARD * t_half)
@@ -473,9 +515,7 @@ impl Implicit {
             return None;
         }
         // Only the span inside the box that holds the surface needs searching.
-        let (lo_t, hi_t) = s
-            .object_box?
-            .clip(&self.frame.ray_to_object(ray), lo_t, hi_t)?;
+        let (lo_t, hi_t) = s.object_box?.clip(ray, lo_t, hi_t)?;
         if lo_t >= hi_t {
             return None;
         }
@@ -483,8 +523,34 @@ impl Implicit {
         let mut c: Uni = [0.0; MAX_DEGREE + 1];
         s.f.compose_into(mid, e, &mut c);
         let (deg, inv) = normalise(&mut c, s.f.degree)?;
-        let mut s_lo = (lo_t - t_mid) / t_half;
-        let s_hi = ((hi_t - t_mid) / t_half).min(1.0);
+        Some(Query {
+            t_mid,
+            t_half,
+            guard,
+            mid,
+            e,
+            c,
+            deg,
+            inv,
+            s_lo: (lo_t - t_mid) / t_half,
+            s_hi: ((hi_t - t_mid) / t_half).min(1.0),
+        })
+    }
+
+    /// The generic path of [`ObjectShape::intersect`], `ray` in object space.
+    fn intersect_generic(&self, s: &Surface, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+        let Query {
+            t_mid,
+            t_half,
+            guard,
+            mid,
+            e,
+            c,
+            deg,
+            inv,
+            mut s_lo,
+            s_hi,
+        } = self.first_query(s, ray, t_min, t_max)?;
         for _ in 0..8 {
             let root = self.solver.first_root(&c[..=deg], s_lo, s_hi)?;
             let radius = ill_conditioned(s, &c[..=deg], inv, mid, e, root);
@@ -522,6 +588,23 @@ impl Implicit {
         }
         None
     }
+}
+
+/// What the generic path hands the solver for one ray: the normalised ray polynomial in
+/// `s` over the clip chord (`t = t_mid + s·t_half`) and the interval `(s_lo, s_hi]` to search.
+struct Query {
+    t_mid: f64,
+    t_half: f64,
+    /// Roots at or below this `t` are the ray's own origin.
+    guard: f64,
+    mid: [f64; 3],
+    e: [f64; 3],
+    /// Coefficients, ascending, `deg + 1` of them used; scaled by `inv`.
+    c: Uni,
+    deg: usize,
+    inv: f64,
+    s_lo: f64,
+    s_hi: f64,
 }
 
 /// Scales `c[..=n]` by a power of two (exact) so its largest coefficient is in `[1, 2)` and
@@ -639,19 +722,26 @@ fn local_root(
     Some((root + u * radius).clamp(lo, hi))
 }
 
-impl Shape for Implicit {
-    fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+impl ObjectShape for ImplicitShape {
+    fn intersect(
+        &self,
+        at: &Placement,
+        world: &Ray,
+        local: &Ray,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<f64> {
         match &self.kind {
-            Kind::Generic(s) => self.intersect_generic(s, ray, t_min, t_max),
+            Kind::Generic(s) => self.intersect_generic(s, local, t_min, t_max),
             Kind::Heart(h) => {
                 if self.bound >= presets::HEART_RADIUS {
-                    h.intersect(ray, t_min, t_max)
+                    h.intersect(at, world, local, t_min, t_max)
                 } else {
-                    let (t_mid, t_half, _, _) = self.chord(ray)?;
+                    let (t_mid, t_half, _, _) = self.chord(local)?;
                     let lo = t_min.max(t_mid - t_half);
                     let hi = t_max.min(t_mid + t_half);
                     if lo < hi {
-                        h.intersect(ray, lo, hi)
+                        h.intersect(at, world, local, lo, hi)
                     } else {
                         None
                     }
@@ -660,10 +750,9 @@ impl Shape for Implicit {
         }
     }
 
-    fn normal(&self, p: DVec3) -> DVec3 {
-        let q = self.frame.point_to_object(p);
+    fn normal(&self, at: &Placement, q: DVec3) -> DVec3 {
         let s = match &self.kind {
-            Kind::Heart(h) => return h.normal(p),
+            Kind::Heart(h) => return h.normal(at, q),
             Kind::Generic(s) => s,
         };
         let g = s.normal_direction(q, SIGN_SPHERE * self.bound);
@@ -682,34 +771,29 @@ impl Shape for Implicit {
                 DVec3::Z
             }
         };
-        let w = self.frame.normal_matrix * n;
-        let big = w.abs().max_element();
-        if big > 0.0 && big.is_finite() {
-            (w / big).normalize()
-        } else {
-            DVec3::Z
-        }
+        at.normal_to_world(n)
     }
 
-    fn bounds(&self) -> Aabb {
+    fn bounds(&self, at: &Placement) -> Aabb {
         // The clip sphere's image is an ellipsoid: its half-extent along world axis a is
         // r·|row a of M|.
-        let m = self.frame.m;
+        let m = at.frame().m;
         let rows = m.transpose();
         let half = DVec3::new(
             rows.x_axis.length(),
             rows.y_axis.length(),
             rows.z_axis.length(),
         ) * self.bound;
-        let sphere = Aabb::new(self.frame.position - half, self.frame.position + half).padded(1e-9);
+        let c = at.frame().position;
+        let sphere = Aabb::new(c - half, c + half).padded(1e-9);
         match &self.kind {
             Kind::Heart(h) => {
-                let hb = h.bounds();
+                let hb = h.bounds(at);
                 Aabb::new(hb.min.max(sphere.min), hb.max.min(sphere.max))
             }
             Kind::Generic(s) => match &s.object_box {
                 Some(b) => {
-                    let wb = self.frame.bounds_to_world(b).padded(1e-9);
+                    let wb = at.bounds_to_world(b).padded(1e-9);
                     Aabb::new(wb.min.max(sphere.min), wb.max.min(sphere.max))
                 }
                 None => Aabb::new(sphere.min, sphere.min),

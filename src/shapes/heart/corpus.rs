@@ -1,7 +1,7 @@
 //! A fixed corpus of heart polynomials from camera rays, shared by tests and benchmarks.
 
+use super::surface::sextic_coefficients;
 use crate::geometry::DVec3;
-use crate::shapes::heart::sextic_coefficients;
 
 /// One ray of the corpus, in the object space of an axis-aligned heart at the origin, with
 /// its sextic and the part `[lo, hi]` of the ray inside the heart's bounding box.

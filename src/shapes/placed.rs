@@ -1,0 +1,317 @@
+//! Placement in the world of a shape defined in its own object space: one wrapper,
+//! [`Placed`], for every shape given by a position and a basis (`BOX`, `ELLIPSOID`, `HEART`,
+//! `IMPLICIT`). The wrapper owns the [`Placement`] (the validated [`Frame`] with the ∞-norm of
+//! `M⁻¹`, computed once), carries each world ray into object space once (the direction is
+//! not renormalised, so `t` is the same in both spaces) and hands it to the object-space shape
+//! ([`ObjectShape`]) together with the placement, which also maps normals and boxes back.
+
+use super::{Shape, ShapeError};
+use crate::geometry::{Aabb, DVec3, Frame, FrameError, Ray};
+
+/// A validated object frame (`p_world = M·p_object + position`) and `‖M⁻¹‖∞`, which bounds how
+/// much the rounding of a world point grows on its way into object space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    frame: Frame,
+    inv_norm: f64,
+}
+
+/// How a shape's placement parameters are called in its error messages: the shape (`"box"`),
+/// its position (`"corner"`) and its basis vectors (`"edge"`).
+#[derive(Debug, Clone, Copy)]
+pub struct PlacementNames {
+    /// The shape, as in "the box's …".
+    pub shape: &'static str,
+    /// The position parameter, as in "… corner and edge vectors …".
+    pub position: &'static str,
+    /// The basis vectors, as in "… three edge vectors …".
+    pub vectors: &'static str,
+}
+
+impl Placement {
+    /// The placement by an already validated frame.
+    pub fn new(frame: Frame) -> Self {
+        let inv_norm = (0..3)
+            .map(|i| frame.m_inv.row(i).abs().element_sum())
+            .fold(0.0, f64::max);
+        Self { frame, inv_norm }
+    }
+
+    /// The placement at `position` with basis columns `u`, `v`, `w` (finite, linearly
+    /// independent: see [`Frame::new`]).
+    pub fn from_basis(position: DVec3, u: DVec3, v: DVec3, w: DVec3) -> Result<Self, FrameError> {
+        Frame::new(position, u, v, w).map(Self::new)
+    }
+
+    /// [`Placement::from_basis`] with the errors worded for the shape's own parameters: "the
+    /// box's corner and edge vectors must all be finite", "the box's three edge vectors lie in
+    /// one plane (…), so the box would be flat".
+    pub fn named(
+        position: DVec3,
+        u: DVec3,
+        v: DVec3,
+        w: DVec3,
+        names: PlacementNames,
+    ) -> Result<Self, ShapeError> {
+        let PlacementNames {
+            shape,
+            position: origin,
+            vectors,
+        } = names;
+        Self::from_basis(position, u, v, w).map_err(|e| match e {
+            FrameError::NotFinite => ShapeError(format!(
+                "the {shape}'s {origin} and {vectors} vectors must all be finite"
+            )),
+            FrameError::Singular => ShapeError(format!(
+                "the {shape}'s three {vectors} vectors lie in one plane (or nearly so, or one is \
+                 zero), so the {shape} would be flat"
+            )),
+        })
+    }
+
+    /// The frame.
+    #[inline]
+    pub fn frame(&self) -> &Frame {
+        &self.frame
+    }
+
+    /// `‖M⁻¹‖∞`, the largest absolute row sum of the world-to-object matrix.
+    #[inline]
+    pub fn inv_norm(&self) -> f64 {
+        self.inv_norm
+    }
+
+    /// `‖M⁻¹‖∞·(‖o‖∞ + ‖position‖∞)` for a world point `o`: the object-space size of the
+    /// quantities `o` goes through on its way into object space, so that `ε` times it bounds
+    /// the rounding of its object coordinates (up to a small factor).
+    #[inline]
+    pub fn origin_reach(&self, o: DVec3) -> f64 {
+        self.inv_norm * (o.abs().max_element() + self.frame.position.abs().max_element())
+    }
+
+    /// `‖M⁻¹‖∞·‖position‖∞`: how large the world position is in object units.
+    #[inline]
+    pub fn position_reach(&self) -> f64 {
+        self.inv_norm * self.frame.position.abs().max_element()
+    }
+
+    /// The world ray in object space, with the same `t` (see [`Frame::ray_to_object`]).
+    #[inline]
+    pub fn ray_to_object(&self, ray: &Ray) -> Ray {
+        self.frame.ray_to_object(ray)
+    }
+
+    /// An object-space normal direction `n` (any length, outward) as a unit world normal:
+    /// `(M⁻¹)ᵀ·n` rescaled by its largest component before normalising, so tiny or huge
+    /// vectors neither underflow nor overflow; `+Z` when that is zero or not finite (never
+    /// NaN).
+    #[inline]
+    pub fn normal_to_world(&self, n: DVec3) -> DVec3 {
+        let w = self.frame.normal_matrix * n;
+        let big = w.abs().max_element();
+        if big > 0.0 && big.is_finite() {
+            (w / big).normalize()
+        } else {
+            DVec3::Z
+        }
+    }
+
+    /// The world box holding the object-space box `b` (see [`Frame::bounds_to_world`]).
+    #[inline]
+    pub fn bounds_to_world(&self, b: &Aabb) -> Aabb {
+        self.frame.bounds_to_world(b)
+    }
+}
+
+/// A shape in its own object space, placed in the world by a [`Placed`] wrapper.
+///
+/// The contract is [`Shape`]'s, with the ray already in object space: `intersect` gets the
+/// world ray and the same ray in object space (`local`, same `t`), and returns the smallest
+/// `t` in `(t_min, t_max)` on the surface; `normal` gets an object-space point and returns the
+/// unit outward normal in world space (never NaN); `bounds` is a world box holding the
+/// surface. The placement is passed to each, for the rounding bounds and mappings it offers.
+pub trait ObjectShape: Send + Sync + std::fmt::Debug {
+    /// Smallest `t` in `(t_min, t_max)` at which the ray meets the surface.
+    fn intersect(
+        &self,
+        at: &Placement,
+        world: &Ray,
+        local: &Ray,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<f64>;
+    /// Unit outward world normal at the object-space point `q` on the surface.
+    fn normal(&self, at: &Placement, q: DVec3) -> DVec3;
+    /// World-space box containing the surface.
+    fn bounds(&self, at: &Placement) -> Aabb;
+}
+
+/// An object-space shape `S` placed in the world by a [`Placement`]; implements [`Shape`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Placed<S> {
+    at: Placement,
+    shape: S,
+}
+
+impl<S> Placed<S> {
+    /// `shape` placed by `at`.
+    pub fn place(at: Placement, shape: S) -> Self {
+        Self { at, shape }
+    }
+
+    /// The placement of the shape.
+    #[inline]
+    pub fn frame(&self) -> &Frame {
+        self.at.frame()
+    }
+
+    /// The placement with its rounding bound.
+    #[inline]
+    pub fn placement(&self) -> &Placement {
+        &self.at
+    }
+
+    /// The object-space shape.
+    #[inline]
+    pub fn object(&self) -> &S {
+        &self.shape
+    }
+
+    /// The object-space shape, to change its settings.
+    #[inline]
+    pub(crate) fn object_mut(&mut self) -> &mut S {
+        &mut self.shape
+    }
+}
+
+impl<S: ObjectShape> Shape for Placed<S> {
+    #[inline]
+    fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+        let local = self.at.ray_to_object(ray);
+        self.shape.intersect(&self.at, ray, &local, t_min, t_max)
+    }
+
+    fn normal(&self, p: DVec3) -> DVec3 {
+        self.shape
+            .normal(&self.at, self.at.frame().point_to_object(p))
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.shape.bounds(&self.at)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The unit sphere in object space, by the plain quadratic formula.
+    #[derive(Debug)]
+    struct Ball;
+
+    impl ObjectShape for Ball {
+        fn intersect(
+            &self,
+            _: &Placement,
+            _: &Ray,
+            r: &Ray,
+            t_min: f64,
+            t_max: f64,
+        ) -> Option<f64> {
+            let (a, b, c) = (
+                r.dir.length_squared(),
+                r.origin.dot(r.dir),
+                r.origin.length_squared() - 1.0,
+            );
+            let disc = (b * b - a * c).sqrt();
+            [(-b - disc) / a, (-b + disc) / a]
+                .into_iter()
+                .find(|&t| t > t_min && t < t_max)
+        }
+        fn normal(&self, at: &Placement, q: DVec3) -> DVec3 {
+            at.normal_to_world(q)
+        }
+        fn bounds(&self, at: &Placement) -> Aabb {
+            at.bounds_to_world(&Aabb::new(DVec3::splat(-1.0), DVec3::ONE))
+        }
+    }
+
+    fn placed() -> Placed<Ball> {
+        let at = Placement::from_basis(
+            DVec3::new(1.0, -2.0, 3.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(0.0, 0.5, 0.0),
+            DVec3::new(0.0, 0.0, 4.0),
+        )
+        .unwrap();
+        Placed::place(at, Ball)
+    }
+
+    #[test]
+    fn t_is_shared_between_world_and_object_space() {
+        // The ellipsoid x²/4 + y²/0.25 + z²/16 = 1 about (1, −2, 3): along x from x = −9 with
+        // a direction of length 2, it is hit at x = −1, t = 4.
+        let s = placed();
+        let ray = Ray::new(DVec3::new(-9.0, -2.0, 3.0), DVec3::new(2.0, 0.0, 0.0));
+        let t = s.intersect(&ray, 0.0, f64::INFINITY).unwrap();
+        assert!((t - 4.0).abs() < 1e-12, "{t}");
+        assert!((s.normal(ray.at(t)) - DVec3::NEG_X).length() < 1e-12);
+        // Off-axis, the normal is the world gradient (x/4, y/0.25, z/16) of the ellipsoid.
+        let q = DVec3::new(0.6, 0.0, 0.8);
+        let p = s.frame().point_to_world(q);
+        let g = DVec3::new((p.x - 1.0) / 4.0, 0.0, (p.z - 3.0) / 16.0).normalize();
+        assert!((s.normal(p) - g).length() < 1e-12);
+        let b = s.bounds();
+        assert_eq!(
+            (b.min, b.max),
+            (DVec3::new(-1.0, -2.5, -1.0), DVec3::new(3.0, -1.5, 7.0))
+        );
+    }
+
+    #[test]
+    fn the_inverse_norm_and_reaches() {
+        let s = placed();
+        // M⁻¹ = diag(1/2, 2, 1/4): its largest row sum is 2.
+        assert_eq!(s.placement().inv_norm(), 2.0);
+        assert_eq!(s.placement().position_reach(), 6.0);
+        assert_eq!(s.placement().origin_reach(DVec3::new(0.0, 5.0, -1.0)), 16.0);
+    }
+
+    #[test]
+    fn normals_never_nan_at_any_scale() {
+        let at = placed().at;
+        for n in [
+            DVec3::splat(1e-300),
+            DVec3::new(1e300, -1e300, 1e300),
+            DVec3::ZERO,
+            DVec3::splat(f64::NAN),
+        ] {
+            let w = at.normal_to_world(n);
+            assert!(
+                w.is_finite() && (w.length() - 1.0).abs() < 1e-12,
+                "{n}: {w}"
+            );
+        }
+        assert_eq!(at.normal_to_world(DVec3::ZERO), DVec3::Z);
+    }
+
+    #[test]
+    fn errors_name_the_shapes_parameters() {
+        let names = PlacementNames {
+            shape: "box",
+            position: "corner",
+            vectors: "edge",
+        };
+        let flat = Placement::named(DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::X, names);
+        assert_eq!(
+            flat.unwrap_err().0,
+            "the box's three edge vectors lie in one plane (or nearly so, or one is zero), so \
+             the box would be flat"
+        );
+        let nan = Placement::named(DVec3::splat(f64::NAN), DVec3::X, DVec3::Y, DVec3::Z, names);
+        assert_eq!(
+            nan.unwrap_err().0,
+            "the box's corner and edge vectors must all be finite"
+        );
+    }
+}
