@@ -13,6 +13,18 @@
 //!   for byte), so regions rendered apart, on any machines, join into the whole image.
 //! - Encode the result with [`crate::film::encode_png`] / [`crate::film::encode_exr`] to any
 //!   writer, or write it atomically through a [`crate::film::AtomicFile`].
+//!
+//! ```no_run
+//! use kardia::{film, pipeline::{Control, RenderRequest, Renderer}, scene};
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let scene = scene::parse_file("scenes/heart.scene".as_ref(), &Default::default())?;
+//! let renderer = Renderer::new(0)?; // one thread per core
+//! let request = RenderRequest { width: Some(400), spp: 4, ..RenderRequest::default() };
+//! let rendered = renderer.render(&scene, &request, &Control::default())?;
+//! film::write_image(&rendered.image, "heart.png".as_ref())?;
+//! # Ok(())
+//! # }
+//! ```
 
 pub use crate::film::Region;
 pub use crate::integrator::View;
@@ -285,7 +297,8 @@ impl Renderer {
 
     /// Renders `request` of `scene`: the region's image (linear RGB, every pixel finite), or
     /// why not ([`RenderError::Cancelled`] when `control.cancel` was cancelled before the last
-    /// tile was done).
+    /// tile was done). Blocks the calling thread until then (from an async server, call it
+    /// on a blocking thread).
     pub fn render(
         &self,
         scene: &Scene,
