@@ -23,6 +23,9 @@ pub enum ClientMessage {
         width: u32,
         /// View height in pixels.
         height: u32,
+        /// Which image: a name of `kardia render --view` (default `shaded`).
+        #[serde(default)]
+        view: Option<String>,
     },
     /// The expanded equation and default clip radius of a preset with its parameters.
     Preset {
@@ -43,7 +46,30 @@ pub enum ClientMessage {
         height: u32,
         /// Samples per pixel.
         spp: u32,
+        /// Which image: a name of `kardia render --view` (default `shaded`).
+        #[serde(default)]
+        view: Option<String>,
     },
+}
+
+/// The render view named `name` (`None`: shaded), or a message listing the names.
+pub fn view_named(name: Option<&str>) -> Result<crate::pipeline::View, String> {
+    use crate::pipeline::View;
+    let Some(name) = name else {
+        return Ok(View::Shaded);
+    };
+    View::ALL
+        .iter()
+        .find(|(_, n)| *n == name)
+        .map(|(v, _)| *v)
+        .ok_or_else(|| {
+            let names: Vec<_> = View::ALL.iter().map(|(_, n)| *n).collect();
+            format!(
+                "unknown view '{}': one of {}",
+                name.chars().take(40).collect::<String>(),
+                names.join(", ")
+            )
+        })
 }
 
 /// A scene that did not parse, located in its text.
@@ -106,6 +132,8 @@ pub enum ServerMessage {
         scenes: Vec<(&'static str, &'static str)>,
         /// The scene the server was started with: `(name, text)`.
         initial: (String, String),
+        /// The names of the views a page may ask for (`shaded` first).
+        views: Vec<&'static str>,
     },
     /// The scene of request `seq` did not parse; the last good image stays.
     SceneError {
@@ -219,6 +247,15 @@ mod tests {
         )
         .is_err());
         assert!(serde_json::from_str::<ClientMessage>(r#"{"type":"open_file"}"#).is_err());
+    }
+
+    #[test]
+    fn views_by_name() {
+        use crate::pipeline::View;
+        assert_eq!(view_named(None), Ok(View::Shaded));
+        assert_eq!(view_named(Some("normals")), Ok(View::Normals));
+        let e = view_named(Some("nonsense")).unwrap_err();
+        assert!(e.contains("one of shaded, normals, depth"), "{e}");
     }
 
     #[test]

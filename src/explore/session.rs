@@ -4,7 +4,9 @@
 //! kept, so stale requests never queue); the render task runs the passes of the newest job,
 //! cancelling the pass in flight when a newer job arrives or the page goes away.
 
-use super::protocol::{binary, ClientMessage, FrameHeader, SceneProblem, ServerMessage};
+use super::protocol::{
+    binary, view_named, ClientMessage, FrameHeader, SceneProblem, ServerMessage,
+};
 use super::render::{render_pass, share, CancelToken, PassRequest, SharedScene};
 use super::{gallery, Limits, Shared};
 use crate::camera::Camera;
@@ -27,6 +29,7 @@ struct ViewJob {
     scene: String,
     width: u32,
     height: u32,
+    view: View,
 }
 
 /// Outgoing messages of a connection (bounded: a slow page slows its renders, never
@@ -70,6 +73,7 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
             shared.options.scene_name.clone(),
             shared.options.scene_text.clone(),
         ),
+        views: View::ALL.iter().map(|(_, name)| *name).collect(),
     };
     let _ = out.send(Message::Text(hello.to_json().into())).await;
 
@@ -154,18 +158,23 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                 scene,
                 width,
                 height,
-            } => match check_size(width, height, limits.max_view_side, limits.max_view_pixels) {
-                Ok(()) => {
+                view,
+            } => match check_size(width, height, limits.max_view_side, limits.max_view_pixels)
+                .and_then(|()| view_named(view.as_deref()))
+            {
+                Ok(view) => {
                     let job = ViewJob {
                         seq,
                         name: "explore.scene".into(),
                         scene,
                         width,
                         height,
+                        view,
                     };
                     jobs.send_if_modified(|current| {
                         let same = current.as_ref().is_some_and(|c| {
-                            c.scene == job.scene && c.width == job.width && c.height == job.height
+                            c.scene == job.scene
+                                && (c.width, c.height, c.view) == (job.width, job.height, job.view)
                         });
                         if same {
                             false
@@ -197,6 +206,7 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                 width,
                 height,
                 spp,
+                view,
             } => {
                 if save_task.as_ref().is_some_and(|t| !t.is_finished()) {
                     let _ = out
@@ -207,14 +217,19 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                         .await;
                     continue;
                 }
-                if let Err(why) = check_save(&limits, width, height, spp) {
-                    let _ = out.send(error_message(Some(seq), why)).await;
-                    continue;
-                }
+                let view = match check_save(&limits, width, height, spp)
+                    .and_then(|()| view_named(view.as_deref()))
+                {
+                    Ok(view) => view,
+                    Err(why) => {
+                        let _ = out.send(error_message(Some(seq), why)).await;
+                        continue;
+                    }
+                };
                 save_task = Some(tokio::spawn(save(
                     seq,
                     scene,
-                    (width, height, spp),
+                    (width, height, spp, view),
                     shared.clone(),
                     save_cancel.clone(),
                     out.clone(),
@@ -494,7 +509,7 @@ async fn render_views(
                 camera: camera.clone(),
                 spp: pass.spp,
                 seed: pass.seed,
-                view: View::Shaded,
+                view: job.view,
             };
             let (scene_ref, cancel_ref, busy) = (scene.clone(), cancel.clone(), Busy::new(&shared));
             let mut task = tokio::task::spawn_blocking(move || {
@@ -603,7 +618,7 @@ fn rgba(image: &Image) -> Vec<u8> {
 async fn save(
     seq: u64,
     text: String,
-    (width, height, spp): (u32, u32, u32),
+    (width, height, spp, view): (u32, u32, u32, View),
     shared: Arc<Shared>,
     cancel: CancelToken,
     out: Outbox,
@@ -621,7 +636,7 @@ async fn save(
             camera,
             spp,
             seed: 0,
-            view: View::Shaded,
+            view,
         };
         let result =
             render_pass(renderer, &shared, &request, &cancel).map_err(|e| e.to_string())?;

@@ -2,7 +2,8 @@
 // downloads no browser). Usage: node tests/browser/explore.mjs URL
 // Run by tests/it/explore_browser.rs, which starts the server on 127.0.0.1:0.
 import { chromium } from "playwright-core";
-import { mkdtempSync, rmSync } from "node:fs";
+import { mkdtempSync, rmSync, writeFileSync, readFileSync } from "node:fs";
+import { execFileSync } from "node:child_process";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
 import assert from "node:assert/strict";
@@ -126,6 +127,73 @@ await check("a preset slider changes the image", async () => {
   const after = await canvasStats();
   assert.ok(difference(before, after) > 8, `mean difference ${difference(before, after)}`);
   await page.waitForFunction(() => document.getElementById("equation").value.includes("0.8^2"));
+});
+
+await check("a study view differs from the shaded view", async () => {
+  const shaded = await canvasStats();
+  const seq = await sentSeq();
+  await page.selectOption("#study", "normals");
+  await fullFrameAfter(seq);
+  const normals = await canvasStats();
+  assert.ok(difference(shaded, normals) > 20, `mean difference ${difference(shaded, normals)}`);
+  await page.selectOption("#study", "shaded");
+  await fullFrameAfter(seq + 1);
+});
+
+await check("Save PNG equals `kardia render` of Copy scene", async () => {
+  const kardia = process.env.KARDIA_BIN;
+  assert.ok(kardia, "KARDIA_BIN names the kardia binary");
+  await page.fill("#save-width", "160");
+  await page.fill("#save-height", "120");
+  await page.fill("#save-spp", "2");
+  await page.evaluate(() => { window.kardia.lastPng = null; });
+  await page.click("#save");
+  await page.waitForFunction(() => window.kardia.lastPng, null, { timeout: 60000 });
+  await page.click("#copy-scene");
+  const scene = await page.evaluate(() => window.kardia.clipboard);
+  const dir = mkdtempSync(join(tmpdir(), "kardia-save-"));
+  writeFileSync(join(dir, "copied.scene"), scene);
+  execFileSync(kardia, ["render", join(dir, "copied.scene"), "-o", join(dir, "cli.png"),
+    "--width", "160", "--height", "120", "--spp", "2", "--quiet"]);
+  const cli = readFileSync(join(dir, "cli.png")).toString("base64");
+  rmSync(dir, { recursive: true, force: true });
+  const same = await page.evaluate(async (cliBase64) => {
+    const pixels = async (blob) => {
+      const bitmap = await createImageBitmap(blob, { colorSpaceConversion: "none", premultiplyAlpha: "none" });
+      const c = new OffscreenCanvas(bitmap.width, bitmap.height);
+      const g = c.getContext("2d");
+      g.drawImage(bitmap, 0, 0);
+      return { w: bitmap.width, h: bitmap.height, data: g.getImageData(0, 0, bitmap.width, bitmap.height).data };
+    };
+    const bytes = Uint8Array.from(atob(cliBase64), (ch) => ch.charCodeAt(0));
+    const a = await pixels(window.kardia.lastPng);
+    const b = await pixels(new Blob([bytes], { type: "image/png" }));
+    let differing = 0;
+    for (let i = 0; i < a.data.length; i++) if (a.data[i] !== b.data[i]) differing++;
+    return { size: [a.w, a.h, b.w, b.h], differing };
+  }, cli);
+  assert.deepEqual(same.size, [160, 120, 160, 120]);
+  assert.equal(same.differing, 0, "every pixel equal");
+});
+
+await check("a copied link restores the view", async () => {
+  const box = await page.locator("#view").boundingBox();
+  await page.mouse.move(box.x + 100, box.y + 100);
+  await page.mouse.down();
+  await page.mouse.move(box.x + 160, box.y + 70, { steps: 5 });
+  await page.mouse.up();
+  await page.click("#copy-link");
+  const link = await page.evaluate(() => window.kardia.clipboard);
+  const scene = await page.evaluate(() => window.kardia.state && document.getElementById("equation").value);
+  const text = await page.evaluate(() => window.kardia.currentScene());
+  const second = await context.newPage();
+  second.on("pageerror", (e) => pageErrors.push("second page: " + e.message));
+  await second.goto(link);
+  await second.waitForFunction(() => window.kardia.frames.some((f) => f.width === f.view_width), null, { timeout: 60000 });
+  assert.equal(await second.evaluate(() => window.kardia.currentScene()), text);
+  assert.equal(await second.inputValue("#equation"), scene);
+  assert.equal(await second.evaluate(() => window.kardia.state.mode), "equation");
+  await second.close();
 });
 
 assert.deepEqual(pageErrors, [], "no script errors on the page");

@@ -51,6 +51,7 @@ fn explorer_works_in_chromium() {
     let output = Command::new("node")
         .arg(root.join("tests/browser/explore.mjs"))
         .arg(&url)
+        .env("KARDIA_BIN", env!("CARGO_BIN_EXE_kardia"))
         .current_dir(&root)
         .output()
         .expect("node runs");

@@ -23,6 +23,7 @@ const state = {
   camera: structuredClone(DEFAULT_CAMERA),
   homeCamera: structuredClone(DEFAULT_CAMERA),
   fixedSize: null,        // [w, h] from the URL, else the canvas follows the window
+  view: "shaded",         // which image (a `kardia render --view` name)
 };
 
 let socket = null;
@@ -32,7 +33,8 @@ let drawnSeq = -1;        // request of the frame on the canvas
 let lastText = "";
 let pendingSave = null;
 const stats = { firstInput: 0 };
-window.kardia = { state, frames: [], errors: [], lastProblem: null, sent: () => seq };
+// For tests and the measuring script: what the page received and sent.
+window.kardia = { state, frames: [], errors: [], lastProblem: null, sent: () => seq, currentScene: () => currentScene() };
 
 // ---------- numbers and vectors ----------
 const fmt = (v) => {
@@ -149,9 +151,10 @@ function send(message) {
 
 // Sends the current view (only when something changed).
 function update() {
+  if (!hello) return; // the URL's state is read once the server has said hello
   const text = currentScene();
   const [width, height] = viewSize();
-  const key = `${width}x${height}\n${text}`;
+  const key = `${width}x${height} ${state.view}\n${text}`;
   if (key === lastText) return;
   lastText = key;
   if (canvas.width !== width || canvas.height !== height) {
@@ -160,7 +163,7 @@ function update() {
   }
   seq += 1;
   stats.firstInput = performance.now();
-  send({ type: "view", seq, scene: text, width, height });
+  send({ type: "view", seq, scene: text, width, height, view: state.view });
   writeUrl();
 }
 
@@ -226,7 +229,15 @@ function onHello(m) {
     o.value = o.textContent = name;
     select.appendChild(o);
   }
+  const study = $("study");
+  study.innerHTML = "";
+  for (const name of m.views) {
+    const o = document.createElement("option");
+    o.value = o.textContent = name;
+    study.appendChild(o);
+  }
   const fromUrl = readUrl();
+  study.value = state.view;
   if (!fromUrl) {
     openScene(m.initial[0], m.initial[1]);
   }
@@ -239,7 +250,9 @@ function presetById(id) {
 }
 
 // ---------- equation mode ----------
+let equationReady = false; // equation mode has a surface
 function choosePreset(id, { keepParams = false, keepView = false } = {}) {
+  equationReady = true;
   const p = presetById(id);
   if (!p) {
     state.presetId = null;
@@ -357,7 +370,7 @@ function setMode(mode) {
   $("scene-mode").hidden = mode !== "scene";
   $("mode-equation").classList.toggle("active", mode === "equation");
   $("mode-scene").classList.toggle("active", mode === "scene");
-  if (mode === "equation" && !$("equation").value) choosePreset(state.presetId || "heart");
+  if (mode === "equation" && !equationReady) choosePreset(state.presetId || "heart");
   if (mode === "scene") {
     const c = cameraFromText(state.sceneText);
     if (c) state.camera = c;
@@ -365,6 +378,11 @@ function setMode(mode) {
   clearProblem();
   update();
 }
+for (const id of ["save-width", "save-height", "save-spp"]) $(id).addEventListener("change", () => update());
+$("study").addEventListener("change", () => {
+  state.view = $("study").value;
+  update();
+});
 $("mode-equation").onclick = () => setMode("equation");
 $("mode-scene").onclick = () => setMode("scene");
 
@@ -511,7 +529,7 @@ $("save").onclick = () => {
   const spp = Number($("save-spp").value) || 1;
   pendingSave = { seq: seq + 1000000 };
   $("message").textContent = `rendering ${width}×${height} at ${spp} spp…`;
-  send({ type: "save", seq: pendingSave.seq, scene: currentScene(), width, height, spp });
+  send({ type: "save", seq: pendingSave.seq, scene: currentScene(), width, height, spp, view: state.view });
 };
 
 function onPng(header, payload) {
@@ -556,6 +574,9 @@ function writeUrl() {
     q.set("scene", state.sceneName);
     if (!original || withCamera(original[1], state.camera) !== state.sceneText) q.set("text", state.sceneText);
   }
+  if (state.view !== "shaded") q.set("view", state.view);
+  q.set("save", [...saveSize(), Number($("save-spp").value) || 1].join("x"));
+  if (state.mode === "equation") q.set("scale", fmt(state.scale));
   if (state.fixedSize) q.set("size", state.fixedSize.join("x"));
   history.replaceState(null, "", "#" + q.toString());
 }
@@ -565,7 +586,11 @@ function readUrl() {
   const q = new URLSearchParams(location.hash.slice(1));
   const size = (q.get("size") || "").match(/^(\d+)x(\d+)$/);
   if (size) state.fixedSize = [Number(size[1]), Number(size[2])];
+  if (hello.views.includes(q.get("view"))) state.view = q.get("view");
+  const save = (q.get("save") || "").match(/^(\d+)x(\d+)x(\d+)$/);
+  if (save) [$("save-width").value, $("save-height").value, $("save-spp").value] = save.slice(1);
   if (!q.has("mode")) return false;
+  if (q.has("scale")) state.scale = Number(q.get("scale")) || 1;
   state.mode = q.get("mode") === "equation" ? "equation" : "scene";
   if (state.mode === "equation") {
     state.presetId = q.get("preset");
