@@ -9,7 +9,8 @@
 mod fuzz_support;
 
 use fuzz_support::{confirm_slow, run, Fuzzer, Tally};
-use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// A case slower than this counts as slow.
@@ -45,31 +46,32 @@ fn main() {
     let (cases, seed, threads) = (number(0, 1_000_000), number(1, 1), number(2, 1));
     // Panics are expected to be rare and are counted: keep their messages off the terminal.
     std::panic::set_hook(Box::new(|_| {}));
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads as usize)
-        .build()
-        .expect("a thread pool");
     let fuzzer = Fuzzer::new();
     let start = Instant::now();
+    // Plain threads taking chunks from a counter (not a rayon pool: a rayon worker waiting
+    // for the render's own pool would run other chunks meanwhile, inside the case's time).
     let chunks = cases.div_ceil(CHUNK);
-    let done = std::sync::atomic::AtomicU64::new(0);
-    let mut tally = pool.install(|| {
-        (0..chunks)
-            .into_par_iter()
-            .map(|k| {
+    let next = AtomicU64::new(0);
+    let done = AtomicU64::new(0);
+    let total = Mutex::new(Tally::default());
+    std::thread::scope(|scope| {
+        for _ in 0..threads.max(1) {
+            scope.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::Relaxed);
+                if k >= chunks {
+                    return;
+                }
                 let first = k * CHUNK;
                 let t = run(&fuzzer, seed, first, CHUNK.min(cases - first), BOUND);
-                let n = done.fetch_add(t.cases, std::sync::atomic::Ordering::Relaxed) + t.cases;
-                if n % 100_000 < CHUNK {
+                let n = done.fetch_add(t.cases, Ordering::Relaxed) + t.cases;
+                if n % 50_000 < CHUNK {
                     eprintln!("{n} cases, {:.0} s", start.elapsed().as_secs_f64());
                 }
-                t
-            })
-            .reduce(Tally::default, |mut a, b| {
-                a.merge(b);
-                a
-            })
+                total.lock().unwrap().merge(t);
+            });
+        }
     });
+    let mut tally = total.into_inner().unwrap();
     let elapsed = start.elapsed();
     let measured_slow = tally.slow;
     let dropped = confirm_slow(&mut tally, seed, BOUND);

@@ -4,6 +4,7 @@
 #![warn(missing_docs)]
 
 pub mod analysis;
+pub mod animation;
 pub mod camera;
 pub mod cli;
 pub mod explore;
@@ -16,3 +17,4 @@ pub mod pipeline;
 pub mod roots;
 pub mod scene;
 pub mod shapes;
+pub mod tiles;

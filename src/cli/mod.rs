@@ -2,6 +2,8 @@
 //! (rendering by [`crate::pipeline`]). Each subcommand lives in its own file with its
 //! arguments and its `run`.
 
+mod animate;
+mod assemble;
 mod explore;
 mod probe;
 mod render;
@@ -30,6 +32,8 @@ enum Command {
     Probe(probe::ProbeArgs),
     /// Explore scenes and equations live in the browser (a local web server).
     Explore(explore::ExploreArgs),
+    /// Join part files (rendered with --tile or --region) into the whole image.
+    Assemble(assemble::AssembleArgs),
 }
 
 /// Runs the command line and returns the process exit code. `interrupt` is the binary's
@@ -43,5 +47,6 @@ pub fn main(interrupt: &CancelToken) -> i32 {
         Some(Command::Roots(a)) => roots::run(a),
         Some(Command::Probe(a)) => probe::run(a),
         Some(Command::Explore(a)) => explore::run(a, interrupt),
+        Some(Command::Assemble(a)) => assemble::run(a),
     }
 }

@@ -59,6 +59,7 @@ fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
 pub fn run(args: ProbeArgs) -> i32 {
     let options = LoadOptions {
         solver: args.solver.unwrap_or_default(),
+        ..LoadOptions::default()
     };
     let scene = match scene::parse_file(&args.scene, &options) {
         Ok(scene) => scene,

@@ -1,5 +1,6 @@
 //! `kardia render`: arguments → [`crate::pipeline`] → an image file, and a summary line.
 
+use super::animate::AnimationArgs;
 use crate::film::{self, AtomicFile, ImageFormat};
 use crate::pipeline::{
     CancelToken, Control, Region, RenderError, RenderRequest, Rendered, Renderer, View,
@@ -58,6 +59,9 @@ pub struct RenderArgs {
     /// Print nothing but errors: no progress bar, no summary line.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Frames, turntables and tiles (see `animate.rs`).
+    #[command(flatten)]
+    pub animation: AnimationArgs,
 }
 
 fn solver_parser() -> impl TypedValueParser<Value = Solver> {
@@ -110,6 +114,7 @@ impl Default for RenderArgs {
             region: None,
             half: false,
             quiet: false,
+            animation: AnimationArgs::default(),
         }
     }
 }
@@ -137,6 +142,9 @@ fn rate(per_second: f64) -> String {
 /// Runs `kardia render`; returns the exit code (0 success, 1 any error, [`INTERRUPTED`] when
 /// `interrupt` was cancelled: then nothing is written and no temporary file is left).
 pub fn run(args: RenderArgs, interrupt: &CancelToken) -> i32 {
+    if args.animation.applies(&args) {
+        return super::animate::run(&args, interrupt);
+    }
     match render(&args, interrupt) {
         Ok(()) => 0,
         Err(Failure::Interrupted) => {
@@ -172,6 +180,7 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
     }
     let options = LoadOptions {
         solver: args.solver,
+        ..LoadOptions::default()
     };
     let scene = match &args.scene {
         Some(path) => scene::parse_file(path, &options),

@@ -144,9 +144,13 @@ pub(super) fn bernstein_fixed<const D: usize>(c: &[f64; D], a: f64, b: f64) -> (
     let reversed = b.abs() < a.abs();
     let (x0, h) = if reversed { (b, a - b) } else { (a, b - a) };
     let mut d = *c;
-    for i in 0..n {
-        for j in (i..n).rev() {
-            d[j] += x0 * d[j + 1];
+    // The Taylor shift to `x0`; none is needed from zero (a chord parametrised from its
+    // entry point, the heart's usual query), where every step would add `0·d[j + 1]`.
+    if x0 != 0.0 {
+        for i in 0..n {
+            for j in (i..n).rev() {
+                d[j] += x0 * d[j + 1];
+            }
         }
     }
     let mut hk = 1.0;

@@ -96,30 +96,12 @@ fn prepare_in(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
     {
         return None;
     }
-    let mut n = coeffs.iter().rposition(|&c| c != 0.0)?;
+    let n = coeffs.iter().rposition(|&c| c != 0.0)?;
     if n >= MAX_COEFFS {
         return None;
     }
     let r = lo.abs().max(hi.abs());
-    while n > 0 && r.is_finite() {
-        let cn = coeffs[n].abs();
-        let mut pow = 1.0;
-        let mut negligible = false;
-        for i in (0..n).rev() {
-            pow *= r;
-            if coeffs[i] != 0.0 && cn * pow <= TRIM_EPS * coeffs[i].abs() {
-                negligible = true;
-                break;
-            }
-        }
-        if !negligible {
-            break;
-        }
-        n -= 1;
-        while n > 0 && coeffs[n] == 0.0 {
-            n -= 1;
-        }
-    }
+    let n = trimmed_degree(coeffs, n, r);
     if n == 0 {
         return None;
     }
@@ -128,6 +110,39 @@ fn prepare_in(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
         return scale(&coeffs[..7], 6, r, lo, hi);
     }
     scale(coeffs, n, r, lo, hi)
+}
+
+/// The degree left of `coeffs[..=n]` (`coeffs[n] ≠ 0`) after the trimming rule of
+/// [`prepare`] on an interval reaching `r = max(|lo|, |hi|)`; 0 when only a constant is left.
+#[inline(always)]
+fn trimmed_degree(coeffs: &[f64], mut n: usize, r: f64) -> usize {
+    while n > 0 && r.is_finite() {
+        let cn = coeffs[n].abs();
+        let negligible = if r == 1.0 {
+            // Every power of `r` is 1 (a chord parametrised over `[0, 1]`, the heart's
+            // query): the rule compares `cₙ` with the largest lower coefficient only.
+            cn <= TRIM_EPS * max_abs(&coeffs[..n])
+        } else {
+            let mut pow = 1.0;
+            let mut negligible = false;
+            for i in (0..n).rev() {
+                pow *= r;
+                if coeffs[i] != 0.0 && cn * pow <= TRIM_EPS * coeffs[i].abs() {
+                    negligible = true;
+                    break;
+                }
+            }
+            negligible
+        };
+        if !negligible {
+            break;
+        }
+        n -= 1;
+        while n > 0 && coeffs[n] == 0.0 {
+            n -= 1;
+        }
+    }
+    n
 }
 
 /// The rest of [`prepare`] once the degree `n` is known (`coeffs[n] ≠ 0`, `n ≥ 1`; `r` is
@@ -143,11 +158,19 @@ fn scale(coeffs: &[f64], n: usize, r: f64, lo: f64, hi: f64) -> Option<Prepared>
         let er = exponent(r) + 1;
         if (-1000..=999).contains(&er) {
             let en = exponent(coeffs[n]);
-            let mut reaches = false;
-            for k in 1..=n {
-                let ck = coeffs[n - k];
-                reaches |= ck != 0.0 && exponent(ck) - en + 1 > k as i32 * (er - 1);
-            }
+            let reaches = if er == 1 {
+                // Every threshold `k·(e_R − 1)` is 0: the largest lower coefficient decides
+                // (the exponent grows with the magnitude).
+                let big = max_abs(&coeffs[..n]);
+                big != 0.0 && exponent(big) - en + 1 > 0
+            } else {
+                let mut reaches = false;
+                for k in 1..=n {
+                    let ck = coeffs[n - k];
+                    reaches |= ck != 0.0 && exponent(ck) - en + 1 > k as i32 * (er - 1);
+                }
+                reaches
+            };
             if reaches {
                 let (c, scale) = rescale(coeffs, n, en, er);
                 return Some(Prepared {
@@ -277,8 +300,16 @@ mod tests {
                 };
             }
             c[n] = if c[n] == 0.0 { 1.0 } else { c[n] };
-            let lo = (next() - 0.7) * 2f64.powi((next() * 30.0) as i32 - 15);
-            let hi = lo + next() * 2f64.powi((next() * 30.0) as i32 - 15);
+            let (lo, hi) = match (next() * 4.0) as u32 {
+                // The heart's chord (r = 1) and other intervals with r in [1, 2), which
+                // take the shortcuts of `prepare_in` and `scale`.
+                0 => (next() * 0.99, 1.0),
+                1 => (-1.0 - next() * 0.99, next()),
+                _ => {
+                    let lo = (next() - 0.7) * 2f64.powi((next() * 30.0) as i32 - 15);
+                    (lo, lo + next() * 2f64.powi((next() * 30.0) as i32 - 15))
+                }
+            };
             if lo >= hi {
                 continue;
             }
@@ -291,6 +322,42 @@ mod tests {
             answered += usize::from(fast.is_some());
         }
         assert!(answered > 1000);
+    }
+
+    #[test]
+    fn trimming_on_the_unit_interval_follows_the_rule() {
+        // Leading coefficients around ε times another one, on an interval reaching 1 (where
+        // the powers of r are skipped): the degree left is the rule's, term by term.
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut trimmed = 0;
+        for _ in 0..20_000 {
+            let n = 1 + (next() * 16.0) as usize;
+            let mut c = [0.0; MAX_COEFFS];
+            for cj in c.iter_mut().take(n) {
+                *cj = if next() < 0.2 { 0.0 } else { next() - 0.5 };
+            }
+            let big = max_abs(&c[..n]);
+            c[n] = (next() - 0.5) * 4.0 * f64::EPSILON * big.max(1e-300);
+            let mut want = n;
+            while want > 0 {
+                let cn = c[want].abs();
+                let negligible = (0..want).any(|i| c[i] != 0.0 && cn <= TRIM_EPS * c[i].abs());
+                if cn != 0.0 && !negligible {
+                    break;
+                }
+                want -= 1;
+            }
+            let got = trimmed_degree(&c[..=n], n, 1.0);
+            assert_eq!(got, want, "{:?}", &c[..=n]);
+            trimmed += usize::from(want < n);
+        }
+        assert!(trimmed > 1000 && trimmed < 19_000, "{trimmed}");
     }
 
     #[test]

@@ -3,6 +3,7 @@
 
 use std::ops::Range;
 
+use super::expr::{self, Names};
 use super::lexer::{Token, TokenKind};
 use super::limits::{self, Limits};
 use super::SceneError;
@@ -119,6 +120,10 @@ pub(super) struct Cursor<'a> {
     /// Set while a part with a grammar of its own is read (a `<surface>`): its usage,
     /// shown in the help after the statement's.
     pub(super) part_usage: Option<&'static str>,
+    /// The names expressions can use (`LET`, `clock`, …).
+    pub(super) names: &'a Names,
+    /// True once a value of this statement depended on the time: errors then name the frame.
+    pub(super) uses_time: bool,
 }
 
 impl<'a> Cursor<'a> {
@@ -204,7 +209,17 @@ impl<'a> Cursor<'a> {
         message: impl Into<String>,
         label: impl Into<String>,
     ) -> SceneError {
+        let message = self.at_frame(message.into());
         self.src.error(span, message, label, self.usage_help())
+    }
+
+    /// `message`, naming the frame when a value of the statement depended on the time.
+    fn at_frame(&self, message: String) -> String {
+        if self.uses_time {
+            message + &self.names.frame_note()
+        } else {
+            message
+        }
     }
 
     /// An error at `span` with the given help.
@@ -215,6 +230,7 @@ impl<'a> Cursor<'a> {
         label: impl Into<String>,
         help: impl Into<String>,
     ) -> SceneError {
+        let message = self.at_frame(message.into());
         self.src.error(span, message, label, Some(help.into()))
     }
 
@@ -228,26 +244,35 @@ impl<'a> Cursor<'a> {
         )
     }
 
-    /// A finite number.
+    /// A finite number: a number as written, or an expression (see `expr`).
     pub(super) fn number(&mut self, what: &str) -> Result<(f64, Span)> {
-        let Some(t) = self.peek().filter(|t| t.kind == TokenKind::Word) else {
+        let Some(t) = self
+            .peek()
+            .filter(|t| matches!(t.kind, TokenKind::Word | TokenKind::Open))
+        else {
             return Err(self.unexpected(&format!("{what} (a number)")));
         };
         let s = self.text(&t);
         match parse_number(s) {
-            Ok(x) => {
+            Ok(x) if !expr::continues(self) => {
                 self.pos += 1;
-                Ok((x, t.span))
+                return Ok((x, t.span));
             }
-            Err(NumberError::NotANumber) => Err(self.unexpected(&format!("{what} (a number)"))),
-            Err(NumberError::NotFinite(reason)) => Err(self.fail(
-                t.span,
-                format!(
-                    "{what} must be a finite number, but `{}` {reason}",
-                    shorten(s, 30)
-                ),
-                "not a finite number",
-            )),
+            Err(NumberError::NotFinite(reason)) => {
+                return Err(self.fail(
+                    t.span,
+                    format!(
+                        "{what} must be a finite number, but `{}` {reason}",
+                        shorten(s, 30)
+                    ),
+                    "not a finite number",
+                ))
+            }
+            _ => {}
+        }
+        match expr::read(self, what)? {
+            Some(value) => Ok(value),
+            None => Err(self.unexpected(&format!("{what} (a number)"))),
         }
     }
 

@@ -153,7 +153,7 @@ pub const COORDINATE: Limits = Limits::closed(-1e6, 1e6);
 /// The length of a direction or basis vector (plane normal, up, edges, u v w).
 pub const DIRECTION_LENGTH: Limits = Limits::closed(1e-6, f64::INFINITY);
 /// Image width and height in pixels.
-pub const IMAGE_SIDE: Limits = Limits::whole(1, 32768);
+pub const IMAGE_SIDE: Limits = Limits::whole(1, super::Scene::MAX_SIDE);
 /// The camera's full horizontal field of view in degrees.
 pub const FIELD_OF_VIEW: Limits = Limits::open(0.0, 180.0);
 /// Each component of a colour: diffuse, checker, inside, background, ambient.
@@ -165,7 +165,7 @@ pub const LENGTH: Limits = Limits::closed(1e-6, 1e6);
 /// A light's radius (0: a point light).
 pub const LIGHT_RADIUS: Limits = Limits::closed(0.0, 1e6);
 /// A spherical light's shadow rays per pixel sample.
-pub const LIGHT_SAMPLES: Limits = Limits::whole(1, 1024);
+pub const LIGHT_SAMPLES: Limits = Limits::whole(1, crate::lights::Light::MAX_SAMPLES);
 /// The specular weight ks.
 pub const SPECULAR_WEIGHT: Limits = Limits::closed(0.0, 1e6);
 /// The specular (Blinn–Phong) exponent.
@@ -182,6 +182,11 @@ pub const POLYGON_VERTICES: Limits = Limits::whole(3, 100_000);
 pub const KUMMER_MU: Limits = Limits::closed(-1e3, 1e3);
 /// The Chmutov preset's degree n.
 pub const CHMUTOV_DEGREE: Limits = Limits::whole(1, 16);
+
+/// `FRAMES` n, the number of frames of an animation.
+pub const FRAME_COUNT: Limits = Limits::whole(1, 1_000_000);
+/// `FRAMES … FPS f`, frames per second of an animated output.
+pub const FRAME_RATE: Limits = Limits::closed(0.01, 1000.0);
 
 /// Every range with the parameters it applies to, in the order of the documentation's table.
 pub const TABLE: &[(&str, Limits)] = &[
@@ -218,6 +223,8 @@ pub const TABLE: &[(&str, Limits)] = &[
     ),
     ("`kummer` μ (μ² ≠ 3)", KUMMER_MU),
     ("`chmutov` degree n", CHMUTOV_DEGREE),
+    ("`FRAMES` n", FRAME_COUNT),
+    ("`FRAMES` … `FPS f`", FRAME_RATE),
 ];
 
 #[cfg(test)]

@@ -3,13 +3,15 @@
 
 mod cursor;
 mod error;
+mod expr;
 mod lexer;
 pub mod limits;
 mod parser;
 mod surface;
 
 pub use error::{InvalidScene, SceneError};
-pub use parser::{parse, parse_file, DEFAULT_SIZE};
+pub use expr::FrameTime;
+pub use parser::{parse, parse_animated, parse_file, DEFAULT_SIZE};
 
 use crate::camera::Camera;
 use crate::geometry::{Aabb, DVec3, Ray};
@@ -26,6 +28,36 @@ pub const DEFAULT_SCENE: &str = include_str!("../../scenes/heart.scene");
 pub struct LoadOptions {
     /// Root-isolation strategy for polynomial surfaces (hearts, implicit surfaces).
     pub solver: Solver,
+    /// The frame to read the scene at (`clock`, `frame`, `frames`); `None` reads it as a still,
+    /// frame 0 of 1.
+    pub time: Option<FrameTime>,
+}
+
+/// What a scene says about its animation, and whether anything in it moves.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Animation {
+    /// The number of frames given by `FRAMES n` (`None` without a `FRAMES` statement).
+    pub frames: Option<u32>,
+    /// Frames per second for animated outputs (`FPS f`; 24 when not given).
+    pub fps: f64,
+    /// True when some value of the scene depends on `clock`, `frame` or `frames`, so frames
+    /// differ; false when every frame reads the same scene.
+    pub uses_time: bool,
+}
+
+impl Animation {
+    /// Frames per second when `FPS` is not given.
+    pub const DEFAULT_FPS: f64 = 24.0;
+}
+
+impl Default for Animation {
+    fn default() -> Self {
+        Self {
+            frames: None,
+            fps: Self::DEFAULT_FPS,
+            uses_time: false,
+        }
+    }
 }
 
 /// One thing in the scene: a shape, how it looks, and where it was written.

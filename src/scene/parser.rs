@@ -7,10 +7,11 @@ use std::ops::Range;
 
 use super::cursor::{parse_number, shorten, suggest, Cursor, NumberError, Source, VecArg};
 use super::error::{ceil_boundary, floor_boundary};
+use super::expr::{self, Names};
 use super::lexer::{lex_line, Token, TokenKind};
 use super::limits::{self, Limits};
 use super::surface::{end_after_surface, is_reserved, property, surface, Materials};
-use super::{LoadOptions, Object, Scene, SceneError};
+use super::{Animation, LoadOptions, Object, Scene, SceneError};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::{DVec3, Frame, FrameError};
 use crate::lights::Light;
@@ -103,6 +104,16 @@ pub(super) const STATEMENTS: &[Statement] = &[
                 or: IMPLICIT preset [params…] (position) (u) (v) (w) <surface> [BOUND r]",
         read: Builder::implicit,
     },
+    Statement {
+        keyword: "LET",
+        usage: "LET name = expression",
+        read: Builder::let_statement,
+    },
+    Statement {
+        keyword: "FRAMES",
+        usage: "FRAMES n [FPS f]",
+        read: Builder::frames,
+    },
 ];
 
 /// The valid range of each preset parameter, by preset and position (presets without
@@ -117,11 +128,18 @@ const PRESET_PARAMETERS: &[(&str, &[Limits])] = &[
 /// error messages (usually the file path). The first mistake is returned as a
 /// [`SceneError`] that points at the offending part of its line.
 pub fn parse(text: &str, name: &str, options: &LoadOptions) -> Result<Scene> {
+    parse_animated(text, name, options).map(|(scene, _)| scene)
+}
+
+/// As [`parse`], also returning what the scene says about its animation (`FRAMES`, `FPS`)
+/// and whether any of its values depends on the time.
+pub fn parse_animated(text: &str, name: &str, options: &LoadOptions) -> Result<(Scene, Animation)> {
     let src = Source { text, name };
     let mut builder = Builder {
         options: *options,
         ..Builder::default()
     };
+    let mut names = Names::new(options.time);
     let mut offset = 0;
     let mut last_token_end = 0;
     for (i, raw) in text.split('\n').enumerate() {
@@ -142,8 +160,14 @@ pub fn parse(text: &str, name: &str, options: &LoadOptions) -> Result<Scene> {
             keyword: "",
             usage: "",
             part_usage: None,
+            names: &names,
+            uses_time: false,
         };
         builder.statement(&mut cur)?;
+        builder.uses_time |= cur.uses_time;
+        if let Some((name, value, uses_time)) = builder.defined.take() {
+            expr::define(&mut names, name, value, uses_time, i + 1);
+        }
     }
     builder.finish(src, last_token_end)
 }
@@ -182,6 +206,12 @@ pub(super) struct Builder {
     lights: Vec<Light>,
     objects: Vec<Object>,
     materials: Materials,
+    /// `FRAMES n [FPS f]` and its line.
+    frames: Option<((u32, f64), usize)>,
+    /// A `LET` just read: name, value, whether it depends on the time.
+    defined: Option<(String, f64, bool)>,
+    /// Some value read so far depends on the time.
+    uses_time: bool,
 }
 
 impl Builder {
@@ -278,6 +308,38 @@ impl Builder {
             radius,
             samples,
         });
+        Ok(())
+    }
+
+    /// `LET name = expression`: the definition is recorded once the line is read.
+    fn let_statement(&mut self, cur: &mut Cursor) -> Result<()> {
+        let (name, value, uses_time, _) = expr::let_statement(cur)?;
+        self.defined = Some((name, value, uses_time));
+        Ok(())
+    }
+
+    /// `FRAMES n [FPS f]`: values the same at every frame.
+    fn frames(&mut self, cur: &mut Cursor) -> Result<()> {
+        let (n, _) = cur.whole_in("the number of frames", &limits::FRAME_COUNT)?;
+        let fps = if cur
+            .peek_word()
+            .is_some_and(|w| w.eq_ignore_ascii_case("FPS"))
+        {
+            cur.pos += 1;
+            cur.number_in("the frame rate", &limits::FRAME_RATE)?.0
+        } else {
+            Animation::DEFAULT_FPS
+        };
+        cur.end()?;
+        if cur.uses_time {
+            return Err(cur.fail(
+                cur.statement_span(),
+                "FRAMES must not depend on clock, frame or frames",
+                "depends on the time",
+            ));
+        }
+        once(cur, &self.frames)?;
+        self.frames = Some(((n, fps), cur.line));
         Ok(())
     }
 
@@ -539,7 +601,15 @@ impl Builder {
             end_after_surface(cur)?;
         }
         let frame = check_frame(cur, &p, [&u, &v, &w], names)?;
-        let shape = Implicit::new(&equation, frame, bound).map_err(|e| match &source {
+        let equation_uses_time = std::cell::Cell::new(false);
+        let constants = |name: &str| {
+            let (value, uses_time) = cur.names.value(name)?;
+            equation_uses_time.set(equation_uses_time.get() | uses_time);
+            Some(value)
+        };
+        let shape = Implicit::with_constants(&equation, &constants, frame, bound);
+        cur.uses_time |= equation_uses_time.get();
+        let shape = shape.map_err(|e| match &source {
             EquationSource::Quoted(inner) => cur.fail(
                 equation_span(cur.src.text, inner.clone(), &e),
                 format!("invalid equation: {e}"),
@@ -555,7 +625,7 @@ impl Builder {
     }
 
     /// The scene; `end` is where the last statement ends (for a missing-camera error).
-    fn finish(self, src: Source, end: usize) -> Result<Scene> {
+    fn finish(self, src: Source, end: usize) -> Result<(Scene, Animation)> {
         let Some((camera, _)) = self.camera else {
             return Err(src.error(
                 end..end,
@@ -565,7 +635,12 @@ impl Builder {
             ));
         };
         let (width, height) = self.size.map_or(DEFAULT_SIZE, |s| s.0);
-        Ok(Scene {
+        let animation = Animation {
+            frames: self.frames.map(|f| f.0 .0),
+            fps: self.frames.map_or(Animation::DEFAULT_FPS, |f| f.0 .1),
+            uses_time: self.uses_time,
+        };
+        let scene = Scene {
             width,
             height,
             camera,
@@ -573,7 +648,8 @@ impl Builder {
             ambient: self.ambient.map_or(DVec3::ZERO, |a| a.0),
             lights: self.lights,
             objects: self.objects,
-        })
+        };
+        Ok((scene, animation))
     }
 }
 /// An error about an invalid shape of the current statement, at `span`.

@@ -68,3 +68,36 @@ fn cases_are_reproducible() {
     }
     assert_ne!(fuzzer.case(7, 1), fuzzer.case(8, 1));
 }
+
+/// Equations with extreme numbers and exponents (the campaign mutates the numbers inside
+/// quotes too): each is refused with a well-formed error or renders finite pixels.
+#[test]
+fn extreme_equations_are_refused_or_render_finite() {
+    use crate::fuzz_support::{run_case, Verdict};
+    for (equation, refused) in [
+        ("1e308*x^2 + 1e308*x^2 - 1", Some("too large")),
+        ("x^2 + y^2 + z^2 - 1e-320", None),
+        ("x^16*1e300 + y^2 + z^2 - 1", None),
+        ("(x+1e300)^16 - 1", Some("too large")),
+        ("x^2 + y^2 + z^2 - 1/5e-324", Some("too large")),
+        ("x^65536 - 1", Some("degree 65536")),
+        // 2^3^4 = 2^81: its degree was cut to 64 bits in the message ("degree 0").
+        ("x^(2^3^4) - 1", Some("degree 2417851639229258349412352")),
+        ("5e-324*x^2 + 5e-324*y^2 + 5e-324*z^2 - 5e-324", None),
+        ("x^2 + y^2 + z^2 - 1e-300", None),
+    ] {
+        let text = format!(
+            "CAMERA (6,0,0) (0,0,0) (0,0,1) 40\nLIGHT (5,5,5) (1,1,1)\n\
+             IMPLICIT \"{equation}\" (0, 0, 0) (1, 0, 0) (0, 1, 0) (0, 0, 1) (0.3, 0.3, 0.8) BOUND 2\n"
+        );
+        let verdict = run_case(&text, 1).verdict;
+        match refused {
+            None => assert_eq!(verdict, Verdict::Rendered, "{equation}"),
+            Some(why) => {
+                assert_eq!(verdict, Verdict::Refused, "{equation}");
+                let e = kardia::scene::parse(&text, "t", &Default::default()).unwrap_err();
+                assert!(e.message().contains(why), "{equation}: {e}");
+            }
+        }
+    }
+}

@@ -4,9 +4,12 @@ mod fuzz_support;
 mod heart_support;
 mod render_support;
 
+mod anim_cli;
+mod anim_scene;
 mod cli_render;
 mod explore;
 mod explore_browser;
+mod farm;
 mod fuzz_scenes;
 mod heart_geometry;
 mod heart_hard_cases;

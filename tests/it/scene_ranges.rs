@@ -3,7 +3,7 @@
 //! tiny render has finite pixels; one step beyond, it is refused with a file:line:column
 //! error at the number that states the range.
 
-use crate::render_support::{render, RenderSettings};
+use crate::fuzz_support::renders_finite;
 use kardia::scene::limits::{self, Limits};
 use kardia::scene::{parse, LoadOptions, SceneError};
 
@@ -130,19 +130,8 @@ fn scene_text(line: &str, x: f64) -> String {
 }
 
 fn render_is_finite(text: &str) -> bool {
-    let mut scene = parse(text, "sweep.scene", &LoadOptions::default()).unwrap();
-    (scene.width, scene.height) = (12, 9);
-    let settings = RenderSettings {
-        spp: 1,
-        max_depth: 8,
-        seed: 1,
-        threads: 1,
-    };
-    // The film stores what would overflow as ±f32::MAX: a saturated channel is an overflow.
-    render(&scene, &settings)
-        .pixels
-        .iter()
-        .all(|p| p.is_finite() && p.abs().max_element() < f32::MAX)
+    let scene = parse(text, "sweep.scene", &LoadOptions::default()).unwrap();
+    renders_finite(&scene, 1)
 }
 
 #[test]

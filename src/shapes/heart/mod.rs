@@ -140,6 +140,7 @@ impl HeartShape {
     }
 
     /// See [`Heart::intersect_with`]; `r` is the ray in object space.
+    #[inline(always)]
     fn intersect_with(
         at: &Placement,
         r: &Ray,
@@ -264,7 +265,9 @@ fn clip_lower_half(r: &Ray, t0: f64, t1: f64) -> Option<(f64, f64)> {
 }
 
 impl ObjectShape for HeartShape {
-    #[inline]
+    // Inlined whole into `Placed::intersect`, as it was into the heart's own before the
+    // placement wrapper (1.3% of the benchmark's instructions otherwise).
+    #[inline(always)]
     fn intersect(
         &self,
         at: &Placement,

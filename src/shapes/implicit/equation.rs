@@ -217,8 +217,12 @@ impl<'a> Lexer<'a> {
     }
 }
 
+/// Values of named constants an equation may use besides x, y and z (`None`: not a name).
+pub type Constants<'a> = &'a dyn Fn(&str) -> Option<f64>;
+
 struct Parser<'a> {
     text: &'a str,
+    constants: Constants<'a>,
     toks: Vec<(Tok, Span)>,
     pos: usize,
     depth: usize,
@@ -226,9 +230,16 @@ struct Parser<'a> {
 
 /// Parses an equation into a syntax tree for `lhs − rhs` (or just `lhs`).
 pub fn parse(text: &str) -> Result<Expr, EquationError> {
+    parse_with(text, &|_| None)
+}
+
+/// As [`parse`], where a name other than x, y and z stands for its value in `constants`
+/// (the exact decimal Rust prints for it, so `mu` = 0.8 reads as `0.8` would).
+pub fn parse_with(text: &str, constants: Constants) -> Result<Expr, EquationError> {
     let toks = Lexer::run(text)?;
     let mut p = Parser {
         text,
+        constants,
         toks,
         pos: 0,
         depth: 0,
@@ -265,6 +276,24 @@ pub fn parse(text: &str) -> Result<Expr, EquationError> {
         Tok::Equals => Err(span.error("only one '=' is allowed in an equation")),
         _ => Err(span.error("unexpected text after the equation")),
     }
+}
+
+/// A named constant's value as a number node (negative values as a negated number).
+fn constant(value: f64, span: Span) -> Result<Expr, EquationError> {
+    let magnitude = Coef::parse_decimal(&format!("{}", value.abs()))
+        .ok_or_else(|| span.error(format!("the value {value} is not a finite number")))?;
+    let num = Expr {
+        node: Node::Num(magnitude),
+        span,
+    };
+    Ok(if value.is_sign_negative() {
+        Expr {
+            node: Node::Neg(Box::new(num)),
+            span,
+        }
+    } else {
+        num
+    })
 }
 
 impl Parser<'_> {
@@ -408,6 +437,9 @@ impl Parser<'_> {
                         node: Node::Var(v),
                         span,
                     });
+                }
+                if let Some(value) = (self.constants)(name) {
+                    return constant(value, span);
                 }
                 if self.peek().0 == Tok::LParen {
                     Err(span.error(format!(

@@ -282,7 +282,12 @@ pub struct RayPolynomial {
 
 /// The equation's polynomial, exactly expanded (`lhs − rhs`), or the first problem found.
 pub fn expand(equation: &str) -> Result<Poly, EquationError> {
-    let expr = equation::parse(equation)?;
+    expand_with(equation, &|_| None)
+}
+
+/// As [`expand`], with named constants besides x, y and z (see [`equation::parse_with`]).
+pub fn expand_with(equation: &str, constants: equation::Constants) -> Result<Poly, EquationError> {
+    let expr = equation::parse_with(equation, constants)?;
     let poly = Poly::expand(&expr)?;
     let whole = equation::Span {
         start: 0,
@@ -312,6 +317,17 @@ impl Implicit {
     /// when `equation` is exactly a preset's text (from [`preset_equation`]), else derives one
     /// (an error asking for `BOUND` when the surface may be unbounded).
     pub fn new(equation: &str, frame: Frame, bound: Option<f64>) -> Result<Self, EquationError> {
+        Self::with_constants(equation, &|_| None, frame, bound)
+    }
+
+    /// As [`Implicit::new`], where names other than x, y and z in `equation` take their values
+    /// from `constants` (the scene's `LET` names).
+    pub fn with_constants(
+        equation: &str,
+        constants: equation::Constants,
+        frame: Frame,
+        bound: Option<f64>,
+    ) -> Result<Self, EquationError> {
         let whole = equation::Span {
             start: 0,
             end: equation.len(),
@@ -326,7 +342,7 @@ impl Implicit {
         if equation.trim() == HEART_EQUATION {
             return Ok(Self::heart(frame, bound.unwrap_or(2.0)));
         }
-        let poly = expand(equation)?;
+        let poly = expand_with(equation, constants)?;
         let f = Compiled::new(&poly);
         let bound = match bound.or_else(|| presets::recognise(equation).map(|p| p.bound)) {
             Some(b) => b,

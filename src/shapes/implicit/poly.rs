@@ -98,7 +98,7 @@ impl Poly {
     /// division only by constants, whole non-negative exponents, total degree ≤ 16 for every
     /// sub-expression.
     pub fn expand(e: &Expr) -> Result<Poly, EquationError> {
-        let too_high = |d: usize| {
+        let too_high = |d: i128| {
             e.span.error(format!(
                 "this part has degree {d}, above the maximum of {MAX_DEGREE}"
             ))
@@ -171,7 +171,7 @@ impl Poly {
                 }
                 let d = (pa.degree() as i128).saturating_mul(n);
                 if d > MAX_DEGREE as i128 {
-                    return Err(too_high(d as usize));
+                    return Err(too_high(d));
                 }
                 let mut r = Poly::constant(Coef::ONE);
                 for _ in 0..n {

@@ -1,0 +1,981 @@
+//! Expressions wherever the scene language takes a number, `LET` names, and the animation
+//! time (`clock`, `frame`, `frames`) they may depend on.
+//!
+//! Grammar, over the line's tokens (a word such as `0.6*clock` is split further):
+//!
+//! ```text
+//! sum     := product { ('+' | '-') product }
+//! product := unary { ('*' | '/') unary }
+//! unary   := ('-' | '+') unary | power
+//! power   := primary [ '^' unary ]              (right associative; -2^2 = -(2^2))
+//! primary := number | name | function '(' sum { ',' sum } ')' | '(' sum ')'
+//! ```
+//!
+//! Angles are in radians (`sin(2*pi*clock)`). In a list of values (a vector, or numbers one
+//! after another), a `+` or `-` with a space before it and none after it starts the next value,
+//! so `(1 -2 3)` stays three numbers while `(1 - 2 3)` and `(1-2 3)` are two; inside
+//! parentheses and in `LET` every `+` and `-` is an operator.
+
+use std::collections::HashMap;
+use std::ops::Range;
+
+use super::cursor::{shorten, suggest, Cursor};
+use super::lexer::TokenKind;
+use super::SceneError;
+
+type Span = Range<usize>;
+
+/// Deepest nesting of parentheses, signs and powers accepted.
+const MAX_NESTING: usize = 100;
+
+/// Functions with their least and greatest number of arguments.
+const FUNCTIONS: &[(&str, usize, usize)] = &[
+    ("sin", 1, 1),
+    ("cos", 1, 1),
+    ("tan", 1, 1),
+    ("sqrt", 1, 1),
+    ("abs", 1, 1),
+    ("min", 2, usize::MAX),
+    ("max", 2, usize::MAX),
+];
+
+/// Names with a built-in value.
+const CONSTANTS: &[&str] = &["clock", "frame", "frames", "pi"];
+
+/// Names a `LET` may not take: the built-ins, the functions and the variables of equations.
+fn is_reserved(name: &str) -> bool {
+    let lower = name.to_ascii_lowercase();
+    CONSTANTS.contains(&lower.as_str())
+        || FUNCTIONS.iter().any(|f| f.0 == lower)
+        || matches!(lower.as_str(), "x" | "y" | "z" | "nan" | "inf" | "infinity")
+}
+
+/// Which frame of an animation a scene is read for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameTime {
+    /// The frame number, from 0 (the first frame) to `count - 1`.
+    pub frame: u32,
+    /// How many frames the animation has (at least 1).
+    pub count: u32,
+}
+
+impl FrameTime {
+    /// `clock`: 0 at the first frame, 1 at the last (0 when there is only one frame).
+    pub fn clock(self) -> f64 {
+        if self.count > 1 {
+            f64::from(self.frame) / f64::from(self.count - 1)
+        } else {
+            0.0
+        }
+    }
+}
+
+/// A value defined by `LET`.
+#[derive(Debug, Clone)]
+struct Defined {
+    value: f64,
+    line: usize,
+    uses_time: bool,
+}
+
+/// The names an expression can use: the built-ins and the `LET` definitions read so far.
+#[derive(Debug)]
+pub(super) struct Names {
+    lets: HashMap<String, Defined>,
+    /// The frame being read; `None` reads the scene as a still (frame 0 of 1).
+    pub(super) time: Option<FrameTime>,
+}
+
+impl Names {
+    /// No `LET` names yet, at the given time.
+    pub(super) fn new(time: Option<FrameTime>) -> Self {
+        Self {
+            lets: HashMap::new(),
+            time,
+        }
+    }
+
+    /// The value of `name` and whether it depends on the time, if it has one.
+    pub(super) fn value(&self, name: &str) -> Option<(f64, bool)> {
+        let t = self.time.unwrap_or(FrameTime { frame: 0, count: 1 });
+        match name {
+            "clock" => Some((t.clock(), true)),
+            "frame" => Some((f64::from(t.frame), true)),
+            "frames" => Some((f64::from(t.count), true)),
+            "pi" => Some((std::f64::consts::PI, false)),
+            _ => self.lets.get(name).map(|d| (d.value, d.uses_time)),
+        }
+    }
+
+    /// `LET` names in alphabetical order.
+    fn defined(&self) -> Vec<&str> {
+        let mut names: Vec<&str> = self.lets.keys().map(String::as_str).collect();
+        names.sort_unstable();
+        names
+    }
+
+    /// The words after which a frame is named in an error: `" (at frame 3 of 0..=9, clock = 0.3333)"`.
+    pub(super) fn frame_note(&self) -> String {
+        match self.time {
+            Some(t) => format!(
+                " (at frame {} of 0..={}, clock = {})",
+                t.frame,
+                t.count.saturating_sub(1),
+                round4(t.clock())
+            ),
+            None => String::new(),
+        }
+    }
+}
+
+/// `x` to 4 decimals, without trailing zeros.
+fn round4(x: f64) -> String {
+    let s = format!("{x:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    s.to_string()
+}
+
+/// What a piece of a line is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Tk {
+    Num,
+    Name,
+    Plus,
+    Minus,
+    Star,
+    Slash,
+    Caret,
+    Equals,
+    Open,
+    Close,
+    Comma,
+    /// A character that is not part of any expression.
+    Bad,
+}
+
+/// A piece of the line: a token of the lexer, or part of a word.
+#[derive(Debug, Clone)]
+struct Piece {
+    tk: Tk,
+    span: Span,
+    /// Index of the lexer token it is part of.
+    token: usize,
+    /// True for the last piece of its lexer token.
+    last: bool,
+    /// Whitespace (or the start of the line) just before it.
+    space_before: bool,
+    /// Whitespace (or the end of the line) just after it.
+    space_after: bool,
+}
+
+/// The pieces of the cursor's tokens from `cur.pos` up to the first string (and at most
+/// `max_tokens` tokens).
+fn pieces(cur: &Cursor, max_tokens: usize) -> Vec<Piece> {
+    let text = cur.src.text;
+    let is_space = |c: Option<char>| c.is_none_or(char::is_whitespace);
+    let mut out = Vec::new();
+    for (index, t) in cur.tokens.iter().enumerate().skip(cur.pos).take(max_tokens) {
+        let mut push = |tk, span: Span, last| {
+            out.push(Piece {
+                tk,
+                space_before: is_space(text[..span.start].chars().next_back()),
+                space_after: is_space(text[span.end..].chars().next()),
+                span,
+                token: index,
+                last,
+            })
+        };
+        match t.kind {
+            TokenKind::Open => push(Tk::Open, t.span.clone(), true),
+            TokenKind::Close => push(Tk::Close, t.span.clone(), true),
+            TokenKind::Comma => push(Tk::Comma, t.span.clone(), true),
+            TokenKind::Str => break,
+            TokenKind::Word => {
+                for (tk, span) in split_word(text, t.span.clone()) {
+                    let last = span.end == t.span.end;
+                    push(tk, span, last);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// A word split into numbers, names and operators (a bad character ends it).
+fn split_word(text: &str, word: Span) -> Vec<(Tk, Span)> {
+    let b = text.as_bytes();
+    let digits = |mut i: usize| {
+        while i < word.end && b[i].is_ascii_digit() {
+            i += 1;
+        }
+        i
+    };
+    let mut out = Vec::new();
+    let mut i = word.start;
+    while i < word.end {
+        let c = b[i];
+        let start = i;
+        let op = match c {
+            b'+' => Some(Tk::Plus),
+            b'-' => Some(Tk::Minus),
+            b'*' => Some(Tk::Star),
+            b'/' => Some(Tk::Slash),
+            b'^' => Some(Tk::Caret),
+            b'=' => Some(Tk::Equals),
+            _ => None,
+        };
+        if let Some(tk) = op {
+            i += 1;
+            out.push((tk, start..i));
+        } else if c.is_ascii_digit() || c == b'.' {
+            i = digits(i);
+            if i < word.end && b[i] == b'.' {
+                i = digits(i + 1);
+            }
+            if i < word.end && (b[i] == b'e' || b[i] == b'E') {
+                let mut j = i + 1;
+                if j < word.end && (b[j] == b'+' || b[j] == b'-') {
+                    j += 1;
+                }
+                let k = digits(j);
+                if k > j {
+                    i = k;
+                }
+            }
+            out.push((Tk::Num, start..i));
+        } else if c.is_ascii_alphabetic() || c == b'_' {
+            while i < word.end && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
+                i += 1;
+            }
+            out.push((Tk::Name, start..i));
+        } else {
+            out.push((Tk::Bad, start..word.end));
+            break;
+        }
+    }
+    out
+}
+
+/// Why an expression could not be read.
+enum Fail {
+    /// Not written as an expression: the caller reports what it expected instead.
+    NotAnExpression,
+    /// A mistake in how the expression is written.
+    Syntax {
+        span: Span,
+        message: String,
+        label: String,
+        help: Option<String>,
+    },
+    /// Written correctly, but its value cannot be computed (or is not finite).
+    Value { span: Span, message: String },
+}
+
+fn syntax(span: Span, message: impl Into<String>, label: impl Into<String>) -> Fail {
+    Fail::Syntax {
+        span,
+        message: message.into(),
+        label: label.into(),
+        help: None,
+    }
+}
+
+/// Reads one expression from a list of pieces, computing its value as it goes.
+struct Reader<'r> {
+    text: &'r str,
+    names: &'r Names,
+    pieces: Vec<Piece>,
+    at: usize,
+    /// Open parentheses around the current position.
+    parens: usize,
+    depth: usize,
+    /// In a list of values (the space rule for `+` and `-` applies at the outer level).
+    list: bool,
+    uses_time: bool,
+}
+
+type Value = (f64, Span);
+
+impl Reader<'_> {
+    fn peek(&self) -> Option<&Piece> {
+        self.pieces.get(self.at)
+    }
+
+    fn peek_tk(&self) -> Option<Tk> {
+        self.peek().map(|p| p.tk)
+    }
+
+    /// The span of the next piece, or an empty span after the last one consumed.
+    fn here(&self) -> Span {
+        match self.peek() {
+            Some(p) => p.span.clone(),
+            None => {
+                let end = self.pieces.last().map_or(0, |p| p.span.end);
+                end..end
+            }
+        }
+    }
+
+    fn piece_text(&self, p: &Piece) -> &str {
+        &self.text[p.span.clone()]
+    }
+
+    fn found(&self) -> String {
+        match self.peek() {
+            None => "end of line".into(),
+            Some(p) => format!("`{}`", shorten(self.piece_text(p), 30)),
+        }
+    }
+
+    fn finite(&self, x: f64, span: &Span, what: &str) -> Result<f64, Fail> {
+        if x.is_finite() {
+            Ok(x)
+        } else {
+            Err(Fail::Value {
+                span: span.clone(),
+                message: format!("{what} is too large: it overflows a 64-bit float"),
+            })
+        }
+    }
+
+    fn sum(&mut self) -> Result<Value, Fail> {
+        let (mut x, mut span) = self.product()?;
+        while let Some(p) = self.peek().filter(|p| matches!(p.tk, Tk::Plus | Tk::Minus)) {
+            if self.list && self.parens == 0 && p.space_before && !p.space_after {
+                break; // `1 -2`: the sign of the next value
+            }
+            let minus = p.tk == Tk::Minus;
+            self.at += 1;
+            let (y, ys) = self.product()?;
+            span = span.start..ys.end;
+            x = self.finite(if minus { x - y } else { x + y }, &span, "the sum")?;
+        }
+        Ok((x, span))
+    }
+
+    fn product(&mut self) -> Result<Value, Fail> {
+        let (mut x, mut span) = self.unary()?;
+        while let Some(p) = self.peek().filter(|p| matches!(p.tk, Tk::Star | Tk::Slash)) {
+            let divide = p.tk == Tk::Slash;
+            self.at += 1;
+            let (y, ys) = self.unary()?;
+            if divide && y == 0.0 {
+                return Err(Fail::Value {
+                    message: format!(
+                        "division by zero: `{}` is 0",
+                        shorten(&self.text[ys.clone()], 30)
+                    ),
+                    span: ys,
+                });
+            }
+            span = span.start..ys.end;
+            x = self.finite(if divide { x / y } else { x * y }, &span, "the product")?;
+        }
+        Ok((x, span))
+    }
+
+    fn unary(&mut self) -> Result<Value, Fail> {
+        self.depth += 1;
+        if self.depth > MAX_NESTING {
+            return Err(syntax(
+                self.here(),
+                format!("the expression is nested too deeply (more than {MAX_NESTING} levels)"),
+                "too deep",
+            ));
+        }
+        let r = match self.peek().map(|p| (p.tk, p.span.clone())) {
+            Some((Tk::Minus, s)) => {
+                self.at += 1;
+                self.unary().map(|(x, e)| (-x, s.start..e.end))
+            }
+            Some((Tk::Plus, s)) => {
+                self.at += 1;
+                self.unary().map(|(x, e)| (x, s.start..e.end))
+            }
+            _ => self.power(),
+        };
+        self.depth -= 1;
+        r
+    }
+
+    fn power(&mut self) -> Result<Value, Fail> {
+        let (base, bs) = self.primary()?;
+        if self.peek_tk() != Some(Tk::Caret) {
+            return Ok((base, bs));
+        }
+        self.at += 1;
+        let (exp, es) = self.unary()?;
+        let span = bs.start..es.end;
+        let x = base.powf(exp);
+        if base == 0.0 && exp < 0.0 {
+            return Err(Fail::Value {
+                span,
+                message: format!("division by zero: 0 to the negative power {exp}"),
+            });
+        }
+        if x.is_nan() {
+            return Err(Fail::Value {
+                span,
+                message: format!(
+                    "{base} to the power {exp} is not a real number (a negative number to a \
+                     power that is not whole)"
+                ),
+            });
+        }
+        Ok((self.finite(x, &span, "the power")?, span))
+    }
+
+    fn primary(&mut self) -> Result<Value, Fail> {
+        let Some(p) = self.peek().cloned() else {
+            return Err(syntax(
+                self.here(),
+                "the expression ends too early: expected a number, a name or `(`",
+                "expected a value",
+            ));
+        };
+        let text = self.piece_text(&p).to_string();
+        match p.tk {
+            Tk::Num => {
+                self.at += 1;
+                match text.parse::<f64>() {
+                    Ok(x) if x.is_finite() => Ok((x, p.span)),
+                    Ok(_) => Err(Fail::Value {
+                        span: p.span,
+                        message: format!(
+                            "`{}` is too large: it overflows a 64-bit float to infinity",
+                            shorten(&text, 30)
+                        ),
+                    }),
+                    Err(_) => Err(syntax(
+                        p.span,
+                        format!("`{}` is not a number", shorten(&text, 30)),
+                        "not a number",
+                    )),
+                }
+            }
+            Tk::Name => {
+                self.at += 1;
+                if let Some(&(name, lo, hi)) = FUNCTIONS.iter().find(|f| f.0 == text) {
+                    return self.call(name, lo, hi, p.span);
+                }
+                match self.names.value(&text) {
+                    Some((x, uses_time)) => {
+                        self.uses_time |= uses_time;
+                        Ok((x, p.span))
+                    }
+                    None => Err(self.unknown_name(&text, p.span)),
+                }
+            }
+            Tk::Open => {
+                self.at += 1;
+                self.parens += 1;
+                let inner = self.sum()?;
+                self.parens -= 1;
+                match self.peek_tk() {
+                    Some(Tk::Close) => {
+                        let close = self.here();
+                        self.at += 1;
+                        Ok((inner.0, p.span.start..close.end))
+                    }
+                    Some(Tk::Comma) => Err(syntax(
+                        self.here(),
+                        "expected `)`, found `,`: parentheses in a number group one \
+                         expression (a vector is not allowed here)",
+                        "expected `)`",
+                    )),
+                    _ => Err(syntax(
+                        self.here(),
+                        format!("expected an operator or `)`, found {}", self.found()),
+                        "expected `)`",
+                    )),
+                }
+            }
+            _ => Err(syntax(
+                p.span,
+                format!(
+                    "expected a number, a name or `(`, found `{}`",
+                    shorten(&text, 30)
+                ),
+                "expected a value",
+            )),
+        }
+    }
+
+    fn call(&mut self, name: &str, lo: usize, hi: usize, span: Span) -> Result<Value, Fail> {
+        if self.peek_tk() != Some(Tk::Open) {
+            return Err(syntax(
+                span,
+                format!("`{name}` is a function: write {name}(…)"),
+                "expected `(` after it",
+            ));
+        }
+        self.at += 1;
+        self.parens += 1;
+        let mut args = vec![self.sum()?];
+        while self.peek_tk() == Some(Tk::Comma) {
+            self.at += 1;
+            args.push(self.sum()?);
+        }
+        self.parens -= 1;
+        if self.peek_tk() != Some(Tk::Close) {
+            return Err(syntax(
+                self.here(),
+                format!(
+                    "expected `,` or `)` in the arguments of {name}, found {}",
+                    self.found()
+                ),
+                "expected `)`",
+            ));
+        }
+        let whole = span.start..self.here().end;
+        self.at += 1;
+        if args.len() < lo || args.len() > hi {
+            let wanted = match (lo, hi) {
+                (1, 1) => "one argument".to_string(),
+                (l, usize::MAX) => format!("at least {l} arguments"),
+                (l, h) => format!("{l} to {h} arguments"),
+            };
+            return Err(syntax(
+                whole,
+                format!("{name} takes {wanted}, not {}", args.len()),
+                "wrong number of arguments",
+            ));
+        }
+        let (a, a_span) = args[0].clone();
+        let x = match name {
+            "sin" => a.sin(),
+            "cos" => a.cos(),
+            "tan" => a.tan(),
+            "abs" => a.abs(),
+            "sqrt" => {
+                if a < 0.0 {
+                    return Err(Fail::Value {
+                        span: a_span,
+                        message: format!("sqrt of a negative number ({a})"),
+                    });
+                }
+                a.sqrt()
+            }
+            "min" => args.iter().map(|v| v.0).fold(f64::INFINITY, f64::min),
+            "max" => args.iter().map(|v| v.0).fold(f64::NEG_INFINITY, f64::max),
+            _ => unreachable!("every function is evaluated"),
+        };
+        Ok((self.finite(x, &whole, "the result")?, whole))
+    }
+
+    fn unknown_name(&self, name: &str, span: Span) -> Fail {
+        let defined = self.names.defined();
+        let mut candidates = defined.clone();
+        candidates.extend(CONSTANTS);
+        let help = match suggest(name, candidates.iter().copied()) {
+            Some(s) => Some(format!("did you mean `{s}`?")),
+            None if defined.is_empty() => Some(format!(
+                "define it before this line with `LET {name} = …`; built-in names: {}",
+                CONSTANTS.join(", ")
+            )),
+            None => Some(format!(
+                "names defined so far: {}; built-in: {}",
+                defined.join(", "),
+                CONSTANTS.join(", ")
+            )),
+        };
+        Fail::Syntax {
+            span,
+            message: format!("unknown name `{}`", shorten(name, 30)),
+            label: "not defined before this line".into(),
+            help,
+        }
+    }
+}
+
+/// True when the number at the cursor is followed by an operator that continues it into an
+/// expression (so it cannot be read as a lone number).
+pub(super) fn continues(cur: &Cursor) -> bool {
+    let ps = pieces(cur, 2);
+    let Some(first) = ps.first() else {
+        return false;
+    };
+    if !first.last {
+        return true;
+    }
+    match ps.get(1) {
+        Some(p) if matches!(p.tk, Tk::Star | Tk::Slash | Tk::Caret) => true,
+        Some(p) if matches!(p.tk, Tk::Plus | Tk::Minus) => !p.space_before || p.space_after,
+        _ => false,
+    }
+}
+
+/// Reads the expression at the cursor as `what` (for messages) and moves past it. Returns
+/// `Ok(None)` when the cursor is not at an expression (the caller reports what it expected).
+pub(super) fn read(cur: &mut Cursor, what: &str) -> Result<Option<Value>, SceneError> {
+    let mut reader = Reader {
+        text: cur.src.text,
+        names: cur.names,
+        pieces: pieces(cur, usize::MAX),
+        at: 0,
+        parens: 0,
+        depth: 0,
+        list: true,
+        uses_time: false,
+    };
+    if !looks_like_expression(&reader) {
+        return Ok(None);
+    }
+    match finish(&mut reader) {
+        Ok((x, span, next_token)) => {
+            cur.uses_time |= reader.uses_time;
+            cur.pos = next_token;
+            Ok(Some((x, span)))
+        }
+        Err(Fail::NotAnExpression) => Ok(None),
+        Err(fail) => {
+            cur.uses_time |= reader.uses_time;
+            Err(report(cur, what, fail))
+        }
+    }
+}
+
+/// False when the first word is not written as an expression at all (`one`, `1.2.3`, `2x`,
+/// `a#b`, an unknown name alone) or a vector starts here: the caller's "expected a number"
+/// says more than an expression error would.
+fn looks_like_expression(reader: &Reader) -> bool {
+    let Some(first) = reader.pieces.first() else {
+        return false;
+    };
+    let word: Vec<&Piece> = reader
+        .pieces
+        .iter()
+        .take_while(|p| p.token == first.token)
+        .collect();
+    let operand = |p: &Piece| matches!(p.tk, Tk::Num | Tk::Name);
+    let has_operator = word.iter().any(|p| !operand(p));
+    if word.iter().any(|p| p.tk == Tk::Bad)
+        || (!has_operator && word.windows(2).any(|w| operand(w[0]) && operand(w[1])))
+    {
+        return false;
+    }
+    if first.tk == Tk::Name && first.last {
+        let name = reader.piece_text(first);
+        let is_function = FUNCTIONS.iter().any(|f| f.0 == name);
+        return is_function || reader.names.value(name).is_some();
+    }
+    if first.tk == Tk::Open {
+        // `(a, b, c)`: a comma at the first level of these parentheses.
+        let mut depth = 0usize;
+        for p in &reader.pieces {
+            match p.tk {
+                Tk::Open => depth += 1,
+                Tk::Close if depth <= 1 => break,
+                Tk::Close => depth -= 1,
+                Tk::Comma if depth == 1 => return false,
+                _ => {}
+            }
+        }
+    }
+    true
+}
+
+/// Reads an expression from the reader's first piece to the end of a token; returns its
+/// value, its span and the index of the next lexer token.
+fn finish(reader: &mut Reader) -> Result<(f64, Span, usize), Fail> {
+    match reader.peek_tk() {
+        Some(Tk::Num | Tk::Name | Tk::Plus | Tk::Minus | Tk::Open) => {}
+        _ => return Err(Fail::NotAnExpression),
+    }
+    let (x, span) = reader.sum()?;
+    let last = &reader.pieces[reader.at - 1];
+    if !last.last {
+        let next = reader.here();
+        return Err(syntax(
+            next,
+            format!(
+                "unexpected {} after `{}`: is an operator missing?",
+                reader.found(),
+                shorten(&reader.text[span.clone()], 30)
+            ),
+            "expected an operator or a space",
+        ));
+    }
+    Ok((x, span, last.token + 1))
+}
+
+fn report(cur: &Cursor, what: &str, fail: Fail) -> SceneError {
+    match fail {
+        Fail::NotAnExpression => cur.unexpected(&format!("{what} (a number)")),
+        Fail::Syntax {
+            span,
+            message,
+            label,
+            help,
+        } => {
+            let message = format!("in {what}: {message}");
+            match help {
+                Some(h) => cur.fail_help(span, message, label, h),
+                None => cur.fail(span, message, label),
+            }
+        }
+        Fail::Value { span, message } => cur.fail(
+            span,
+            format!("{what} cannot be computed: {message}"),
+            "here",
+        ),
+    }
+}
+
+/// A `LET name = expression` statement after its keyword: the name, its value, whether the
+/// value depends on the time, and the span of the name.
+pub(super) fn let_statement(cur: &mut Cursor) -> Result<(String, f64, bool, Span), SceneError> {
+    let ps = pieces(cur, usize::MAX);
+    let Some(name_piece) = ps.first().filter(|p| p.tk == Tk::Name) else {
+        return Err(cur.unexpected("a name (letters, digits and `_`, starting with a letter)"));
+    };
+    let name = cur.src.text[name_piece.span.clone()].to_string();
+    let name_span = name_piece.span.clone();
+    if !name_piece.last && ps.get(1).is_some_and(|p| p.tk != Tk::Equals) {
+        let p = &ps[1];
+        return Err(cur.fail(
+            name_span.start..p.span.end,
+            format!(
+                "`{}` is not a valid name: names contain only letters, digits and `_`",
+                shorten(cur.text(&cur.tokens[name_piece.token]), 30)
+            ),
+            "invalid name",
+        ));
+    }
+    if is_reserved(&name) {
+        return Err(cur.fail(
+            name_span,
+            format!("`{name}` is a built-in name and cannot be defined by LET"),
+            "reserved name",
+        ));
+    }
+    if let Some(d) = cur.names.lets.get(&name) {
+        return Err(cur.fail(
+            name_span,
+            format!("`{name}` is already defined on line {}", d.line),
+            "defined twice",
+        ));
+    }
+    match ps.get(1) {
+        Some(p) if p.tk == Tk::Equals => {}
+        Some(p) => {
+            return Err(cur.fail(
+                p.span.clone(),
+                format!(
+                    "expected `=` after the name, found `{}`",
+                    shorten(&cur.src.text[p.span.clone()], 30)
+                ),
+                "expected `=`",
+            ))
+        }
+        None => {
+            return Err(cur.fail(
+                name_span.end..name_span.end,
+                "expected `=` after the name, found end of line",
+                "expected `=`",
+            ))
+        }
+    }
+    let mut reader = Reader {
+        text: cur.src.text,
+        names: cur.names,
+        pieces: ps[2..].to_vec(),
+        at: 0,
+        parens: 0,
+        depth: 0,
+        list: false,
+        uses_time: false,
+    };
+    let what = format!("the value of {name}");
+    let result = finish(&mut reader);
+    cur.uses_time |= reader.uses_time;
+    match result {
+        Ok((x, _, next)) => {
+            cur.pos = next;
+            cur.end()?;
+            Ok((name, x, reader.uses_time, name_span))
+        }
+        Err(Fail::NotAnExpression) => {
+            cur.pos = ps.get(2).map_or(cur.tokens.len(), |p| p.token);
+            Err(cur.unexpected(&format!("{what} (an expression)")))
+        }
+        Err(fail) => Err(report(cur, &what, fail)),
+    }
+}
+
+/// Records a `LET` definition read on `line`.
+pub(super) fn define(names: &mut Names, name: String, value: f64, uses_time: bool, line: usize) {
+    names.lets.insert(
+        name,
+        Defined {
+            value,
+            line,
+            uses_time,
+        },
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::cursor::Source;
+    use crate::scene::lexer::lex_line;
+
+    /// Reads `text` as one expression in a list (as a number argument is read) at `time`.
+    fn eval_at(text: &str, time: Option<FrameTime>, lets: &[(&str, f64)]) -> Result<f64, String> {
+        let mut names = Names::new(time);
+        for (n, v) in lets {
+            define(&mut names, n.to_string(), *v, false, 1);
+        }
+        let tokens = lex_line(text, 0, text.len()).unwrap();
+        let mut cur = Cursor {
+            src: Source { text, name: "t" },
+            tokens,
+            pos: 0,
+            line: 1,
+            next_line: text.len(),
+            keyword: "",
+            usage: "",
+            part_usage: None,
+            names: &names,
+            uses_time: false,
+        };
+        match read(&mut cur, "the value") {
+            Ok(Some((x, _))) if cur.pos == cur.tokens.len() => Ok(x),
+            Ok(Some(_)) => Err(format!("stopped at token {}", cur.pos)),
+            Ok(None) => Err("not an expression".into()),
+            Err(e) => Err(e.message()),
+        }
+    }
+
+    fn eval(text: &str) -> f64 {
+        eval_at(text, None, &[]).unwrap_or_else(|e| panic!("{text}: {e}"))
+    }
+
+    #[test]
+    fn arithmetic_against_hand_computed_values() {
+        assert_eq!(eval("1 + 2 * 3"), 7.0);
+        assert_eq!(eval("(1 + 2) * 3"), 9.0);
+        assert_eq!(eval("2^3^2"), 512.0); // right associative: 2^(3^2)
+        assert_eq!(eval("-2^2"), -4.0); // the power binds tighter than the sign
+        assert_eq!(eval("(-2)^2"), 4.0);
+        assert_eq!(eval("10 / 4 - 1"), 1.5);
+        assert_eq!(eval("1-2-3"), -4.0); // left associative
+        assert_eq!(eval("8/2/2"), 2.0);
+        assert_eq!(eval("2*-3"), -6.0);
+        assert_eq!(eval("--3"), 3.0);
+        assert_eq!(eval("1e3 + 2.5E-1"), 1000.25);
+        assert_eq!(eval("+.5"), 0.5);
+        assert_eq!(eval("4^-0.5"), 0.5);
+    }
+
+    #[test]
+    fn functions_take_radians() {
+        assert!((eval("sin(pi/6)") - 0.5).abs() < 1e-15);
+        assert!((eval("cos(pi)") + 1.0).abs() < 1e-15);
+        assert!((eval("tan(pi/4)") - 1.0).abs() < 1e-15);
+        assert_eq!(eval("sqrt(16)"), 4.0);
+        assert_eq!(eval("abs(-2.5)"), 2.5);
+        assert_eq!(eval("min(3, 1, 2)"), 1.0);
+        assert_eq!(eval("max(3, 1 + 4, 2)"), 5.0);
+        assert_eq!(eval("max(1 -2, 0)"), 0.0); // inside parentheses, `-` is an operator
+        assert_eq!(eval("2*sqrt(9)^2"), 18.0);
+    }
+
+    #[test]
+    fn time_and_names() {
+        let t = |frame, count| Some(FrameTime { frame, count });
+        assert_eq!(eval_at("clock", t(0, 5), &[]), Ok(0.0));
+        assert_eq!(eval_at("clock", t(1, 5), &[]), Ok(0.25));
+        assert_eq!(eval_at("clock", t(4, 5), &[]), Ok(1.0));
+        assert_eq!(eval_at("clock", t(0, 1), &[]), Ok(0.0));
+        assert_eq!(eval_at("frame * 2 + frames", t(3, 10), &[]), Ok(16.0));
+        assert_eq!(eval_at("clock", None, &[]), Ok(0.0));
+        assert_eq!(
+            eval_at("0.8 + 0.6*clock", t(2, 3), &[]),
+            Ok(0.8 + 0.6 * 1.0)
+        );
+        assert_eq!(eval_at("2*mu + 1", None, &[("mu", 0.25)]), Ok(1.5));
+        assert_eq!(eval_at("mu_2^2", None, &[("mu_2", 3.0)]), Ok(9.0));
+    }
+
+    #[test]
+    fn value_errors_say_what_went_wrong() {
+        let t = Some(FrameTime { frame: 2, count: 3 });
+        let e = eval_at("1 / (clock - 1)", t, &[]).unwrap_err();
+        assert!(e.contains("division by zero: `(clock - 1)` is 0"), "{e}");
+        let e = eval_at("sqrt(0.5 - clock)", t, &[]).unwrap_err();
+        assert!(e.contains("sqrt of a negative number (-0.5)"), "{e}");
+        let e = eval_at("(-8)^(1/3)", None, &[]).unwrap_err();
+        assert!(e.contains("is not a real number"), "{e}");
+        let e = eval_at("0^-1", None, &[]).unwrap_err();
+        assert!(e.contains("division by zero"), "{e}");
+        let e = eval_at("10^400", None, &[]).unwrap_err();
+        assert!(e.contains("overflows"), "{e}");
+        let e = eval_at("2 * 1e999", None, &[]).unwrap_err();
+        assert!(e.contains("overflows"), "{e}");
+    }
+
+    #[test]
+    fn syntax_errors() {
+        let e = eval_at("1 + mu", None, &[]).unwrap_err();
+        assert!(e.contains("unknown name `mu`"), "{e}");
+        let e = eval_at("sin 1", None, &[]).unwrap_err();
+        assert!(e.contains("`sin` is a function"), "{e}");
+        let e = eval_at("min(1)", None, &[]).unwrap_err();
+        assert!(e.contains("min takes at least 2 arguments, not 1"), "{e}");
+        let e = eval_at("sqrt(1, 2)", None, &[]).unwrap_err();
+        assert!(e.contains("sqrt takes one argument, not 2"), "{e}");
+        let e = eval_at("(1 + 2", None, &[]).unwrap_err();
+        assert!(e.contains("expected an operator or `)`"), "{e}");
+        let e = eval_at("1 + ", None, &[]).unwrap_err();
+        assert!(e.contains("ends too early"), "{e}");
+        let deep = format!("{}1{}", "(".repeat(150), ")".repeat(150));
+        let e = eval_at(&deep, None, &[]).unwrap_err();
+        assert!(e.contains("nested too deeply"), "{e}");
+        // Not expressions at all: the caller says what it expected.
+        assert_eq!(eval_at("one", None, &[]), Err("not an expression".into()));
+        assert_eq!(eval_at("1.2.3", None, &[]), Err("not an expression".into()));
+        assert_eq!(
+            eval_at("(1, 2)", None, &[]),
+            Err("not an expression".into())
+        );
+    }
+
+    #[test]
+    fn a_sign_after_a_space_starts_the_next_value() {
+        let text = "1 -2 3-1 4 - 1 (5)";
+        let names = Names::new(None);
+        let tokens = lex_line(text, 0, text.len()).unwrap();
+        let mut cur = Cursor {
+            src: Source { text, name: "t" },
+            tokens,
+            pos: 0,
+            line: 1,
+            next_line: text.len(),
+            keyword: "",
+            usage: "",
+            part_usage: None,
+            names: &names,
+            uses_time: false,
+        };
+        let mut values = Vec::new();
+        while cur.pos < cur.tokens.len() {
+            match read(&mut cur, "v").unwrap() {
+                Some((x, _)) => values.push(x),
+                None => break,
+            }
+        }
+        assert_eq!(values, vec![1.0, -2.0, 2.0, 3.0, 5.0]);
+    }
+
+    #[test]
+    fn frame_note_names_the_frame() {
+        let names = Names::new(Some(FrameTime {
+            frame: 3,
+            count: 10,
+        }));
+        assert_eq!(names.frame_note(), " (at frame 3 of 0..=9, clock = 0.3333)");
+        assert_eq!(Names::new(None).frame_note(), "");
+    }
+}

@@ -1,0 +1,172 @@
+//! The farm recipes of examples/farm/ (docs/farm.md): GNU parallel over frames and tiles gives
+//! the files of one sequential run; the Kubernetes manifest is a valid Indexed Job; the Slurm
+//! scripts are valid shell with the array index and the dependent join step.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use super::anim_cli::{ok, SCENE};
+
+fn recipe(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples/farm")
+        .join(name)
+}
+
+/// Runs a recipe script with the test's kardia binary, in `dir`.
+fn run_recipe(dir: &Path, name: &str, args: &[&str]) {
+    let out = Command::new("bash")
+        .arg(recipe(name))
+        .args(args)
+        .env("KARDIA", env!("CARGO_BIN_EXE_kardia"))
+        .env("PARALLEL_OPTS", "-j 2")
+        .current_dir(dir)
+        .output()
+        .expect("bash runs");
+    assert!(
+        out.status.success(),
+        "{name} {args:?} failed (GNU parallel must be installed: apt-get install parallel):\n{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn gnu_parallel_over_frames_gives_the_files_of_a_sequential_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("a.scene"), SCENE).unwrap();
+    run_recipe(
+        d,
+        "parallel-frames.sh",
+        &["a.scene", "farm", "--spp", "2", "--threads", "1"],
+    );
+    ok(
+        d,
+        &[
+            "render",
+            "a.scene",
+            "--spp",
+            "2",
+            "--frames",
+            "0..3",
+            "--quiet",
+            "-o",
+            "seq_####.png",
+        ],
+    );
+    let mut made: Vec<String> = std::fs::read_dir(d.join("farm"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    made.sort();
+    assert_eq!(
+        made,
+        [
+            "frame_0000.png",
+            "frame_0001.png",
+            "frame_0002.png",
+            "frame_0003.png"
+        ]
+    );
+    for f in 0..4 {
+        let farm = std::fs::read(d.join(format!("farm/frame_{f:04}.png"))).unwrap();
+        let seq = std::fs::read(d.join(format!("seq_{f:04}.png"))).unwrap();
+        assert_eq!(farm, seq, "frame {f}");
+    }
+}
+
+#[test]
+fn gnu_parallel_over_tiles_joins_into_the_single_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("a.scene"), SCENE).unwrap();
+    run_recipe(
+        d,
+        "parallel-tiles.sh",
+        &["a.scene", "4", "joined.png", "--spp", "2"],
+    );
+    ok(
+        d,
+        &[
+            "render",
+            "a.scene",
+            "--spp",
+            "2",
+            "--quiet",
+            "-o",
+            "single.png",
+        ],
+    );
+    assert_eq!(
+        std::fs::read(d.join("joined.png")).unwrap(),
+        std::fs::read(d.join("single.png")).unwrap()
+    );
+}
+
+#[test]
+fn the_kubernetes_manifest_is_an_indexed_job_over_frames() {
+    use yaml_rust2::YamlLoader;
+    let text = std::fs::read_to_string(recipe("k8s-indexed-job.yaml")).unwrap();
+    let docs = YamlLoader::load_from_str(&text).expect("valid YAML");
+    assert_eq!(docs.len(), 1);
+    let job = &docs[0];
+    assert_eq!(job["apiVersion"].as_str(), Some("batch/v1"));
+    assert_eq!(job["kind"].as_str(), Some("Job"));
+    let spec = &job["spec"];
+    assert_eq!(spec["completionMode"].as_str(), Some("Indexed"));
+    // completions = the scene's FRAMES.
+    let scene = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/heartbeat.scene"),
+    )
+    .unwrap();
+    assert!(scene.contains(&format!(
+        "FRAMES {} ",
+        spec["completions"].as_i64().unwrap()
+    )));
+    assert!(spec["parallelism"].as_i64().unwrap() >= 1);
+    let pod = &spec["template"]["spec"];
+    assert_eq!(pod["restartPolicy"].as_str(), Some("Never"));
+    let container = &pod["containers"][0];
+    let command: Vec<&str> = container["args"]
+        .as_vec()
+        .unwrap()
+        .iter()
+        .map(|a| a.as_str().unwrap())
+        .collect();
+    let line = command.join(" ");
+    assert!(line.contains("kardia render"), "{line}");
+    assert!(line.contains("--frame \"$JOB_COMPLETION_INDEX\""), "{line}");
+    assert!(line.contains("-o /shared/out/frame_####.png"), "{line}");
+    let mount = container["volumeMounts"][0]["mountPath"].as_str().unwrap();
+    assert!(line.contains(mount), "the output is on the shared volume");
+}
+
+#[test]
+fn the_slurm_scripts_are_valid_and_chain_the_join_after_the_array() {
+    for name in [
+        "slurm-frames.sbatch",
+        "slurm-tiles.sbatch",
+        "slurm-assemble.sbatch",
+        "slurm-submit.sh",
+        "parallel-frames.sh",
+        "parallel-tiles.sh",
+    ] {
+        let out = Command::new("bash")
+            .arg("-n")
+            .arg(recipe(name))
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let frames = std::fs::read_to_string(recipe("slurm-frames.sbatch")).unwrap();
+    assert!(frames.contains("--frame \"$SLURM_ARRAY_TASK_ID\""));
+    let tiles = std::fs::read_to_string(recipe("slurm-tiles.sbatch")).unwrap();
+    assert!(tiles.contains("--tile \"$SLURM_ARRAY_TASK_ID/$TILES\""));
+    let submit = std::fs::read_to_string(recipe("slurm-submit.sh")).unwrap();
+    assert!(submit.contains("--dependency=afterok:\"$tiles_job\""));
+}
