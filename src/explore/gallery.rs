@@ -150,6 +150,18 @@ pub const SCENES: &[(&str, &str)] = &[
     ),
     ("hearts.scene", include_str!("../../scenes/hearts.scene")),
     (
+        "heartbeat.scene",
+        include_str!("../../scenes/heartbeat.scene"),
+    ),
+    (
+        "kummer_morph.scene",
+        include_str!("../../scenes/kummer_morph.scene"),
+    ),
+    (
+        "turntable.scene",
+        include_str!("../../scenes/turntable.scene"),
+    ),
+    (
         "menagerie.scene",
         include_str!("../../scenes/menagerie.scene"),
     ),
