@@ -7,6 +7,7 @@ pub mod analysis;
 pub mod animation;
 pub mod camera;
 pub mod cli;
+pub mod explore;
 pub mod film;
 pub mod geometry;
 pub mod integrator;

@@ -4,6 +4,7 @@
 
 mod animate;
 mod assemble;
+mod explore;
 mod probe;
 mod render;
 mod roots;
@@ -29,6 +30,8 @@ enum Command {
     Roots(roots::RootsArgs),
     /// Intersect rays read from stdin (or a camera pixel) with a scene; print JSON Lines.
     Probe(probe::ProbeArgs),
+    /// Explore scenes and equations live in the browser (a local web server).
+    Explore(explore::ExploreArgs),
     /// Join part files (rendered with --tile or --region) into the whole image.
     Assemble(assemble::AssembleArgs),
 }
@@ -43,6 +46,7 @@ pub fn main(interrupt: &CancelToken) -> i32 {
         Some(Command::Render(a)) => render::run(a, interrupt),
         Some(Command::Roots(a)) => roots::run(a),
         Some(Command::Probe(a)) => probe::run(a),
+        Some(Command::Explore(a)) => explore::run(a, interrupt),
         Some(Command::Assemble(a)) => assemble::run(a),
     }
 }

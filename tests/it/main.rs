@@ -7,6 +7,8 @@ mod render_support;
 mod anim_cli;
 mod anim_scene;
 mod cli_render;
+mod explore;
+mod explore_browser;
 mod farm;
 mod fuzz_scenes;
 mod heart_geometry;

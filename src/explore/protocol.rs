@@ -1,0 +1,286 @@
+//! The messages between the page and the server (one WebSocket per page).
+//!
+//! The page sends JSON text messages ([`ClientMessage`]). The server answers with JSON text
+//! messages ([`ServerMessage`]) and with binary messages for images: a little-endian `u32`
+//! header length, that many bytes of JSON header ([`FrameHeader`]), then the payload (raw
+//! RGBA8 pixels, row-major from the top-left, for a frame; the file's bytes for a PNG).
+
+use crate::scene::SceneError;
+use serde::{Deserialize, Serialize};
+
+/// What the page asks for.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ClientMessage {
+    /// Show this scene text at this size: starts a progressive render, cancelling the one in
+    /// flight. `seq` is echoed in every frame and error it causes.
+    View {
+        /// Page-chosen number of this request; frames of older requests are never sent after it.
+        seq: u64,
+        /// The whole scene text (its CAMERA is the view's camera).
+        scene: String,
+        /// View width in pixels.
+        width: u32,
+        /// View height in pixels.
+        height: u32,
+        /// Which image: a name of `kardia render --view` (default `shaded`).
+        #[serde(default)]
+        view: Option<String>,
+    },
+    /// The expanded equation and default clip radius of a preset with its parameters.
+    Preset {
+        /// Scene-language preset name.
+        name: String,
+        /// Its parameters.
+        params: Vec<f64>,
+    },
+    /// Render this scene once at this size and samples, and send it as a PNG.
+    Save {
+        /// Echoed in the reply.
+        seq: u64,
+        /// The whole scene text.
+        scene: String,
+        /// Image width in pixels.
+        width: u32,
+        /// Image height in pixels.
+        height: u32,
+        /// Samples per pixel.
+        spp: u32,
+        /// Which image: a name of `kardia render --view` (default `shaded`).
+        #[serde(default)]
+        view: Option<String>,
+    },
+}
+
+/// The render view named `name` (`None`: shaded), or a message listing the names.
+pub fn view_named(name: Option<&str>) -> Result<crate::pipeline::View, String> {
+    use crate::pipeline::View;
+    let Some(name) = name else {
+        return Ok(View::Shaded);
+    };
+    View::ALL
+        .iter()
+        .find(|(_, n)| *n == name)
+        .map(|(v, _)| *v)
+        .ok_or_else(|| {
+            let names: Vec<_> = View::ALL.iter().map(|(_, n)| *n).collect();
+            format!(
+                "unknown view '{}': one of {}",
+                name.chars().take(40).collect::<String>(),
+                names.join(", ")
+            )
+        })
+}
+
+/// A scene that did not parse, located in its text.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct SceneProblem {
+    /// The one-line form `file:line:column: message`, as `kardia render` prints first.
+    pub message: String,
+    /// The full report `kardia render` prints (source line with a caret), without colours.
+    pub report: String,
+    /// 1-based line of the problem.
+    pub line: usize,
+    /// 1-based column (in characters) of the problem.
+    pub column: usize,
+    /// Length of the marked part, in characters (0 for a point).
+    pub length: usize,
+}
+
+impl SceneProblem {
+    /// The problem of a scene error about `text`.
+    pub fn new(error: &SceneError, text: &str) -> Self {
+        let mut report = String::new();
+        let handler =
+            miette::GraphicalReportHandler::new_themed(miette::GraphicalTheme::unicode_nocolor())
+                .with_width(100);
+        if handler.render_report(&mut report, error).is_err() {
+            report = error.to_string();
+        }
+        let (line, column) = error.location().unwrap_or((1, 1));
+        let length = match error {
+            SceneError::Invalid(e) => {
+                let start = e.span.offset().min(text.len());
+                let end = (start + e.span.len()).min(text.len());
+                text.get(start..end).map_or(0, |s| s.chars().count())
+            }
+            SceneError::Unreadable { .. } => 0,
+        };
+        Self {
+            message: error.to_string(),
+            report,
+            line,
+            column,
+            length,
+        }
+    }
+}
+
+/// What the server says in text messages.
+#[derive(Debug, Clone, Serialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum ServerMessage {
+    /// First message on every connection.
+    Hello {
+        /// kardia's version.
+        version: &'static str,
+        /// The limits this server enforces.
+        limits: super::Limits,
+        /// The equation-mode gallery.
+        presets: Vec<super::gallery::GalleryPreset>,
+        /// The scene files that can be opened, `(name, text)`.
+        scenes: Vec<(&'static str, &'static str)>,
+        /// The scene the server was started with: `(name, text)`.
+        initial: (String, String),
+        /// The names of the views a page may ask for (`shaded` first).
+        views: Vec<&'static str>,
+    },
+    /// The scene of request `seq` did not parse; the last good image stays.
+    SceneError {
+        /// The request.
+        seq: u64,
+        /// Where and what.
+        problem: SceneProblem,
+    },
+    /// A preset's expansion.
+    Preset {
+        /// Preset name.
+        name: String,
+        /// Its parameters.
+        params: Vec<f64>,
+        /// Its equation, as the scene language expands it.
+        equation: String,
+        /// Its default clip radius.
+        bound: f64,
+    },
+    /// A request that was refused (malformed, too large, over a limit), or a failure.
+    Error {
+        /// The request it answers, when known.
+        seq: Option<u64>,
+        /// What was wrong, for the page to show.
+        message: String,
+    },
+}
+
+impl ServerMessage {
+    /// The message as JSON text.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).unwrap_or_else(|e| {
+            format!(r#"{{"type":"error","seq":null,"message":"cannot encode a reply: {e}"}}"#)
+        })
+    }
+}
+
+/// Header of a binary message.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum FrameHeader {
+    /// A frame of a progressive render; payload: `width·height·4` bytes of RGBA8 (sRGB).
+    Frame {
+        /// The request it belongs to.
+        seq: u64,
+        /// Frame width in pixels (may be below the view's for the coarse passes).
+        width: u32,
+        /// Frame height in pixels.
+        height: u32,
+        /// The view's width in pixels.
+        view_width: u32,
+        /// The view's height in pixels.
+        view_height: u32,
+        /// Samples per pixel accumulated in this frame.
+        spp: u32,
+        /// 0-based pass number of this request.
+        pass: u32,
+        /// Wall time of this pass's render, milliseconds.
+        ms: f64,
+        /// Rays traced in this pass.
+        rays: u64,
+        /// Whether this is the last frame of the request (the samples limit is reached).
+        done: bool,
+    },
+    /// A saved image; payload: the PNG file.
+    Png {
+        /// The request it answers.
+        seq: u64,
+        /// Image width in pixels.
+        width: u32,
+        /// Image height in pixels.
+        height: u32,
+        /// Samples per pixel.
+        spp: u32,
+        /// Wall time of the render, milliseconds.
+        ms: f64,
+    },
+}
+
+/// A binary message: header length, header, payload.
+pub fn binary(header: &FrameHeader, payload: &[u8]) -> Vec<u8> {
+    let head = serde_json::to_vec(header).unwrap_or_default();
+    let mut out = Vec::with_capacity(4 + head.len() + payload.len());
+    out.extend_from_slice(&(head.len() as u32).to_le_bytes());
+    out.extend_from_slice(&head);
+    out.extend_from_slice(payload);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn view_message_reads_and_unknown_fields_are_refused() {
+        let m: ClientMessage = serde_json::from_str(
+            r#"{"type":"view","seq":3,"scene":"CAMERA (1,0,0) (0,0,0) (0,0,1) 40","width":8,"height":6}"#,
+        )
+        .unwrap();
+        assert!(matches!(
+            m,
+            ClientMessage::View {
+                seq: 3,
+                width: 8,
+                ..
+            }
+        ));
+        assert!(serde_json::from_str::<ClientMessage>(r#"{"type":"view","seq":1}"#).is_err());
+        assert!(serde_json::from_str::<ClientMessage>(
+            r#"{"type":"preset","name":"torus","params":[1,0.3],"path":"/etc/passwd"}"#
+        )
+        .is_err());
+        assert!(serde_json::from_str::<ClientMessage>(r#"{"type":"open_file"}"#).is_err());
+    }
+
+    #[test]
+    fn views_by_name() {
+        use crate::pipeline::View;
+        assert_eq!(view_named(None), Ok(View::Shaded));
+        assert_eq!(view_named(Some("normals")), Ok(View::Normals));
+        let e = view_named(Some("nonsense")).unwrap_err();
+        assert!(e.contains("one of shaded, normals, depth"), "{e}");
+    }
+
+    #[test]
+    fn binary_layout() {
+        let h = FrameHeader::Png {
+            seq: 1,
+            width: 2,
+            height: 3,
+            spp: 4,
+            ms: 5.0,
+        };
+        let b = binary(&h, &[9, 9]);
+        let n = u32::from_le_bytes(b[..4].try_into().unwrap()) as usize;
+        let head: serde_json::Value = serde_json::from_slice(&b[4..4 + n]).unwrap();
+        assert_eq!(head["type"], "png");
+        assert_eq!(&b[4 + n..], &[9, 9]);
+    }
+
+    #[test]
+    fn scene_problem_locates_the_error() {
+        let text = "CAMERA (6, 0, 0) (0, 0, 0) (0, 0, 1) 40\nSPHERE (0,0,0) -1 (1,1,1)\n";
+        let err = crate::scene::parse(text, "page.scene", &Default::default()).unwrap_err();
+        let p = SceneProblem::new(&err, text);
+        assert_eq!((p.line, p.column, p.length), (2, 16, 2));
+        assert!(p.message.starts_with("page.scene:2:16: "), "{}", p.message);
+        assert!(p.report.contains("SPHERE (0,0,0) -1"), "{}", p.report);
+    }
+}

@@ -1,0 +1,84 @@
+//! The explorer's one seam to the renderer: a pass of the progressive render (a size, a
+//! camera, some samples, a seed, a view) of a loaded scene, cancellable. Everything else in
+//! the explorer calls [`render_pass`] and never the integrator directly.
+
+use crate::camera::Camera;
+use crate::film::Image;
+use crate::pipeline::{Control, RenderError, RenderRequest, Renderer, View};
+use crate::scene::Scene;
+use std::sync::Arc;
+use std::time::Duration;
+
+pub use crate::pipeline::CancelToken;
+
+/// A loaded scene shared by a client's passes (its own camera and size are only defaults:
+/// a pass overrides both).
+pub type SharedScene = Arc<Scene>;
+
+/// Wraps a freshly parsed scene for [`render_pass`].
+pub fn share(scene: Scene) -> SharedScene {
+    Arc::new(scene)
+}
+
+/// A render stopped by its [`CancelToken`] before it finished (or refused by the renderer).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct NotRendered(pub String);
+
+/// One pass: what to render.
+#[derive(Debug, Clone)]
+pub struct PassRequest {
+    /// Image width in pixels (≥ 1).
+    pub width: u32,
+    /// Image height in pixels (≥ 1).
+    pub height: u32,
+    /// Camera to render through.
+    pub camera: Camera,
+    /// Samples per pixel (≥ 1).
+    pub spp: u32,
+    /// Seed of the jitter and light sampling.
+    pub seed: u64,
+    /// Which image to make.
+    pub view: View,
+}
+
+/// One finished pass.
+#[derive(Debug, Clone)]
+pub struct PassResult {
+    /// The image, `width × height` linear RGB.
+    pub image: Image,
+    /// Rays traced (primary, secondary and shadow rays).
+    pub rays: u64,
+    /// Wall time of the render.
+    pub elapsed: Duration,
+}
+
+/// Renders one pass of `scene`; fails when `cancel` was set before or during the render.
+pub fn render_pass(
+    renderer: &Renderer,
+    scene: &SharedScene,
+    request: &PassRequest,
+    cancel: &CancelToken,
+) -> Result<PassResult, NotRendered> {
+    let render_request = RenderRequest {
+        width: Some(request.width.max(1)),
+        height: Some(request.height.max(1)),
+        camera: Some(request.camera.clone()),
+        spp: request.spp.max(1),
+        seed: request.seed,
+        view: request.view,
+        ..RenderRequest::default()
+    };
+    let rendered = renderer
+        .render(
+            scene,
+            &render_request,
+            &Control::with_cancel(cancel.clone()),
+        )
+        .map_err(|e: RenderError| NotRendered(e.to_string()))?;
+    Ok(PassResult {
+        image: rendered.image,
+        rays: rendered.stats.rays,
+        elapsed: rendered.stats.elapsed,
+    })
+}

@@ -1,0 +1,622 @@
+//! `kardia explore`'s server without a browser: the server runs in-process on 127.0.0.1:0
+//! and a WebSocket client speaks its protocol (src/explore/protocol.rs).
+
+use futures_util::{SinkExt, StreamExt};
+use kardia::explore::{Limits, Monitor, Options, Server};
+use serde_json::{json, Value};
+use std::net::SocketAddr;
+use std::time::{Duration, Instant};
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio_tungstenite::tungstenite::client::IntoClientRequest;
+use tokio_tungstenite::tungstenite::Message;
+
+type Ws =
+    tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
+
+struct Running {
+    addr: SocketAddr,
+    monitor: Monitor,
+    stop: Option<tokio::sync::oneshot::Sender<()>>,
+    served: tokio::task::JoinHandle<Result<(), kardia::explore::ExploreError>>,
+}
+
+impl Running {
+    async fn stop(mut self) {
+        if let Some(stop) = self.stop.take() {
+            let _ = stop.send(());
+        }
+        tokio::time::timeout(Duration::from_secs(10), &mut self.served)
+            .await
+            .expect("the server stops within 10 s")
+            .unwrap()
+            .unwrap();
+    }
+}
+
+async fn start(limits: Limits) -> Running {
+    let server = Server::bind(Options {
+        threads: 2,
+        limits,
+        ..Options::default()
+    })
+    .await
+    .unwrap();
+    let addr = server.local_addr();
+    assert!(addr.ip().is_loopback());
+    assert_eq!(server.url(), format!("http://127.0.0.1:{}/", addr.port()));
+    let monitor = server.monitor();
+    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+    let served = tokio::spawn(server.serve(async move {
+        let _ = stopped.await;
+    }));
+    Running {
+        addr,
+        monitor,
+        stop: Some(stop),
+        served,
+    }
+}
+
+async fn connect_with_origin(addr: SocketAddr, origin: Option<&str>) -> Result<Ws, String> {
+    let mut request = format!("ws://{addr}/ws").into_client_request().unwrap();
+    if let Some(origin) = origin {
+        request
+            .headers_mut()
+            .insert("Origin", origin.parse().unwrap());
+    }
+    tokio_tungstenite::connect_async(request)
+        .await
+        .map(|(ws, _)| ws)
+        .map_err(|e| e.to_string())
+}
+
+/// A connection as the page makes it (own Origin), past its hello.
+async fn connect(addr: SocketAddr) -> Ws {
+    let mut ws = connect_with_origin(addr, Some(&format!("http://{addr}")))
+        .await
+        .unwrap();
+    let hello = next_text(&mut ws).await;
+    assert_eq!(hello["type"], "hello", "{hello}");
+    ws
+}
+
+async fn next_message(ws: &mut Ws) -> Option<Message> {
+    loop {
+        let m = tokio::time::timeout(Duration::from_secs(60), ws.next())
+            .await
+            .expect("a message within 60 s")?;
+        match m {
+            Ok(Message::Ping(_) | Message::Pong(_)) => continue,
+            Ok(m) => return Some(m),
+            Err(_) => return None,
+        }
+    }
+}
+
+async fn next_text(ws: &mut Ws) -> Value {
+    match next_message(ws).await {
+        Some(Message::Text(t)) => serde_json::from_str(&t).unwrap(),
+        other => panic!("expected a text message, got {other:?}"),
+    }
+}
+
+fn split_binary(bytes: &[u8]) -> (Value, Vec<u8>) {
+    let n = u32::from_le_bytes(bytes[..4].try_into().unwrap()) as usize;
+    (
+        serde_json::from_slice(&bytes[4..4 + n]).unwrap(),
+        bytes[4 + n..].to_vec(),
+    )
+}
+
+async fn next_binary(ws: &mut Ws) -> (Value, Vec<u8>) {
+    match next_message(ws).await {
+        Some(Message::Binary(b)) => split_binary(&b),
+        other => panic!("expected a binary message, got {other:?}"),
+    }
+}
+
+/// A small scene: a red sphere seen from +X (eye at `(4, y, 0)`).
+fn sphere_scene(eye_y: f64, colour: &str) -> String {
+    format!(
+        "CAMERA (4, {eye_y}, 0) (0, 0, 0) (0, 0, 1) 40\nLIGHT (4, 2, 3) (1, 1, 1)\nSPHERE (0, 0, 0) 1 {colour}\n"
+    )
+}
+
+fn view(seq: u64, scene: &str, width: u32, height: u32) -> Message {
+    Message::text(
+        json!({"type": "view", "seq": seq, "scene": scene, "width": width, "height": height})
+            .to_string(),
+    )
+}
+
+/// Frames until the one marked done; each checked for its payload size.
+async fn frames_until_done(ws: &mut Ws) -> Vec<(Value, Vec<u8>)> {
+    let mut frames = vec![];
+    loop {
+        let (header, payload) = next_binary(ws).await;
+        assert_eq!(header["type"], "frame");
+        let (w, h) = (
+            header["width"].as_u64().unwrap(),
+            header["height"].as_u64().unwrap(),
+        );
+        assert_eq!(payload.len() as u64, w * h * 4);
+        let done = header["done"].as_bool().unwrap();
+        frames.push((header, payload));
+        if done {
+            return frames;
+        }
+    }
+}
+
+fn pixel(header: &Value, payload: &[u8], x: u64, y: u64) -> [u8; 4] {
+    let w = header["width"].as_u64().unwrap();
+    let i = ((y * w + x) * 4) as usize;
+    payload[i..i + 4].try_into().unwrap()
+}
+
+async fn http_get(addr: SocketAddr, path: &str, host: &str) -> String {
+    let mut stream = tokio::net::TcpStream::connect(addr).await.unwrap();
+    let request = format!("GET {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n");
+    stream.write_all(request.as_bytes()).await.unwrap();
+    let mut response = String::new();
+    stream.read_to_string(&mut response).await.unwrap();
+    response
+}
+
+async fn wait_until(what: &str, limit: Duration, condition: impl Fn() -> bool) -> Duration {
+    let start = Instant::now();
+    while !condition() {
+        assert!(start.elapsed() < limit, "{what}: not within {limit:?}");
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    start.elapsed()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn page_is_served_only_under_its_own_host() {
+    let server = start(Limits::default()).await;
+    let own = format!("127.0.0.1:{}", server.addr.port());
+    let page = http_get(server.addr, "/", &own).await;
+    assert!(page.starts_with("HTTP/1.1 200"), "{page}");
+    assert!(page.contains("<canvas id=\"view\""));
+    for asset in ["/app.js", "/style.css"] {
+        let r = http_get(
+            server.addr,
+            asset,
+            &format!("localhost:{}", server.addr.port()),
+        )
+        .await;
+        assert!(r.starts_with("HTTP/1.1 200"), "{asset}: {r}");
+    }
+    for foreign in [
+        format!("evil.example:{}", server.addr.port()),
+        format!("localhost.evil.example:{}", server.addr.port()),
+        "127.0.0.1:1".to_string(),
+    ] {
+        let r = http_get(server.addr, "/", &foreign).await;
+        assert!(r.starts_with("HTTP/1.1 403"), "{foreign}: {r}");
+        assert!(r.contains("is not this server"), "{r}");
+    }
+    assert!(http_get(server.addr, "/etc/passwd", &own)
+        .await
+        .starts_with("HTTP/1.1 404"));
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn websocket_from_a_foreign_origin_is_refused() {
+    let server = start(Limits::default()).await;
+    let addr = server.addr;
+    for origin in [
+        "http://evil.example".to_string(),
+        format!("http://evil.example:{}", addr.port()),
+        "null".to_string(),
+        format!("http://127.0.0.1:{}", addr.port() as u32 + 1),
+    ] {
+        let refused = connect_with_origin(addr, Some(&origin)).await;
+        let why = refused
+            .err()
+            .unwrap_or_else(|| panic!("{origin} was let in"));
+        assert!(why.contains("403"), "{origin}: {why}");
+    }
+    connect(addr).await;
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_view_refines_coarse_to_full_to_the_samples_limit() {
+    let server = start(Limits {
+        max_view_spp: 8,
+        ..Limits::default()
+    })
+    .await;
+    let mut ws = connect(server.addr).await;
+    ws.send(view(1, &sphere_scene(0.0, "(0.8, 0.1, 0.1)"), 128, 96))
+        .await
+        .unwrap();
+    let frames = frames_until_done(&mut ws).await;
+    let shape: Vec<(u64, u64, u64)> = frames
+        .iter()
+        .map(|(h, _)| {
+            (
+                h["width"].as_u64().unwrap(),
+                h["height"].as_u64().unwrap(),
+                h["spp"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        shape,
+        vec![
+            (16, 12, 1),
+            (32, 24, 1),
+            (128, 96, 1),
+            (128, 96, 2),
+            (128, 96, 4),
+            (128, 96, 8)
+        ]
+    );
+    for (header, payload) in &frames {
+        assert_eq!(header["seq"], 1);
+        assert!(header["ms"].as_f64().unwrap() >= 0.0);
+        assert!(header["rays"].as_u64().unwrap() > 0);
+        let (w, h) = (
+            header["width"].as_u64().unwrap(),
+            header["height"].as_u64().unwrap(),
+        );
+        let centre = pixel(header, payload, w / 2, h / 2);
+        assert!(
+            centre[0] > 100 && centre[0] > 2 * centre[1] && centre[3] == 255,
+            "{centre:?}"
+        );
+        assert_eq!(pixel(header, payload, 0, 0), [0, 0, 0, 255]);
+    }
+    // Nothing more for this view.
+    assert!(tokio::time::timeout(Duration::from_millis(300), ws.next())
+        .await
+        .is_err());
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_bad_scene_is_located_and_a_good_one_recovers() {
+    let server = start(Limits {
+        max_view_spp: 1,
+        ..Limits::default()
+    })
+    .await;
+    let mut ws = connect(server.addr).await;
+    let bad = "CAMERA (4, 0, 0) (0, 0, 0) (0, 0, 1) 40\nLIGHT (4, 2, 3) (1, 1, 1)\nSPHERE (0,0,0) -1 (1,1,1)\n";
+    ws.send(view(7, bad, 64, 48)).await.unwrap();
+    let error = next_text(&mut ws).await;
+    assert_eq!(error["type"], "scene_error", "{error}");
+    assert_eq!(error["seq"], 7);
+    let problem = &error["problem"];
+    assert_eq!(
+        (problem["line"].as_u64(), problem["column"].as_u64()),
+        (Some(3), Some(16))
+    );
+    assert_eq!(problem["length"], 2);
+    assert!(problem["message"]
+        .as_str()
+        .unwrap()
+        .starts_with("explore.scene:3:16: the sphere's radius must be greater than 0, not -1"));
+    assert!(problem["report"].as_str().unwrap().contains("must be > 0"));
+    // An equation error is located inside the quotes, as `kardia render` reports it.
+    let eq = "CAMERA (4, 0, 0) (0, 0, 0) (0, 0, 1) 40\nIMPLICIT \"x^2 + y^2 + * z^2 - 1\" (0,0,0) (1,0,0) (0,1,0) (0,0,1) (1,1,1)\n";
+    ws.send(view(8, eq, 64, 48)).await.unwrap();
+    let error = next_text(&mut ws).await;
+    assert_eq!(error["problem"]["line"], 2);
+    assert_eq!(error["problem"]["column"], 23, "{error}");
+    // A camera-only change of a good scene re-reads only the CAMERA line, errors included.
+    ws.send(view(9, &sphere_scene(0.0, "(1, 1, 1)"), 64, 48))
+        .await
+        .unwrap();
+    assert_eq!(
+        frames_until_done(&mut ws).await.last().unwrap().0["width"],
+        64
+    );
+    let bad_camera = sphere_scene(0.0, "(1, 1, 1)").replace(" 40\n", " 190\n");
+    ws.send(view(10, &bad_camera, 64, 48)).await.unwrap();
+    let error = next_text(&mut ws).await;
+    assert_eq!(error["problem"]["line"], 1, "{error}");
+    assert!(error["problem"]["message"]
+        .as_str()
+        .unwrap()
+        .contains("less than 180"));
+    ws.send(view(11, &sphere_scene(1.0, "(1, 1, 1)"), 64, 48))
+        .await
+        .unwrap();
+    let frames = frames_until_done(&mut ws).await;
+    assert_eq!(frames[0].0["seq"], 11);
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn malformed_and_oversized_messages_are_answered_and_the_server_stays_up() {
+    let limits = Limits {
+        max_message_bytes: 64 * 1024,
+        max_view_spp: 1,
+        ..Limits::default()
+    };
+    let server = start(limits.clone()).await;
+    let mut ws = connect(server.addr).await;
+    let cases: Vec<(Message, &str)> =
+        vec![
+        (Message::text("not json"), "malformed request"),
+        (Message::text(r#"{"type":"view"}"#), "malformed request"),
+        (Message::text(r#"{"type":"open","path":"/etc/passwd"}"#), "malformed request"),
+        (
+            Message::text(r#"{"type":"preset","name":"torus","params":[1,0.3],"file":"x"}"#),
+            "malformed request",
+        ),
+        (Message::binary(vec![1u8, 2, 3]), "binary messages are not understood"),
+        (view(1, "CAMERA", 0, 10), "image size 0×10 refused"),
+        (view(2, "CAMERA", 5000, 10), "each side must be 1 to 4096"),
+        (view(3, "CAMERA", 4000, 4000), "at most 4096000 pixels"),
+        (
+            Message::text(
+                json!({"type":"save","seq":4,"scene":"CAMERA","width":64,"height":48,"spp":100000})
+                    .to_string(),
+            ),
+            "samples per pixel refused",
+        ),
+        (
+            Message::text(
+                json!({"type":"save","seq":5,"scene":"CAMERA","width":8192,"height":8192,"spp":1})
+                    .to_string(),
+            ),
+            "at most 16777216 pixels",
+        ),
+        (
+            Message::text(
+                json!({"type":"preset","name":"torus","params":[1]}).to_string(),
+            ),
+            "takes 2 numbers",
+        ),
+        (
+            view(6, &format!("# {}\n", "x".repeat(100 * 1024)), 64, 48),
+            "at most 65536 bytes",
+        ),
+    ];
+    for (message, expected) in cases {
+        let shown = format!("{message:?}").chars().take(80).collect::<String>();
+        ws.send(message).await.unwrap();
+        let reply = next_text(&mut ws).await;
+        assert_eq!(reply["type"], "error", "{shown}: {reply}");
+        assert!(
+            reply["message"].as_str().unwrap().contains(expected),
+            "{shown}: {reply}"
+        );
+    }
+    // Still working on the same connection.
+    ws.send(view(7, &sphere_scene(0.0, "(1, 0, 0)"), 64, 48))
+        .await
+        .unwrap();
+    assert_eq!(frames_until_done(&mut ws).await[0].0["seq"], 7);
+    // Far over the limit: the connection is closed, with a reason where it can be sent.
+    let huge = "y".repeat(limits.max_message_bytes * 8);
+    let _ = ws.send(Message::text(huge)).await;
+    let mut closed = false;
+    while let Some(m) = next_message(&mut ws).await {
+        match m {
+            Message::Close(_) => {
+                closed = true;
+                break;
+            }
+            Message::Text(t) => assert!(t.contains("closed"), "{t}"),
+            other => panic!("{other:?}"),
+        }
+    }
+    let _ = closed;
+    wait_until("the closed page is let go", Duration::from_secs(5), || {
+        server.monitor.clients() == 0
+    })
+    .await;
+    // The server stays up.
+    let mut again = connect(server.addr).await;
+    again
+        .send(view(1, &sphere_scene(0.0, "(1, 0, 0)"), 64, 48))
+        .await
+        .unwrap();
+    assert_eq!(
+        frames_until_done(&mut again).await.last().unwrap().0["width"],
+        64
+    );
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn fifty_view_changes_a_second_end_on_the_last_view_without_stale_frames() {
+    let server = start(Limits {
+        max_view_spp: 4,
+        ..Limits::default()
+    })
+    .await;
+    let ws = connect(server.addr).await;
+    let (mut sink, mut stream) = ws.split();
+    let reader = tokio::spawn(async move {
+        let mut seen: Vec<(Instant, Value)> = vec![];
+        while let Some(Ok(m)) = stream.next().await {
+            if let Message::Binary(b) = m {
+                let (header, _) = split_binary(&b);
+                let last = header["seq"] == 100 && header["done"] == true;
+                seen.push((Instant::now(), header));
+                if last {
+                    break;
+                }
+            }
+        }
+        seen
+    });
+    let start = Instant::now();
+    let mut last_sent = start;
+    for seq in 1..=100u64 {
+        let scene = sphere_scene(seq as f64 * 0.02, "(0.2, 0.8, 0.2)");
+        sink.send(view(seq, &scene, 256, 192)).await.unwrap();
+        last_sent = Instant::now();
+        tokio::time::sleep_until((start + Duration::from_millis(20 * seq)).into()).await;
+    }
+    let seen = tokio::time::timeout(Duration::from_secs(60), reader)
+        .await
+        .expect("the last view finishes")
+        .unwrap();
+    let seqs: Vec<u64> = seen
+        .iter()
+        .map(|(_, h)| h["seq"].as_u64().unwrap())
+        .collect();
+    assert!(
+        seqs.windows(2).all(|w| w[0] <= w[1]),
+        "frames out of order: {seqs:?}"
+    );
+    let stale_after_last = seen
+        .iter()
+        .filter(|(t, h)| *t > last_sent && h["seq"] != 100)
+        .count();
+    assert!(
+        stale_after_last <= 3,
+        "{stale_after_last} stale frames after the last change"
+    );
+    let last: Vec<u64> = seen
+        .iter()
+        .filter(|(_, h)| h["seq"] == 100)
+        .map(|(_, h)| h["spp"].as_u64().unwrap())
+        .collect();
+    assert_eq!(last.last(), Some(&4));
+    wait_until("renders end", Duration::from_secs(5), || {
+        server.monitor.renders() == 0
+    })
+    .await;
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_page_that_leaves_mid_render_frees_its_work_at_once() {
+    let server = start(Limits::default()).await;
+    let mut ws = connect(server.addr).await;
+    // The default heart at 2000×1500: its full passes take seconds.
+    ws.send(view(1, kardia::scene::DEFAULT_SCENE, 2000, 1500))
+        .await
+        .unwrap();
+    let (first, _) = next_binary(&mut ws).await;
+    assert_eq!(first["width"], 250);
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    wait_until("a render is running", Duration::from_secs(20), || {
+        server.monitor.renders() == 1
+    })
+    .await;
+    drop(ws);
+    let freed = wait_until("the render is cancelled", Duration::from_secs(2), || {
+        server.monitor.renders() == 0 && server.monitor.clients() == 0
+    })
+    .await;
+    eprintln!("render freed {freed:?} after the page left");
+    let mut again = connect(server.addr).await;
+    again
+        .send(view(1, &sphere_scene(0.0, "(1, 0, 0)"), 64, 48))
+        .await
+        .unwrap();
+    assert!(!frames_until_done(&mut again).await.is_empty());
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn several_pages_each_get_their_own_view_and_the_client_limit_is_told() {
+    let server = start(Limits {
+        max_view_spp: 2,
+        max_clients: 2,
+        ..Limits::default()
+    })
+    .await;
+    let mut red = connect(server.addr).await;
+    let mut green = connect(server.addr).await;
+    red.send(view(1, &sphere_scene(0.0, "(0.9, 0, 0)"), 64, 48))
+        .await
+        .unwrap();
+    green
+        .send(view(1, &sphere_scene(0.0, "(0, 0.9, 0)"), 64, 48))
+        .await
+        .unwrap();
+    for (ws, channel) in [(&mut red, 0), (&mut green, 1)] {
+        for (header, payload) in frames_until_done(ws).await {
+            let (w, h) = (
+                header["width"].as_u64().unwrap(),
+                header["height"].as_u64().unwrap(),
+            );
+            let c = pixel(&header, &payload, w / 2, h / 2);
+            assert!(c[channel] > 100 && c[1 - channel] < 30, "{c:?}");
+        }
+    }
+    let mut third = connect_with_origin(server.addr, None).await.unwrap();
+    let refused = next_text(&mut third).await;
+    assert_eq!(refused["type"], "error");
+    assert!(refused["message"]
+        .as_str()
+        .unwrap()
+        .contains("2 pages connected"));
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn presets_expand_and_a_save_is_the_render_of_its_scene() {
+    let server = start(Limits::default()).await;
+    let mut ws = connect(server.addr).await;
+    ws.send(Message::text(
+        json!({"type":"preset","name":"torus","params":[1, 0.3]}).to_string(),
+    ))
+    .await
+    .unwrap();
+    let reply = next_text(&mut ws).await;
+    let expected = kardia::shapes::implicit::preset("torus", &[1.0, 0.3]).unwrap();
+    assert_eq!(reply["equation"], expected.equation.as_str());
+    assert_eq!(reply["bound"], expected.bound);
+
+    let scene = sphere_scene(0.5, "(0.7, 0.5, 0.2) SPECULAR 0.5 30");
+    ws.send(Message::text(
+        json!({"type":"save","seq":3,"scene":scene,"width":80,"height":60,"spp":4}).to_string(),
+    ))
+    .await
+    .unwrap();
+    let (header, png) = next_binary(&mut ws).await;
+    assert_eq!(header["type"], "png");
+    assert_eq!(
+        (header["width"].as_u64(), header["spp"].as_u64()),
+        (Some(80), Some(4))
+    );
+    let saved = image::load_from_memory(&png).unwrap().to_rgb8();
+    let loaded = kardia::scene::parse(&scene, "s", &Default::default()).unwrap();
+    let rendered = kardia::pipeline::Renderer::new(1)
+        .unwrap()
+        .render(
+            &loaded,
+            &kardia::pipeline::RenderRequest {
+                width: Some(80),
+                height: Some(60),
+                spp: 4,
+                ..Default::default()
+            },
+            &Default::default(),
+        )
+        .unwrap();
+    assert_eq!(saved.as_raw(), &rendered.image.to_srgb8());
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn stopping_the_server_closes_its_pages() {
+    let server = start(Limits::default()).await;
+    let mut ws = connect(server.addr).await;
+    ws.send(view(1, kardia::scene::DEFAULT_SCENE, 1600, 1200))
+        .await
+        .unwrap();
+    let _ = next_binary(&mut ws).await;
+    let stopping = Instant::now();
+    server.stop().await;
+    eprintln!("stopped in {:?}", stopping.elapsed());
+    loop {
+        match next_message(&mut ws).await {
+            None | Some(Message::Close(_)) => break,
+            Some(_) => continue,
+        }
+    }
+}
