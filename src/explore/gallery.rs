@@ -154,10 +154,6 @@ pub const SCENES: &[(&str, &str)] = &[
         include_str!("../../scenes/heartbeat.scene"),
     ),
     (
-        "kummer_morph.scene",
-        include_str!("../../scenes/kummer_morph.scene"),
-    ),
-    (
         "turntable.scene",
         include_str!("../../scenes/turntable.scene"),
     ),
@@ -176,6 +172,10 @@ pub const SCENES: &[(&str, &str)] = &[
     (
         "implicit/clebsch.scene",
         include_str!("../../scenes/implicit/clebsch.scene"),
+    ),
+    (
+        "implicit/kummer_morph.scene",
+        include_str!("../../scenes/implicit/kummer_morph.scene"),
     ),
     (
         "implicit/kummer.scene",
