@@ -19,6 +19,8 @@ pub const RENDER_SIZE: (u32, u32) = (12, 9);
 /// and the `heart` preset (a HEART); the other presets come from scenes/implicit/, whose
 /// surfaces take milliseconds each to load.
 pub const EVERY_KEYWORD: &str = r#"SIZE 64 48
+FRAMES 4 FPS 12
+LET s = 0.5 + 0.25*sin(2*pi*clock)
 CAMERA (8, 2, 3) (0, 0, 0.2) (0, 0, 1) 45
 BACKGROUND (0.05, 0.05, 0.1)
 AMBIENT (0.05, 0.05, 0.05)
@@ -28,12 +30,12 @@ MATERIAL glass (0.02, 0.02, 0.02) SPECULAR 0.9 200 REFLECT 0.08 TRANSMIT 0.9 IOR
 MATERIAL tinted glass ATTENUATION (0.05, 0.4, 0.35) INSIDE (0.9, 0.8, 0.2)
 HEART (0, 0, 0) (1, 0, 0) (0, 1, 0) (0, 0, 1) (0.75, 0.04, 0.08) SPECULAR 0.6 80
 SPHERE (-1, -2.6, -0.2) 0.8 (0.1, 0.1, 0.1) REFLECT 0.8
-SPHERE (1, 2, 0) 0.5 tinted
+SPHERE (1, 2, 0) s tinted
 PLANE (0, 0, -1) (0, 0, 1) (0.9, 0.9, 0.9) CHECKER (0.1, 0.1, 0.12) 0.5
 BOX (1.2, 1.8, -1) (0.866, 0.5, 0) (-0.5, 0.866, 0) (0, 0, 1) (0.15, 0.3, 0.8) SPECULAR 0.3 30
 POLYGON 4 (-2.49, -3, -1) (-2.49, 3, -1) (-2.49, 3, 2.5) (-2.49, -3, 2.5) (0.05, 0.05, 0.05) REFLECT 0.9
 ELLIPSOID (-1.8, 2.4, -0.3) (0.5, 0, 0) (0, 0.9, 0) (0, 0, 0.7) (0.2, 0.7, 0.3)
-IMPLICIT "x^2 + y^2 = 0.25" (0, 0, 0) (1, 0, 0) (0, 1, 0) (0, 0, 1) (0.3, 0.3, 0.8) INSIDE (0.9, 0.8, 0.2) BOUND 2
+IMPLICIT "x^2 + y^2 = s^2" (0, 0, 0) (1, 0, 0) (0, 1, 0) (0, 0, 1) (0.3, 0.3, 0.8) INSIDE (0.9, 0.8, 0.2) BOUND 2
 IMPLICIT heart (0, 3, 0) (1, 0, 0) (0, 1, 0) (0, 0, 1) (0.8, 0.1, 0.1) INSIDE (1, 0.9, 0.6) BOUND 0.9
 "#;
 
@@ -72,8 +74,65 @@ pub const WORDS: &[&str] = &[
     "tinted",
     "chrome",
     "sphere",
+    "LET",
+    "FRAMES",
+    "FPS",
+    "clock",
+    "frame",
+    "frames",
+    "pi",
+    "s",
+    "sin",
+    "cos",
+    "tan",
+    "sqrt",
+    "abs",
+    "min",
+    "max",
+    "^",
+    "/",
+    "*",
+    "(",
+    ")",
+    "=",
     "é",
     "\u{feff}",
+];
+
+/// Expressions the fuzzer puts where a number was: undefined or overflowing arithmetic,
+/// the time variables, unbalanced and malformed forms.
+pub const EXPRESSIONS: &[&str] = &[
+    "1/0",
+    "-1/0",
+    "0/0",
+    "sqrt(-1)",
+    "2^1024",
+    "2^-1075",
+    "(-8)^(1/3)",
+    "0^0",
+    "0^-1",
+    "1e308*10",
+    "-(1e308+1e308)",
+    "clock/0",
+    "1/clock",
+    "frame/frames",
+    "frames*32768",
+    "sin(1e308)",
+    "tan(pi/2)",
+    "min(1)",
+    "max(1, 2, 3)",
+    "max(,)",
+    "abs(-0)",
+    "-(-(-1))",
+    "pi^pi^pi^pi",
+    "(((((((1)))))))",
+    "((1",
+    "1))",
+    "s*s*s*s*s*s*s*s",
+    "undefined_name",
+    "sqrt",
+    "2 ^",
+    "* 3",
 ];
 
 /// Extreme numbers, in many spellings.
@@ -397,6 +456,7 @@ impl Fuzzer {
         let costly = read_dir(root.join("implicit"));
         let mut numbers: Vec<String> = EXTREMES.iter().map(|s| s.to_string()).collect();
         numbers.extend(boundary_values());
+        numbers.extend(EXPRESSIONS.iter().map(|s| s.to_string()));
         Self {
             seeds,
             costly,
