@@ -620,3 +620,133 @@ async fn stopping_the_server_closes_its_pages() {
         }
     }
 }
+
+/// One random client message: a JSON object of a known or unknown type whose fields are
+/// missing, of the wrong type or extreme, with scene text from the scene fuzzer; or plain
+/// garbage text, binary bytes or invalid UTF-8 in a binary frame.
+fn random_message(
+    rng: &mut impl rand::Rng,
+    scenes: &crate::fuzz_support::Fuzzer,
+    k: u64,
+) -> Message {
+    let numbers = [
+        json!(0),
+        json!(1),
+        json!(-1),
+        json!(16),
+        json!(4097),
+        json!(u32::MAX),
+        json!(u64::MAX),
+        json!(1.5),
+        json!(1e308),
+        json!(-1e308),
+        json!(5e-324),
+        json!("8"),
+        json!(null),
+        json!([1, 2]),
+    ];
+    let pick =
+        |rng: &mut dyn rand::RngCore| numbers[rng.next_u32() as usize % numbers.len()].clone();
+    let scene = match rng.random_range(0..4) {
+        0 => json!(sphere_scene(0.0, "(1, 0, 0)")),
+        1 => json!(scenes.case(99, k)),
+        2 => json!("\u{0}\u{feff}é CAMERA ((((("),
+        _ => pick(rng),
+    };
+    let size = |rng: &mut dyn rand::RngCore| {
+        if rng.next_u32() % 3 == 0 {
+            numbers[rng.next_u32() as usize % numbers.len()].clone()
+        } else {
+            json!(1 + rng.next_u32() % 24)
+        }
+    };
+    let preset = ["torus", "kummer", "chmutov", "heart", "nope", ""][rng.random_range(0..6)];
+    let view_name = ["depth", "normals", "x", ""][rng.random_range(0..4)];
+    match rng.random_range(0..8) {
+        0 => Message::text("{\"type\":"),
+        1 => Message::binary(vec![0xff, 0xfe, 0x80, 0x00, b'{']),
+        2 => Message::text(
+            json!({"type": "preset", "name": preset,
+                   "params": [pick(rng), pick(rng)]})
+            .to_string(),
+        ),
+        3 => Message::text(
+            json!({"type": "save", "seq": pick(rng), "scene": scene, "width": size(rng),
+                   "height": size(rng), "spp": pick(rng), "view": view_name})
+            .to_string(),
+        ),
+        4 => Message::text(json!({"type": "nope", "seq": 1}).to_string()),
+        _ => Message::text(
+            json!({"type": "view", "seq": k, "scene": scene, "width": size(rng), "height": size(rng)})
+                .to_string(),
+        ),
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn random_messages_are_each_answered_and_the_server_stays_up() {
+    use rand::SeedableRng;
+    let limits = Limits {
+        max_view_spp: 1,
+        max_save_spp: 4,
+        max_messages_per_second: 100_000,
+        ..Limits::default()
+    };
+    let server = start(limits).await;
+    let scenes = crate::fuzz_support::Fuzzer::new();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(11);
+    let mut ws = connect(server.addr).await;
+    let (mut errors, mut frames_seen) = (0, 0);
+    for k in 0..400u64 {
+        ws.send(random_message(&mut rng, &scenes, k)).await.unwrap();
+        // Every reply is a frame (binary, a JSON header first) or a JSON message of a known
+        // type; drain what has arrived so far.
+        while let Ok(Some(m)) =
+            tokio::time::timeout(Duration::from_millis(2), next_message(&mut ws)).await
+        {
+            match m {
+                Message::Text(t) => {
+                    let v: Value = serde_json::from_str(&t).expect("replies are JSON");
+                    let kind = v["type"].as_str().unwrap_or_default().to_string();
+                    assert!(!kind.is_empty(), "a reply without a type: {t}");
+                    if kind == "error" {
+                        assert!(!v["message"].as_str().unwrap_or_default().is_empty(), "{t}");
+                        errors += 1;
+                    }
+                }
+                Message::Binary(b) => {
+                    let _ = split_binary(&b);
+                    frames_seen += 1;
+                }
+                Message::Close(c) => panic!("the server closed the page at message {k}: {c:?}"),
+                _ => {}
+            }
+        }
+    }
+    // Both kinds of answer were exercised: refusals and renders.
+    assert!(
+        errors > 100 && frames_seen > 10,
+        "{errors} errors, {frames_seen} frames"
+    );
+    // The same page still renders a good view to the end, and the server takes new pages.
+    ws.send(view(1_000_000, &sphere_scene(0.0, "(1, 0, 0)"), 32, 24))
+        .await
+        .unwrap();
+    let frames = loop {
+        let frames = frames_until_done(&mut ws).await;
+        if frames.last().unwrap().0["seq"] == 1_000_000 {
+            break frames;
+        }
+    };
+    assert_eq!(frames.last().unwrap().0["width"], 32);
+    let mut again = connect(server.addr).await;
+    again
+        .send(view(1, &sphere_scene(0.0, "(0, 1, 0)"), 16, 12))
+        .await
+        .unwrap();
+    assert_eq!(
+        frames_until_done(&mut again).await.last().unwrap().0["width"],
+        16
+    );
+    server.stop().await;
+}
