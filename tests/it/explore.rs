@@ -654,7 +654,7 @@ fn random_message(
         _ => pick(rng),
     };
     let size = |rng: &mut dyn rand::RngCore| {
-        if rng.next_u32() % 3 == 0 {
+        if rng.next_u32().is_multiple_of(3) {
             numbers[rng.next_u32() as usize % numbers.len()].clone()
         } else {
             json!(1 + rng.next_u32() % 24)
