@@ -39,17 +39,12 @@ impl Shader for Depth<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrator::tests::unit_sphere_scene;
+    use crate::integrator::tests::{one_sample_setup, unit_sphere_scene};
 
     #[test]
     fn grey_falls_off_with_distance() {
         let scene = unit_sphere_scene();
-        let setup = ShadeSetup {
-            scene: &scene,
-            camera: &scene.camera,
-            spp: 1,
-            max_depth: 0,
-        };
+        let setup = one_sample_setup(&scene);
         // The camera sits at z = 5 looking at the origin: d₀ = 5, the sphere's front at d = 4.
         let view = Depth::new(&setup);
         let mut sample = Sample::new(0, 0, 1);

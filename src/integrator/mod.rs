@@ -170,6 +170,17 @@ pub(crate) mod tests {
     use crate::scene::Object;
     use crate::shapes::Sphere;
 
+    /// What a view is built from to shade single samples of `scene`: its camera, 1 spp, no
+    /// secondary rays.
+    pub(crate) fn one_sample_setup(scene: &Scene) -> ShadeSetup<'_> {
+        ShadeSetup {
+            scene,
+            camera: &scene.camera,
+            spp: 1,
+            max_depth: 0,
+        }
+    }
+
     /// A unit sphere at the origin seen from z = 5, 8×8 pixels, no lights.
     pub(crate) fn unit_sphere_scene() -> Scene {
         Scene {

@@ -33,17 +33,12 @@ impl Shader for Normals<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrator::tests::unit_sphere_scene;
+    use crate::integrator::tests::{one_sample_setup, unit_sphere_scene};
 
     #[test]
     fn facing_normal_is_blue_and_misses_are_black() {
         let scene = unit_sphere_scene();
-        let setup = ShadeSetup {
-            scene: &scene,
-            camera: &scene.camera,
-            spp: 1,
-            max_depth: 0,
-        };
+        let setup = one_sample_setup(&scene);
         let view = Normals::new(&setup);
         let mut sample = Sample::new(0, 0, 1);
         let towards = Ray::new(DVec3::new(0.0, 0.0, 5.0), -DVec3::Z);

@@ -840,25 +840,29 @@ mod tests {
     use crate::scene::cursor::Source;
     use crate::scene::lexer::lex_line;
 
-    /// Reads `text` as one expression in a list (as a number argument is read) at `time`.
-    fn eval_at(text: &str, time: Option<FrameTime>, lets: &[(&str, f64)]) -> Result<f64, String> {
-        let mut names = Names::new(time);
-        for (n, v) in lets {
-            define(&mut names, n.to_string(), *v, false, 1);
-        }
-        let tokens = lex_line(text, 0, text.len()).unwrap();
-        let mut cur = Cursor {
+    /// A cursor over `text` as one whole line, reading names from `names`.
+    fn cursor_over<'a>(text: &'a str, names: &'a Names) -> Cursor<'a> {
+        Cursor {
             src: Source { text, name: "t" },
-            tokens,
+            tokens: lex_line(text, 0, text.len()).unwrap(),
             pos: 0,
             line: 1,
             next_line: text.len(),
             keyword: "",
             usage: "",
             part_usage: None,
-            names: &names,
+            names,
             uses_time: false,
-        };
+        }
+    }
+
+    /// Reads `text` as one expression in a list (as a number argument is read) at `time`.
+    fn eval_at(text: &str, time: Option<FrameTime>, lets: &[(&str, f64)]) -> Result<f64, String> {
+        let mut names = Names::new(time);
+        for (n, v) in lets {
+            define(&mut names, n.to_string(), *v, false, 1);
+        }
+        let mut cur = cursor_over(text, &names);
         match read(&mut cur, "the value") {
             Ok(Some((x, _))) if cur.pos == cur.tokens.len() => Ok(x),
             Ok(Some(_)) => Err(format!("stopped at token {}", cur.pos)),
@@ -965,19 +969,7 @@ mod tests {
     fn a_sign_after_a_space_starts_the_next_value() {
         let text = "1 -2 3-1 4 - 1 (5)";
         let names = Names::new(None);
-        let tokens = lex_line(text, 0, text.len()).unwrap();
-        let mut cur = Cursor {
-            src: Source { text, name: "t" },
-            tokens,
-            pos: 0,
-            line: 1,
-            next_line: text.len(),
-            keyword: "",
-            usage: "",
-            part_usage: None,
-            names: &names,
-            uses_time: false,
-        };
+        let mut cur = cursor_over(text, &names);
         let mut values = Vec::new();
         while cur.pos < cur.tokens.len() {
             match read(&mut cur, "v").unwrap() {
