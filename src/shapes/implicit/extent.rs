@@ -20,44 +20,46 @@ fn depth_for(n: usize) -> u32 {
 /// Most cells examined before giving up on a tighter box (bounds the load time).
 const MAX_CELLS: usize = 20_000;
 
-/// Tensor coefficients `(n+1)³` of one cell, index `(i·m + j)·m + k`.
-struct Cell {
-    b: Vec<f64>,
-    lo: [f64; 3],
-    size: f64,
-}
-
 /// `C(n, k)` as `f64` (exact for `n ≤ 16`).
 fn binom(n: usize, k: usize) -> f64 {
     (0..k).fold(1.0, |acc, i| acc * (n - i) as f64 / (i + 1) as f64)
 }
 
-/// Splits the coefficient lines along `axis` at the middle (de Casteljau): the lower and
-/// upper halves.
-fn split(b: &[f64], m: usize, axis: usize) -> (Vec<f64>, Vec<f64>) {
-    let stride = [m * m, m, 1][axis];
-    let mut lo = b.to_vec();
-    let mut hi = b.to_vec();
-    let mut line = vec![0.0; m];
-    for base in 0..b.len() {
-        // Visit each line once, from its first element.
-        if !(base / stride).is_multiple_of(m) {
-            continue;
-        }
-        for (q, v) in line.iter_mut().enumerate() {
-            *v = b[base + q * stride];
-        }
-        // Row r of the triangle: its first entry goes to the lower half, its last to the
-        // upper half (reversed).
-        for r in 0..m {
-            lo[base + r * stride] = line[0];
-            hi[base + (m - 1 - r) * stride] = line[m - 1 - r];
-            for q in 0..m - 1 - r {
-                line[q] = 0.5 * (line[q] + line[q + 1]);
+/// Splits every coefficient line of `b` (`M³` tensor coefficients, index `(i·M + j)·M + k`)
+/// along `axis` at the middle (de Casteljau): the lower half into `lo`, the upper half into
+/// `hi`. `M` is fixed so that the triangle's loops unroll.
+fn split_into<const M: usize>(b: &[f64], axis: usize, lo: &mut [f64], hi: &mut [f64]) {
+    // The lines along `axis` start where its index is 0; the two loops run over the others.
+    let (stride, outer_stride, inner_stride) = match axis {
+        0 => (M * M, M, 1),
+        1 => (M, M * M, 1),
+        _ => (1, M * M, M),
+    };
+    let (b, lo, hi) = (&b[..M * M * M], &mut lo[..M * M * M], &mut hi[..M * M * M]);
+    for outer in 0..M {
+        for inner in 0..M {
+            let base = outer * outer_stride + inner * inner_stride;
+            let mut line = [0.0; M];
+            for (q, v) in line.iter_mut().enumerate() {
+                *v = b[base + q * stride];
+            }
+            // Row r of the triangle: its first entry goes to the lower half, its last to
+            // the upper half (reversed).
+            for r in 0..M {
+                lo[base + r * stride] = line[0];
+                hi[base + (M - 1 - r) * stride] = line[M - 1 - r];
+                for q in 0..M - 1 - r {
+                    line[q] = 0.5 * (line[q] + line[q + 1]);
+                }
             }
         }
     }
-    (lo, hi)
+}
+
+/// True when every coefficient is beyond `margin` on one side of zero.
+#[inline]
+fn one_sign(b: &[f64], margin: f64) -> bool {
+    b.iter().all(|&v| v > margin) || b.iter().all(|&v| v < -margin)
 }
 
 /// A box `(min, max)` in object space holding every zero of `f` in the cube `[−r, r]³` (the
@@ -111,48 +113,28 @@ pub fn zero_set_box(f: &Compiled, r: f64) -> Option<([f64; 3], [f64; 3])> {
     // Conversion and subdivision are sums of a few hundred rounded terms of at most `scale`.
     let margin = 1e-9 * scale;
     let depth = depth_for(n);
-    let mut stack = vec![(
-        Cell {
-            b: a,
-            lo: [0.0; 3],
-            size: 1.0,
-        },
-        0u32,
-    )];
-    let (mut bmin, mut bmax) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    let mut examined = 0;
-    while let Some((cell, level)) = stack.pop() {
-        examined += 1;
-        if examined > MAX_CELLS {
-            return Some(([-r; 3], [r; 3]));
-        }
-        if cell.b.iter().all(|&v| v > margin) || cell.b.iter().all(|&v| v < -margin) {
-            continue;
-        }
-        if level == depth {
-            for ax in 0..3 {
-                bmin[ax] = bmin[ax].min(cell.lo[ax]);
-                bmax[ax] = bmax[ax].max(cell.lo[ax] + cell.size);
-            }
-            continue;
-        }
-        let half = 0.5 * cell.size;
-        let mut parts = vec![(cell.b, cell.lo)];
-        for axis in 0..3 {
-            let mut next = Vec::with_capacity(parts.len() * 2);
-            for (b, lo) in parts {
-                let (l, h) = split(&b, m, axis);
-                let mut lo_h = lo;
-                lo_h[axis] += half;
-                next.push((l, lo));
-                next.push((h, lo_h));
-            }
-            parts = next;
-        }
-        for (b, lo) in parts {
-            stack.push((Cell { b, lo, size: half }, level + 1));
-        }
-    }
+    let hull = match m {
+        2 => subdivide::<2>(a, margin, depth),
+        3 => subdivide::<3>(a, margin, depth),
+        4 => subdivide::<4>(a, margin, depth),
+        5 => subdivide::<5>(a, margin, depth),
+        6 => subdivide::<6>(a, margin, depth),
+        7 => subdivide::<7>(a, margin, depth),
+        8 => subdivide::<8>(a, margin, depth),
+        9 => subdivide::<9>(a, margin, depth),
+        10 => subdivide::<10>(a, margin, depth),
+        11 => subdivide::<11>(a, margin, depth),
+        12 => subdivide::<12>(a, margin, depth),
+        13 => subdivide::<13>(a, margin, depth),
+        14 => subdivide::<14>(a, margin, depth),
+        15 => subdivide::<15>(a, margin, depth),
+        16 => subdivide::<16>(a, margin, depth),
+        _ => subdivide::<17>(a, margin, depth),
+    };
+    let (bmin, bmax) = match hull {
+        Hull::Cells(bmin, bmax) => (bmin, bmax),
+        Hull::GaveUp => return Some(([-r; 3], [r; 3])),
+    };
     if bmin[0] > bmax[0] {
         return None;
     }
@@ -164,6 +146,80 @@ pub fn zero_set_box(f: &Compiled, r: f64) -> Option<([f64; 3], [f64; 3])> {
     ))
 }
 
+/// What the subdivision found: the hull `(min, max)` in `[0, 1]³` of the finest cells where
+/// `f` may vanish (empty, `min > max`, when there are none), or that it gave up.
+enum Hull {
+    Cells([f64; 3], [f64; 3]),
+    GaveUp,
+}
+
+/// The subdivision of the unit cube for the tensor Bernstein coefficients `root` (`M³`, of a
+/// polynomial of degree `M − 1` in each variable), down to `depth` levels: a cell whose
+/// coefficients all lie beyond `margin` on one side of zero is dropped, the others are split
+/// in eight.
+fn subdivide<const M: usize>(root: Vec<f64>, margin: f64, depth: u32) -> Hull {
+    // Depth-first over the cells, their coefficients in one stack of `M³` blocks beside
+    // their corner, size and level (at most 7 pending cells a level, plus the 8 just made).
+    // Every cell made counts towards `MAX_CELLS` whatever the order, so the result is that
+    // of the whole subdivision.
+    let len = M * M * M;
+    let mut coeffs = vec![0.0; (7 * depth as usize + 8) * len];
+    coeffs[..len].copy_from_slice(&root);
+    let mut cells = vec![([0.0f64; 3], 1.0f64, 0u32)];
+    let mut parent = vec![0.0; len];
+    let mut halves = vec![0.0; 2 * len];
+    let mut quarters = vec![0.0; 4 * len];
+    let (mut bmin, mut bmax) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    let mut examined = 0;
+    while let Some((lo, size, level)) = cells.pop() {
+        examined += 1;
+        if examined > MAX_CELLS {
+            return Hull::GaveUp;
+        }
+        let top = cells.len() * len;
+        let b = &coeffs[top..top + len];
+        if one_sign(b, margin) {
+            continue;
+        }
+        if level == depth {
+            for ax in 0..3 {
+                bmin[ax] = bmin[ax].min(lo[ax]);
+                bmax[ax] = bmax[ax].max(lo[ax] + size);
+            }
+            continue;
+        }
+        parent.copy_from_slice(b);
+        let (h0, h1) = halves.split_at_mut(len);
+        split_into::<M>(&parent, 0, h0, h1);
+        for (h, q) in halves
+            .chunks_exact(len)
+            .zip(quarters.chunks_exact_mut(2 * len))
+        {
+            let (q0, q1) = q.split_at_mut(len);
+            split_into::<M>(h, 1, q0, q1);
+        }
+        for (q, e) in quarters
+            .chunks_exact(len)
+            .zip(coeffs[top..top + 8 * len].chunks_exact_mut(2 * len))
+        {
+            let (e0, e1) = e.split_at_mut(len);
+            split_into::<M>(q, 2, e0, e1);
+        }
+        // Child c has the upper half along x when bit 2 of c is set, along y bit 1, z bit 0.
+        let half = 0.5 * size;
+        for c in 0..8 {
+            let mut corner = lo;
+            for (ax, bit) in [(0, 4), (1, 2), (2, 1)] {
+                if c & bit != 0 {
+                    corner[ax] += half;
+                }
+            }
+            cells.push((corner, half, level + 1));
+        }
+    }
+    Hull::Cells(bmin, bmax)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -171,6 +227,148 @@ mod tests {
 
     fn boxed(eq: &str, r: f64) -> Option<([f64; 3], [f64; 3])> {
         zero_set_box(&Compiled::new(&expand(eq).unwrap()), r)
+    }
+
+    /// The subdivision as first written (every cell's coefficients in its own vectors, all
+    /// eight children of a cell made by splitting whole vectors): the reference the faster
+    /// [`subdivide`] must reproduce exactly.
+    fn reference_box(f: &Compiled, r: f64) -> Option<([f64; 3], [f64; 3])> {
+        fn split(b: &[f64], m: usize, axis: usize) -> (Vec<f64>, Vec<f64>) {
+            let stride = [m * m, m, 1][axis];
+            let (mut lo, mut hi) = (b.to_vec(), b.to_vec());
+            for base in (0..b.len()).filter(|base| (base / stride).is_multiple_of(m)) {
+                let mut line: Vec<f64> = (0..m).map(|q| b[base + q * stride]).collect();
+                for r in 0..m {
+                    lo[base + r * stride] = line[0];
+                    hi[base + (m - 1 - r) * stride] = line[m - 1 - r];
+                    for q in 0..m - 1 - r {
+                        line[q] = 0.5 * (line[q] + line[q + 1]);
+                    }
+                }
+            }
+            (lo, hi)
+        }
+        let (n, m) = (f.degree, f.degree + 1);
+        let mut a = vec![0.0; m * m * m];
+        let mut a_abs = vec![0.0; m * m * m];
+        for t in &f.terms {
+            let part = |e: u8| -> Vec<f64> {
+                let e = e as usize;
+                (0..=e)
+                    .map(|q| binom(e, q) * (-r).powi((e - q) as i32) * (2.0 * r).powi(q as i32))
+                    .collect()
+            };
+            let (px, py, pz) = (part(t.e[0]), part(t.e[1]), part(t.e[2]));
+            for (i, x) in px.iter().enumerate() {
+                for (j, y) in py.iter().enumerate() {
+                    for (k, z) in pz.iter().enumerate() {
+                        let v = t.c * x * y * z;
+                        a[(i * m + j) * m + k] += v;
+                        a_abs[(i * m + j) * m + k] += v.abs();
+                    }
+                }
+            }
+        }
+        for a in [&mut a, &mut a_abs] {
+            for stride in [m * m, m, 1] {
+                let src = a.clone();
+                for (idx, out) in a.iter_mut().enumerate() {
+                    let p = (idx / stride) % m;
+                    let base = idx - p * stride;
+                    *out = (0..=p)
+                        .map(|q| binom(p, q) / binom(n, q) * src[base + q * stride])
+                        .sum();
+                }
+            }
+        }
+        let margin = 1e-9 * a_abs.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+        let depth = depth_for(n);
+        let mut stack = vec![(a, [0.0; 3], 1.0, 0)];
+        let (mut bmin, mut bmax) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        let mut examined = 0;
+        while let Some((b, lo, size, level)) = stack.pop() {
+            examined += 1;
+            if examined > MAX_CELLS {
+                return Some(([-r; 3], [r; 3]));
+            }
+            if one_sign(&b, margin) {
+                continue;
+            }
+            if level == depth {
+                for ax in 0..3 {
+                    bmin[ax] = bmin[ax].min(lo[ax]);
+                    bmax[ax] = bmax[ax].max(lo[ax] + size);
+                }
+                continue;
+            }
+            let half = 0.5 * size;
+            let mut parts = vec![(b, lo)];
+            for axis in 0..3 {
+                let mut next = Vec::new();
+                for (b, lo) in parts {
+                    let (l, h) = split(&b, m, axis);
+                    let mut lo_h = lo;
+                    lo_h[axis] += half;
+                    next.push((l, lo));
+                    next.push((h, lo_h));
+                }
+                parts = next;
+            }
+            stack.extend(parts.into_iter().map(|(b, lo)| (b, lo, half, level + 1)));
+        }
+        if bmin[0] > bmax[0] {
+            return None;
+        }
+        let pad = 1e-9 * r;
+        Some((
+            bmin.map(|u| (-r + 2.0 * r * u - pad).max(-r)),
+            bmax.map(|u| (-r + 2.0 * r * u + pad).min(r)),
+        ))
+    }
+
+    #[test]
+    fn the_subdivision_gives_the_reference_box_exactly() {
+        // Every degree from 1 to 16 and the presets: surfaces that cross the cube, miss it
+        // or are clipped by it, bit for bit.
+        let cases = [
+            ("x + 2*y - z = 0.3", 1.0),
+            ("x^2 + y^2 - z^2 = 0.2", 1.5),
+            ("x^3 + y^3 + z^3 = 1", 2.0),
+            ("(x^2 + y^2 + z^2 + 0.91)^2 - 4*(x^2 + y^2) = 0", 1.4),
+            ("x^2 + y^2 + z^2 = 100", 2.0),
+            ("x^5 - y*z^3 + x*y = 0.01", 1.0),
+            ("(2*x^2 + y^2 + z^2 - 1)^3 - (0.1*x^2 + y^2)*z^3 = 0", 1.83),
+            ("x^7 + y^7 + z^7 = 1", 1.2),
+            ("(x^2 + y^2 + z^2)^4 - x*y*z = 0.5", 1.5),
+            ("x^9 - y^9 + z = 0.1", 1.0),
+            ("(x^2 + y^2 + z^2)^5 = 1", 1.5),
+            ("x^11 + y^2 + z^2 = 0.5", 1.0),
+            ("(x^2 + y^2 + z^2)^6 - x^3 = 1", 1.5),
+            ("x^13 + y^13 + z^13 = 0.5", 1.0),
+            ("(x^2 + y^2 + z^2)^7 = 1", 1.5),
+            ("x^15 + y*z = 0.2", 1.0),
+            ("(x^2 + y^2 + z^2)^8 = 1", 1.5),
+        ];
+        for (eq, r) in cases {
+            let f = Compiled::new(&expand(eq).unwrap());
+            assert_eq!(zero_set_box(&f, r), reference_box(&f, r), "{eq}");
+        }
+        let presets: [(&str, &[f64]); 8] = [
+            ("torus", &[1.0, 0.3]),
+            ("barth_sextic", &[]),
+            ("chmutov", &[6.0]),
+            ("chmutov", &[8.0]),
+            ("taubin_heart", &[]),
+            ("kummer", &[1.3]),
+            ("clebsch", &[]),
+            ("heart", &[]),
+        ];
+        for (name, params) in presets {
+            let p = crate::shapes::implicit::preset(name, params).unwrap();
+            let f = Compiled::new(&expand(&p.equation).unwrap());
+            let r = p.bound;
+            assert_eq!(zero_set_box(&f, r), reference_box(&f, r), "{name}");
+        }
     }
 
     #[test]
