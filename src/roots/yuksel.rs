@@ -105,6 +105,7 @@ fn sign_right_of<const M: usize>(ders: &[[f64; M]], degs: &[usize], x: f64) -> f
 
 /// Roots of `ders[0]` in `(lo, hi]`, given its critical points `crit` (ascending, inside
 /// `(lo, hi)`), written to `out` (ascending); stops after the first when `first_only`.
+#[allow(clippy::too_many_arguments)]
 fn roots_in_pieces<const M: usize>(
     ders: &[[f64; M]],
     degs: &[usize],

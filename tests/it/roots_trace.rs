@@ -20,11 +20,10 @@ fn census(solver: Solver, queries: &[(&[f64], f64, f64)]) -> Vec<usize> {
             "{solver:?} on {c:?} in ({lo}, {hi}]"
         );
         assert_eq!(trace.queries, 1);
-        if plain.is_some() {
-            assert!(
-                trace.refine_steps > 0 || trace.path == Path::Subdivision,
-                "{trace:?}"
-            );
+        if plain.is_some() && trace.path == Path::Bernstein {
+            // Its root is refined from a bracket (the other paths may land on it exactly: at
+            // a critical point, or the middle of a zero region).
+            assert!(trace.refine_steps > 0, "{trace:?}");
         }
         counts[Path::ALL
             .iter()
