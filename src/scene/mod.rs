@@ -131,6 +131,17 @@ impl Scene {
     /// Largest accepted image side, in pixels.
     pub const MAX_SIDE: u32 = 32768;
 
+    /// Whether some object meets the ray with `t_min < t < t_max`: exactly
+    /// `self.intersect(ray, t_min, t_max).is_some()`, but it stops at the first object hit and
+    /// computes no normal (an any-hit query, for shadow rays).
+    pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        // `intersect` asks each object with the whole (t_min, t_max) until the first one
+        // answers, so that first answer alone decides whether it returns a hit.
+        self.objects.iter().any(|obj| {
+            obj.bounds.clip(ray, t_min, t_max).is_some() && obj.shape.occludes(ray, t_min, t_max)
+        })
+    }
+
     /// The nearest hit with `t_min < t < t_max`, if any.
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SceneHit> {
         let mut best: Option<(usize, f64)> = None;

@@ -48,6 +48,12 @@ impl From<crate::geometry::FrameError> for ShapeError {
 pub trait Shape: Send + Sync + std::fmt::Debug {
     /// Smallest ray parameter in `(t_min, t_max)` at which the ray meets the surface.
     fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64>;
+    /// Whether the ray meets the surface at some `t` with `t_min < t < t_max`: always exactly
+    /// `self.intersect(ray, t_min, t_max).is_some()` (shadow rays ask this; a shape may answer
+    /// it more cheaply, never differently).
+    fn occludes(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        self.intersect(ray, t_min, t_max).is_some()
+    }
     /// Unit outward normal at the world point `p` on the surface.
     fn normal(&self, p: DVec3) -> DVec3;
     /// World-space box containing the surface.
