@@ -63,7 +63,10 @@ pub(crate) fn horner(c: &[f64], x: f64) -> f64 {
 /// Largest absolute value among the coefficients.
 #[inline]
 pub(crate) fn max_abs(c: &[f64]) -> f64 {
-    c.iter().fold(0.0f64, |m, &a| m.max(a.abs()))
+    // A plain comparison instead of `f64::max` (whose NaN rule costs a few instructions per
+    // element): the same result, a NaN being skipped by both.
+    c.iter()
+        .fold(0.0f64, |m, &a| if a.abs() > m { a.abs() } else { m })
 }
 
 /// Validates and prepares `coeffs` on `(lo, hi]`; `None` when there can be no reportable root:
@@ -90,10 +93,10 @@ pub(crate) fn prepare(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
 /// [`prepare`]'s body, inlined into each caller so that a fixed-size `coeffs` fixes its loops.
 #[inline(always)]
 fn prepare_in(coeffs: &[f64], lo: f64, hi: f64) -> Option<Prepared> {
-    // `!(lo < hi)` also rejects NaN bounds.
-    if lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less)
-        || coeffs.iter().any(|c| !c.is_finite())
-    {
+    // `!(lo < hi)` also rejects NaN bounds. `c·0` is 0 for a finite `c` and NaN otherwise,
+    // so one sum without branches tests every coefficient.
+    let valid = lo < hi && coeffs.iter().fold(0.0, |acc, &c| acc + c * 0.0) == 0.0;
+    if !valid {
         return None;
     }
     let n = coeffs.iter().rposition(|&c| c != 0.0)?;
@@ -365,6 +368,17 @@ mod tests {
         assert!(prepare(&[1.0, 1.0], 1.0, 1.0).is_none());
         assert!(prepare(&[1.0, 1.0], f64::NAN, 1.0).is_none());
         assert!(prepare(&[f64::NAN, 1.0], 0.0, 1.0).is_none());
+        assert!(prepare(&[1.0, f64::INFINITY], 0.0, 1.0).is_none());
+        let mut sextic = [1.0, -2.0, 0.5, 0.0, 3.0, -1.0, 2.0];
+        assert!(prepare(&sextic, 0.0, 1.0).is_some());
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            for j in 0..7 {
+                let keep = sextic[j];
+                sextic[j] = bad;
+                assert!(prepare(&sextic, 0.0, 1.0).is_none(), "{j}: {bad}");
+                sextic[j] = keep;
+            }
+        }
         assert!(prepare(&[0.0, 0.0], 0.0, 1.0).is_none());
         assert!(prepare(&[2.0], 0.0, 1.0).is_none());
     }
