@@ -35,7 +35,7 @@ use super::SolverReport;
 use crate::geometry::{Aabb, DVec3, Frame, Ray};
 use crate::roots::Solver;
 use dd::Dd;
-use poly::{Compiled, Poly, Uni};
+use poly::{Compiled, Poly, Powers, Uni};
 pub use presets::{Preset, HEART_EQUATION};
 
 #[doc(hidden)]
@@ -122,7 +122,10 @@ impl Surface {
     /// fallback where the signs are not split by a plane.
     fn normal_direction(&self, q: DVec3, h: f64) -> DVec3 {
         let p = q.to_array();
-        let parts = self.grad.each_ref().map(|g| g.eval_with_bound(p));
+        // One table of powers for the three partial derivatives (the same values each
+        // would compute alone).
+        let powers = Powers::new(p, self.grad.iter().map(|g| g.degree).max().unwrap_or(0));
+        let parts = self.grad.each_ref().map(|g| g.eval_with_bound_on(&powers));
         let g = DVec3::new(parts[0].0, parts[1].0, parts[2].0);
         let scale = parts.iter().fold(0.0f64, |m, v| m.max(v.1));
         let terms = self.grad.iter().map(|g| g.terms.len()).max().unwrap_or(1) as f64;

@@ -220,6 +220,25 @@ pub struct Compiled {
     max_z: usize,
 }
 
+/// The powers `xᵏ, yᵏ, zᵏ` of a point's coordinates, each the previous one times the
+/// coordinate (so every polynomial evaluated on the table sees the same values).
+#[derive(Clone, Copy, Debug)]
+pub struct Powers([[f64; MAX_DEGREE + 1]; 3]);
+
+impl Powers {
+    /// The powers of `p`'s coordinates up to `degree` (at most [`MAX_DEGREE`]).
+    #[inline]
+    pub fn new(p: [f64; 3], degree: usize) -> Powers {
+        let mut pw = [[1.0; MAX_DEGREE + 1]; 3];
+        for (v, row) in pw.iter_mut().enumerate() {
+            for k in 1..=degree {
+                row[k] = row[k - 1] * p[v];
+            }
+        }
+        Powers(pw)
+    }
+}
+
 /// Univariate coefficients (ascending) in fixed storage.
 pub type Uni = [f64; MAX_DEGREE + 1];
 
@@ -319,12 +338,14 @@ impl Compiled {
     /// error of the value: it is within a few `(degree + terms)·ε` of that).
     #[inline]
     pub fn eval_with_bound(&self, p: [f64; 3]) -> (f64, f64) {
-        let mut pw = [[1.0; MAX_DEGREE + 1]; 3];
-        for (v, row) in pw.iter_mut().enumerate() {
-            for k in 1..=self.degree {
-                row[k] = row[k - 1] * p[v];
-            }
-        }
+        self.eval_with_bound_on(&Powers::new(p, self.degree))
+    }
+
+    /// [`Compiled::eval_with_bound`] from a table of the point's coordinate powers (at least
+    /// up to this polynomial's degree), so that several polynomials at one point share it.
+    #[inline]
+    pub fn eval_with_bound_on(&self, pw: &Powers) -> (f64, f64) {
+        let pw = &pw.0;
         let (mut v, mut m) = (0.0, 0.0);
         for t in &self.terms {
             let x = t.c * pw[0][t.e[0] as usize] * pw[1][t.e[1] as usize] * pw[2][t.e[2] as usize];
@@ -506,4 +527,29 @@ pub fn derive_bound(c: &Compiled) -> Option<f64> {
         }
     }
     Some(hi_r * 1.01)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes::implicit::expand;
+
+    #[test]
+    fn a_shared_table_of_powers_gives_each_value_exactly() {
+        // The three partial derivatives of a degree-8 surface (degree 7 each, with terms of
+        // every exponent) evaluated on one table of the highest degree, and a cubic on it.
+        let f = expand("(x^2 + y^2 + z^2)^4 - 3*x^5*y*z^2 + x^3 - y*z + 0.25").unwrap();
+        let parts: Vec<Compiled> = (0..3).map(|v| Compiled::new(&f.derivative(v))).collect();
+        let cubic = Compiled::new(&expand("x^3 - 2*y^2*z + z - 1").unwrap());
+        for p in [[0.3, -0.7, 1.1], [1e-3, 2.5, -0.25], [-1.5, 0.0, 0.9]] {
+            let powers = Powers::new(p, 7);
+            for c in parts.iter().chain([&cubic]) {
+                let (a, b) = (c.eval_with_bound_on(&powers), c.eval_with_bound(p));
+                assert_eq!(
+                    (a.0.to_bits(), a.1.to_bits()),
+                    (b.0.to_bits(), b.1.to_bits())
+                );
+            }
+        }
+    }
 }
