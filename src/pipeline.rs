@@ -27,10 +27,10 @@
 //! ```
 
 pub use crate::film::Region;
-pub use crate::integrator::View;
+pub use crate::integrator::{BandDone, View};
 
 use crate::camera::Camera;
-use crate::film::{Image, Vec3};
+use crate::film::Image;
 use crate::geometry::{DVec3, Ray};
 use crate::integrator::{self, Hooks, Job, ShadeSetup};
 use crate::scene::Scene;
@@ -64,6 +64,12 @@ pub struct RenderRequest {
     pub region: Option<Region>,
     /// Which image to make.
     pub view: View,
+    /// A transparent background: the image gets an alpha channel, each pixel's alpha the
+    /// fraction of its samples whose camera ray hit an object (so an anti-aliased edge is
+    /// partly covered), and its colour leaves out the samples that saw only the background
+    /// (premultiplied; see [`crate::film::Image::alpha`]). `false`: an opaque image, the
+    /// scene's background in the misses.
+    pub alpha: bool,
 }
 
 impl Default for RenderRequest {
@@ -77,6 +83,7 @@ impl Default for RenderRequest {
             max_depth: 8,
             region: None,
             view: View::Shaded,
+            alpha: false,
         }
     }
 }
@@ -305,13 +312,13 @@ impl Renderer {
         request: &RenderRequest,
         control: &Control,
     ) -> Result<Rendered, RenderError> {
-        self.render_in_bands(scene, request, control, &|_, _| {})
+        self.render_in_bands(scene, request, control, &|_, _, _| {})
     }
 
     /// [`Renderer::render`], also handing each finished band of rows to `band_done(first_row,
-    /// rows)` from the worker thread that rendered it (`first_row` counted in the region's
-    /// image; `rows`: whole rows of it, [`integrator::TILE_SIZE`] of them except at the bottom
-    /// edge). Bands are taken in order from the top, so they finish in nearly ascending order,
+    /// rows, alpha)` from the worker thread that rendered it (`first_row` counted in the
+    /// region's image; `rows`: whole rows of it, [`integrator::TILE_SIZE`] of them except at
+    /// the bottom edge; `alpha`: their coverage when the request asks for alpha). Bands are taken in order from the top, so they finish in nearly ascending order,
     /// each exactly once (none after a cancellation). Lets a caller consume the image while
     /// the rest is being rendered (e.g. compress it, [`crate::film::encode_png_streaming`]).
     pub fn render_in_bands(
@@ -319,7 +326,7 @@ impl Renderer {
         scene: &Scene,
         request: &RenderRequest,
         control: &Control,
-        band_done: &(dyn Fn(u32, &[Vec3]) + Sync),
+        band_done: &BandDone<'_>,
     ) -> Result<Rendered, RenderError> {
         let start = Instant::now();
         let (full_width, full_height) = request.full_size(scene)?;
@@ -332,12 +339,14 @@ impl Renderer {
             max_depth: request.max_depth,
         };
         let job = Job {
+            scene,
             camera,
             full_width,
             full_height,
             region,
             spp: request.spp.max(1),
             seed: request.seed,
+            alpha: request.alpha,
         };
         let total = region.pixel_count();
         let done = AtomicU64::new(0);
@@ -387,6 +396,7 @@ pub fn trace_ray(scene: &Scene, request: &RenderRequest, ray: &Ray) -> DVec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::film::Vec3;
     use crate::scene::{self, LoadOptions};
     use std::sync::Mutex;
 
@@ -447,9 +457,15 @@ mod tests {
         let renderer = Renderer::new(2).unwrap();
         let seen = Mutex::new(Vec::new());
         let rendered = renderer
-            .render_in_bands(&scene, &request, &Control::default(), &|row, rows| {
-                seen.lock().unwrap().push((row, rows.to_vec()));
-            })
+            .render_in_bands(
+                &scene,
+                &request,
+                &Control::default(),
+                &|row, rows, alpha| {
+                    assert!(alpha.is_none());
+                    seen.lock().unwrap().push((row, rows.to_vec()));
+                },
+            )
             .unwrap();
         let mut seen = seen.into_inner().unwrap();
         seen.sort_by_key(|(row, _)| *row);

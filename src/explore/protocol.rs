@@ -49,6 +49,9 @@ pub enum ClientMessage {
         /// Which image: a name of `kardia render --view` (default `shaded`).
         #[serde(default)]
         view: Option<String>,
+        /// A transparent background: an RGBA PNG, as `kardia render --alpha` (default false).
+        #[serde(default)]
+        alpha: bool,
     },
 }
 

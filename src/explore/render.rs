@@ -40,12 +40,14 @@ pub struct PassRequest {
     pub seed: u64,
     /// Which image to make.
     pub view: View,
+    /// A transparent background (the image gets alpha: see [`RenderRequest::alpha`]).
+    pub alpha: bool,
 }
 
 /// One finished pass.
 #[derive(Debug, Clone)]
 pub struct PassResult {
-    /// The image, `width × height` linear RGB.
+    /// The image, `width × height` linear RGB (premultiplied, with alpha, when asked for).
     pub image: Image,
     /// Rays traced (primary, secondary and shadow rays).
     pub rays: u64,
@@ -67,6 +69,7 @@ pub fn render_pass(
         spp: request.spp.max(1),
         seed: request.seed,
         view: request.view,
+        alpha: request.alpha,
         ..RenderRequest::default()
     };
     let rendered = renderer

@@ -207,6 +207,7 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                 height,
                 spp,
                 view,
+                alpha,
             } => {
                 if save_task.as_ref().is_some_and(|t| !t.is_finished()) {
                     let _ = out
@@ -229,7 +230,7 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                 save_task = Some(tokio::spawn(save(
                     seq,
                     scene,
-                    (width, height, spp, view),
+                    (width, height, spp, view, alpha),
                     shared.clone(),
                     save_cancel.clone(),
                     out.clone(),
@@ -510,6 +511,7 @@ async fn render_views(
                 spp: pass.spp,
                 seed: pass.seed,
                 view: job.view,
+                alpha: false,
             };
             let (scene_ref, cancel_ref, busy) = (scene.clone(), cancel.clone(), Busy::new(&shared));
             let mut task = tokio::task::spawn_blocking(move || {
@@ -540,6 +542,7 @@ async fn render_views(
                     width: pass.width,
                     height: pass.height,
                     pixels: sum.iter().map(|p| *p * scale).collect(),
+                    alpha: None,
                 }
             } else {
                 if pass.width == job.width && pass.height == job.height {
@@ -614,11 +617,12 @@ fn rgba(image: &Image) -> Vec<u8> {
     out
 }
 
-/// Renders a scene once and sends it as a PNG.
+/// Renders a scene once and sends it as a PNG (RGBA with straight alpha for a transparent
+/// background).
 async fn save(
     seq: u64,
     text: String,
-    (width, height, spp, view): (u32, u32, u32, View),
+    (width, height, spp, view, alpha): (u32, u32, u32, View, bool),
     shared: Arc<Shared>,
     cancel: CancelToken,
     out: Outbox,
@@ -637,6 +641,7 @@ async fn save(
             spp,
             seed: 0,
             view,
+            alpha,
         };
         let result =
             render_pass(renderer, &shared, &request, &cancel).map_err(|e| e.to_string())?;

@@ -19,6 +19,7 @@ pub mod whitted;
 pub use sampling::{strata, stratified_point, Sample};
 pub use whitted::{MAX_SHADOW_CROSSINGS, SELF_HIT_EPS};
 
+pub use scheduler::BandDone;
 pub(crate) use scheduler::{Hooks, Job};
 
 use crate::camera::Camera;
