@@ -529,8 +529,10 @@ $("save").onclick = () => {
   const spp = Number($("save-spp").value) || 1;
   pendingSave = { seq: seq + 1000000 };
   $("message").textContent = `rendering ${width}×${height} at ${spp} spp…`;
-  send({ type: "save", seq: pendingSave.seq, scene: currentScene(), width, height, spp, view: state.view });
+  const alpha = $("save-alpha").checked;
+  send({ type: "save", seq: pendingSave.seq, scene: currentScene(), width, height, spp, view: state.view, alpha });
 };
+$("save-alpha").addEventListener("change", () => writeUrl());
 
 function onPng(header, payload) {
   const blob = new Blob([payload], { type: "image/png" });
@@ -576,6 +578,7 @@ function writeUrl() {
   }
   if (state.view !== "shaded") q.set("view", state.view);
   q.set("save", [...saveSize(), Number($("save-spp").value) || 1].join("x"));
+  if ($("save-alpha").checked) q.set("alpha", "1");
   if (state.mode === "equation") q.set("scale", fmt(state.scale));
   if (state.fixedSize) q.set("size", state.fixedSize.join("x"));
   history.replaceState(null, "", "#" + q.toString());
@@ -589,6 +592,7 @@ function readUrl() {
   if (hello.views.includes(q.get("view"))) state.view = q.get("view");
   const save = (q.get("save") || "").match(/^(\d+)x(\d+)x(\d+)$/);
   if (save) [$("save-width").value, $("save-height").value, $("save-spp").value] = save.slice(1);
+  $("save-alpha").checked = q.get("alpha") === "1";
   if (!q.has("mode")) return false;
   if (q.has("scale")) state.scale = Number(q.get("scale")) || 1;
   state.mode = q.get("mode") === "equation" ? "equation" : "scene";
