@@ -29,6 +29,7 @@
 
 use super::prep::{horner, Prepared};
 use super::refine::refine_simple;
+use super::trace::Observer;
 
 /// Halvings after which a piece that still has more than one sign variation is left to the
 /// full method (a numerically multiple root or an unresolvable cluster).
@@ -113,24 +114,24 @@ fn keep_right<const D: usize>(b: &mut [f64; D], lambda: f64) {
 }
 
 /// See the module documentation.
-pub(crate) fn first_root(p: &Prepared) -> Fast {
+pub(crate) fn first_root(p: &Prepared, obs: &mut impl Observer) -> Fast {
     match p.n {
-        1 => search::<2>(p),
-        2 => search::<3>(p),
-        3 => search::<4>(p),
-        4 => search::<5>(p),
-        5 => search::<6>(p),
-        6 => search::<7>(p),
-        7 => search::<8>(p),
-        8 => search::<9>(p),
-        9 => search::<10>(p),
-        10 => search::<11>(p),
-        11 => search::<12>(p),
-        12 => search::<13>(p),
-        13 => search::<14>(p),
-        14 => search::<15>(p),
-        15 => search::<16>(p),
-        16 => search::<17>(p),
+        1 => search::<2, _>(p, obs),
+        2 => search::<3, _>(p, obs),
+        3 => search::<4, _>(p, obs),
+        4 => search::<5, _>(p, obs),
+        5 => search::<6, _>(p, obs),
+        6 => search::<7, _>(p, obs),
+        7 => search::<8, _>(p, obs),
+        8 => search::<9, _>(p, obs),
+        9 => search::<10, _>(p, obs),
+        10 => search::<11, _>(p, obs),
+        11 => search::<12, _>(p, obs),
+        12 => search::<13, _>(p, obs),
+        13 => search::<14, _>(p, obs),
+        14 => search::<15, _>(p, obs),
+        15 => search::<16, _>(p, obs),
+        16 => search::<17, _>(p, obs),
         _ => Fast::Undecided,
     }
 }
@@ -175,7 +176,7 @@ pub(super) fn bernstein_fixed<const D: usize>(c: &[f64; D], a: f64, b: f64) -> (
 
 /// The search for a polynomial of degree `D − 1` (a fixed size, so that the loops unroll and
 /// the coefficients stay in registers).
-fn search<const D: usize>(p: &Prepared) -> Fast {
+fn search<const D: usize, O: Observer>(p: &Prepared, obs: &mut O) -> Fast {
     let n = D - 1;
     let c: &[f64; D] = p.c[..D].try_into().expect("degree D - 1");
     let (lo, hi) = (p.lo, p.hi);
@@ -229,13 +230,14 @@ fn search<const D: usize>(p: &Prepared) -> Fast {
                     .unwrap_or(0);
                 let s = (i as f64 + b[i] / (b[i] - b[i + 1])) / n as f64;
                 let start = ta + (tb - ta) * s;
-                return Fast::Root(refine_simple(c, ta, tb, fa, start) * p.scale);
+                return Fast::Root(refine_simple(c, ta, tb, fa, start, obs) * p.scale);
             }
             _ => {}
         }
         if depth as usize + 1 >= MAX_DEPTH {
             return Fast::Undecided;
         }
+        obs.split();
         let sm = s0 + SPLIT * (s1 - s0);
         keep_left(&mut b, SPLIT);
         if b[n].abs() <= margin || !(sm > s0 && sm < s1) {
@@ -255,7 +257,7 @@ mod tests {
     use crate::roots::prep::prepare;
 
     fn fast(c: &[f64], lo: f64, hi: f64) -> Fast {
-        first_root(&prepare(c, lo, hi).expect("a polynomial"))
+        first_root(&prepare(c, lo, hi).expect("a polynomial"), &mut ())
     }
 
     #[test]

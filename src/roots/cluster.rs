@@ -40,6 +40,7 @@
 use super::bernstein::bernstein_fixed;
 use super::prep::{horner, Prepared, MAX_COEFFS};
 use super::refine::refine;
+use super::trace::Observer;
 
 /// Halvings after which a piece counts as a zero piece.
 const MAX_DEPTH: usize = 100;
@@ -161,7 +162,7 @@ fn derivative(c: &[f64], k: usize) -> (Coeffs, usize) {
 }
 
 /// The simple root of `c` in the certain-sign bracket `[a, b]`.
-fn simple_root(c: &[f64], a: f64, b: f64) -> f64 {
+fn simple_root(c: &[f64], a: f64, b: f64, obs: &mut impl Observer) -> f64 {
     let (fa, fb) = (horner(c, a), horner(c, b));
     if fa == 0.0 {
         return a;
@@ -169,11 +170,11 @@ fn simple_root(c: &[f64], a: f64, b: f64) -> f64 {
     if fb == 0.0 || (fa < 0.0) == (fb < 0.0) {
         return b;
     }
-    refine(c, a, b, fa, fb)
+    refine(c, a, b, fa, fb, obs)
 }
 
 /// The point of a cluster spanning `[a, b]`: see the module documentation.
-fn locate(c: &[f64], a: f64, b: f64) -> f64 {
+fn locate(c: &[f64], a: f64, b: f64, obs: &mut impl Observer) -> f64 {
     let n = c.len() - 1;
     for k in 1..n {
         let (d, dn) = derivative(c, k);
@@ -182,20 +183,20 @@ fn locate(c: &[f64], a: f64, b: f64) -> f64 {
         let bz = &bz[..=dn];
         match max_variations(bz, m) {
             0 => break,
-            1 if bz[0].abs() > m && bz[dn].abs() > m => return simple_root(d, a, b),
+            1 if bz[0].abs() > m && bz[dn].abs() > m => return simple_root(d, a, b, obs),
             _ => {}
         }
     }
     let (fa, fb) = (horner(c, a), horner(c, b));
     if fa != 0.0 && fb != 0.0 && (fa < 0.0) != (fb < 0.0) {
-        return refine(c, a, b, fa, fb);
+        return refine(c, a, b, fa, fb, obs);
     }
     0.5 * (a + b)
 }
 
 /// Every distinct root of `P` in `(lo, hi]`, ascending, in `T` (unscaled), passed to `emit`
 /// until it returns `false`.
-pub(crate) fn roots(p: &Prepared, emit: &mut dyn FnMut(f64) -> bool) {
+pub(crate) fn roots<O: Observer>(p: &Prepared, emit: &mut dyn FnMut(f64) -> bool, obs: &mut O) {
     let c = &p.c[..=p.n];
     let (lo, hi) = (p.lo, p.hi);
     let p_lo_zero = horner(c, lo) == 0.0;
@@ -203,7 +204,7 @@ pub(crate) fn roots(p: &Prepared, emit: &mut dyn FnMut(f64) -> bool) {
     // An open cluster: its span.
     let mut open: Option<(f64, f64)> = None;
     // Closes the open cluster; false when `emit` asks to stop.
-    let close = |span: (f64, f64), emit: &mut dyn FnMut(f64) -> bool| -> bool {
+    let close = |span: (f64, f64), emit: &mut dyn FnMut(f64) -> bool, obs: &mut O| -> bool {
         let (a, b) = span;
         let at_lo = a <= lo;
         let at_hi = b >= hi;
@@ -215,7 +216,7 @@ pub(crate) fn roots(p: &Prepared, emit: &mut dyn FnMut(f64) -> bool) {
         }
         let w = b - a;
         let (sa, sb) = (if at_lo { a - w } else { a }, if at_hi { b + w } else { b });
-        let r = locate(c, sa, sb);
+        let r = locate(c, sa, sb, obs);
         if r > lo && r <= hi {
             emit(r)
         } else {
@@ -241,6 +242,7 @@ pub(crate) fn roots(p: &Prepared, emit: &mut dyn FnMut(f64) -> bool) {
         }
         match kind {
             Kind::Split => {
+                obs.split();
                 stack[top] = (mid, b, depth + 1);
                 top += 1;
                 b = mid;
@@ -255,11 +257,11 @@ pub(crate) fn roots(p: &Prepared, emit: &mut dyn FnMut(f64) -> bool) {
             }
             Kind::Empty | Kind::Simple => {
                 if let Some(span) = open.take() {
-                    if !close(span, emit) {
+                    if !close(span, emit, obs) {
                         return;
                     }
                 }
-                if kind == Kind::Simple && !emit(simple_root(c, a, b)) {
+                if kind == Kind::Simple && !emit(simple_root(c, a, b, obs)) {
                     return;
                 }
             }
@@ -271,7 +273,7 @@ pub(crate) fn roots(p: &Prepared, emit: &mut dyn FnMut(f64) -> bool) {
         (a, b, depth) = stack[top];
     }
     if let Some(span) = open {
-        close(span, emit);
+        close(span, emit, obs);
     }
 }
 
@@ -283,10 +285,14 @@ mod tests {
     fn all(c: &[f64], lo: f64, hi: f64) -> Vec<f64> {
         let p = prepare(c, lo, hi).expect("a polynomial");
         let mut out = Vec::new();
-        roots(&p, &mut |t| {
-            out.push(t * p.scale);
-            true
-        });
+        roots(
+            &p,
+            &mut |t| {
+                out.push(t * p.scale);
+                true
+            },
+            &mut (),
+        );
         out
     }
 

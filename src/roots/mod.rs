@@ -41,7 +41,11 @@ mod cluster;
 mod prep;
 mod refine;
 mod sturm;
+mod trace;
 mod yuksel;
+
+use trace::Observer;
+pub use trace::{Path, Trace};
 
 /// Every distinct real root of the polynomial in the half-open interval `(lo, hi]`, ascending.
 /// A multiple root is reported once. Degree 0 to 16. Non-finite coefficients, or `lo ≥ hi`,
@@ -59,18 +63,34 @@ pub fn sturm_roots(coeffs: &[f64], lo: f64, hi: f64) -> Vec<f64> {
 /// isolated and refined), after the Bernstein test (see the module documentation). No heap
 /// allocation.
 pub fn first_root(coeffs: &[f64], lo: f64, hi: f64) -> Option<f64> {
-    prep::prepare(coeffs, lo, hi).and_then(|p| sturm::first_root(&p))
+    prep::prepare(coeffs, lo, hi).and_then(|p| sturm::first_root(&p, &mut ()))
 }
 
 /// The smallest real root in `(lo, hi]` by the derivative-splitting method (Yuksel 2022):
 /// same contract as [`first_root`], including multiple roots reported at the root. The
 /// Bernstein test runs first, as for [`first_root`]. No heap allocation.
 pub fn first_root_yuksel(coeffs: &[f64], lo: f64, hi: f64) -> Option<f64> {
-    prep::prepare(coeffs, lo, hi).and_then(|p| match bernstein::first_root(&p) {
-        bernstein::Fast::NoRoot => None,
-        bernstein::Fast::Root(t) => Some(t),
-        bernstein::Fast::Undecided => yuksel::first_root(&p),
-    })
+    yuksel_observed(coeffs, lo, hi, &mut ())
+}
+
+/// [`first_root_yuksel`], telling `obs` what it does.
+#[inline]
+fn yuksel_observed(coeffs: &[f64], lo: f64, hi: f64, obs: &mut impl Observer) -> Option<f64> {
+    let p = prep::prepare(coeffs, lo, hi)?;
+    match bernstein::first_root(&p, obs) {
+        bernstein::Fast::NoRoot => {
+            obs.settled(Path::Bernstein);
+            None
+        }
+        bernstein::Fast::Root(t) => {
+            obs.settled(Path::Bernstein);
+            Some(t)
+        }
+        bernstein::Fast::Undecided => {
+            obs.settled(Path::Derivatives);
+            yuksel::first_root(&p, obs)
+        }
+    }
 }
 
 /// Which root-isolation strategy a shape uses for its first-root queries.
@@ -109,6 +129,25 @@ impl Solver {
         match self {
             Solver::Sturm => first_root(coeffs, lo, hi),
             Solver::Yuksel => first_root_yuksel(coeffs, lo, hi),
+        }
+    }
+
+    /// [`Solver::first_root`] with the same answer, also adding what the query did to
+    /// `trace`: its counts grow, and its path becomes this query's (see [`Trace`]).
+    pub fn first_root_traced(
+        self,
+        coeffs: &[f64],
+        lo: f64,
+        hi: f64,
+        trace: &mut Trace,
+    ) -> Option<f64> {
+        trace.queries = trace.queries.saturating_add(1);
+        trace.path = Path::Refused;
+        match self {
+            Solver::Sturm => {
+                prep::prepare(coeffs, lo, hi).and_then(|p| sturm::first_root(&p, trace))
+            }
+            Solver::Yuksel => yuksel_observed(coeffs, lo, hi, trace),
         }
     }
 }

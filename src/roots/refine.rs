@@ -2,6 +2,8 @@
 //! uses on a sign-change bracket, and its Halley variant for a bracket known to hold exactly
 //! one simple root (the Bernstein fast path).
 
+use super::trace::Observer;
+
 /// Steps allowed to the refinement (bisection of a `f64` range needs at most about 2100).
 const MAX_ITER: usize = 2200;
 
@@ -26,22 +28,36 @@ fn eval3(c: &[f64], x: f64) -> (f64, f64, f64, f64) {
 /// or a cluster of roots, which is what the heart's f = A³ − B·Z³ looks like from afar.
 /// Inlined, so a fixed-size caller gets its loops unrolled.
 #[inline(always)]
-pub(crate) fn refine(c: &[f64], a: f64, b: f64, fa: f64, fb: f64) -> f64 {
+pub(crate) fn refine(c: &[f64], a: f64, b: f64, fa: f64, fb: f64, obs: &mut impl Observer) -> f64 {
     let start = a - fa * ((b - a) / (fb - fa));
-    refine_with::<false>(c, a, b, fa, start)
+    refine_with::<false>(c, a, b, fa, start, obs)
 }
 
 /// [`refine`] for a bracket known to hold exactly one root, a simple one (the Bernstein fast
 /// path's certain single sign variation), from the caller's starting point `start`: Halley's
 /// step, cubically convergent at a simple root, where Schröder's is only quadratic.
 #[inline(always)]
-pub(crate) fn refine_simple(c: &[f64], a: f64, b: f64, fa: f64, start: f64) -> f64 {
-    refine_with::<true>(c, a, b, fa, start)
+pub(crate) fn refine_simple(
+    c: &[f64],
+    a: f64,
+    b: f64,
+    fa: f64,
+    start: f64,
+    obs: &mut impl Observer,
+) -> f64 {
+    refine_with::<true>(c, a, b, fa, start, obs)
 }
 
 /// The iteration behind [`refine`] (`HALLEY = false`) and [`refine_simple`].
 #[inline(always)]
-fn refine_with<const HALLEY: bool>(c: &[f64], mut a: f64, mut b: f64, fa: f64, start: f64) -> f64 {
+fn refine_with<const HALLEY: bool>(
+    c: &[f64],
+    mut a: f64,
+    mut b: f64,
+    fa: f64,
+    start: f64,
+    obs: &mut impl Observer,
+) -> f64 {
     let neg_a = fa < 0.0;
     let mut x = start;
     if !(x > a && x < b) {
@@ -49,6 +65,7 @@ fn refine_with<const HALLEY: bool>(c: &[f64], mut a: f64, mut b: f64, fa: f64, s
     }
     let (mut step, mut step_before) = (b - a, b - a);
     for _ in 0..MAX_ITER {
+        obs.refine_step();
         let (v, d, h, size) = eval3(c, x);
         if v == 0.0 {
             return x;

@@ -32,6 +32,7 @@
 use super::bernstein::{self, Fast};
 use super::cluster::{abs_horner, bound};
 use super::prep::{horner, max_abs, Prepared, MAX_COEFFS};
+use super::trace::{Observer, Path};
 
 /// Safety factor on the propagated error of each remainder.
 const ERR_SAFETY: f64 = 4.0;
@@ -183,6 +184,7 @@ pub(crate) fn false_position(
     mut fa: f64,
     mut fb: f64,
     floor: f64,
+    obs: &mut impl Observer,
 ) -> f64 {
     let a0 = a;
     // `side` is the end replaced last: -1 left, 1 right, 0 none yet.
@@ -201,6 +203,7 @@ pub(crate) fn false_position(
         if !(x > a && x < b) {
             x = 0.5 * (a + b);
         }
+        obs.refine_step();
         let fx = horner(q, x);
         if fx == 0.0 {
             return x;
@@ -276,23 +279,28 @@ impl Shifted {
 
 /// A bracket `[a, b]` (in `T`) of a simple root of `P`, checked: `P` beyond three times its
 /// rounding bound at both ends, with opposite signs. The refined root, or `None`.
-fn checked_root(c: &[f64], a: f64, b: f64) -> Option<f64> {
+fn checked_root(c: &[f64], a: f64, b: f64, obs: &mut impl Observer) -> Option<f64> {
     let (fa, fb) = (horner(c, a), horner(c, b));
     let sure = |f: f64, t: f64| f.abs() > 3.0 * bound(c, t.abs());
     if !(sure(fa, a) && sure(fb, b)) || (fa < 0.0) == (fb < 0.0) {
         return None;
     }
-    Some(false_position(c, a, b, fa, fb, 0.0))
+    Some(false_position(c, a, b, fa, fb, 0.0, obs))
 }
 
 /// The roots of `P` in `(lo, hi]` (in `T`) by the Sturm sequence, written to `out`
 /// (ascending; only the first when `first_only`): their number, or `None` when some sign it
 /// needs is not certain.
-fn isolate(p: &Prepared, first_only: bool, out: &mut [f64; MAX_COEFFS]) -> Option<usize> {
+fn isolate(
+    p: &Prepared,
+    first_only: bool,
+    out: &mut [f64; MAX_COEFFS],
+    obs: &mut impl Observer,
+) -> Option<usize> {
     if p.n < 8 {
-        isolate_in::<8>(p, first_only, out)
+        isolate_in::<8>(p, first_only, out, obs)
     } else {
-        isolate_in::<MAX_COEFFS>(p, first_only, out)
+        isolate_in::<MAX_COEFFS>(p, first_only, out, obs)
     }
 }
 
@@ -301,6 +309,7 @@ fn isolate_in<const M: usize>(
     p: &Prepared,
     first_only: bool,
     out: &mut [f64; MAX_COEFFS],
+    obs: &mut impl Observer,
 ) -> Option<usize> {
     let c = &p.c[..=p.n];
     let sh = Shifted::new(p);
@@ -318,7 +327,7 @@ fn isolate_in<const M: usize>(
         match va - vb {
             0 => continue,
             1 => {
-                let root = checked_root(c, sh.to_t(p, a), sh.to_t(p, b))?;
+                let root = checked_root(c, sh.to_t(p, a), sh.to_t(p, b), obs)?;
                 out[found] = root;
                 found += 1;
                 if first_only || found == out.len() {
@@ -334,6 +343,7 @@ fn isolate_in<const M: usize>(
         if counts > MAX_COUNTS || !(m > a && m < b) || top + 2 > stack.len() {
             return None;
         }
+        obs.split();
         let vm = ch.changes(m)?;
         stack[top] = (m, b, vm, vb);
         stack[top + 1] = (a, m, va, vm);
@@ -343,34 +353,50 @@ fn isolate_in<const M: usize>(
 }
 
 /// See [`super::first_root`].
-pub(crate) fn first_root(p: &Prepared) -> Option<f64> {
-    match bernstein::first_root(p) {
-        Fast::NoRoot => return None,
-        Fast::Root(t) => return Some(t),
+pub(crate) fn first_root(p: &Prepared, obs: &mut impl Observer) -> Option<f64> {
+    match bernstein::first_root(p, obs) {
+        Fast::NoRoot => {
+            obs.settled(Path::Bernstein);
+            return None;
+        }
+        Fast::Root(t) => {
+            obs.settled(Path::Bernstein);
+            return Some(t);
+        }
         Fast::Undecided => {}
     }
     let mut out = [0.0; MAX_COEFFS];
-    if let Some(found) = isolate(p, true, &mut out) {
+    if let Some(found) = isolate(p, true, &mut out, obs) {
+        obs.settled(Path::Sturm);
         return (found > 0).then(|| out[0] * p.scale);
     }
+    obs.settled(Path::Subdivision);
     let mut first = None;
-    super::cluster::roots(p, &mut |t| {
-        first = Some(t * p.scale);
-        false
-    });
+    super::cluster::roots(
+        p,
+        &mut |t| {
+            first = Some(t * p.scale);
+            false
+        },
+        obs,
+    );
     first
 }
 
 /// See [`super::sturm_roots`].
 pub(crate) fn all_roots(p: &Prepared) -> Vec<f64> {
     let mut out = [0.0; MAX_COEFFS];
-    if let Some(found) = isolate(p, false, &mut out) {
+    if let Some(found) = isolate(p, false, &mut out, &mut ()) {
         return out[..found].iter().map(|t| t * p.scale).collect();
     }
     let mut all = Vec::new();
-    super::cluster::roots(p, &mut |t| {
-        all.push(t * p.scale);
-        true
-    });
+    super::cluster::roots(
+        p,
+        &mut |t| {
+            all.push(t * p.scale);
+            true
+        },
+        &mut (),
+    );
     all
 }

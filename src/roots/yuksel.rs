@@ -13,6 +13,7 @@
 
 use super::prep::Prepared;
 use super::sturm::CRIT_TOL;
+use super::trace::Observer;
 
 /// Precision, relative to the interval's magnitude, of critical points (roots of derivatives):
 /// they only split the interval, and a multiple root found at one is off by at most this.
@@ -48,7 +49,15 @@ fn eval_with_derivative(c: &[f64], x: f64) -> (f64, f64) {
 /// The root of `c` (monotonic on `[a, b]`) in the open bracket where `fa`, `fb` have opposite
 /// signs, by Newton steps that fall back to bisection whenever they leave the bracket, until
 /// a step is below an ulp of the root plus `floor`.
-fn newton_in_bracket(c: &[f64], mut a: f64, mut b: f64, fa: f64, fb: f64, floor: f64) -> f64 {
+fn newton_in_bracket(
+    c: &[f64],
+    mut a: f64,
+    mut b: f64,
+    fa: f64,
+    fb: f64,
+    floor: f64,
+    obs: &mut impl Observer,
+) -> f64 {
     let neg_at_a = fa < 0.0;
     // Start from the secant of the bracket: exact for a linear piece, close for a flat one.
     let mut x = a - fa * ((b - a) / (fb - fa));
@@ -56,6 +65,7 @@ fn newton_in_bracket(c: &[f64], mut a: f64, mut b: f64, fa: f64, fb: f64, floor:
         x = 0.5 * (a + b);
     }
     for _ in 0..MAX_ITER {
+        obs.refine_step();
         let (v, d) = eval_with_derivative(c, x);
         if v == 0.0 {
             return x;
@@ -95,6 +105,7 @@ fn sign_right_of<const M: usize>(ders: &[[f64; M]], degs: &[usize], x: f64) -> f
 
 /// Roots of `ders[0]` in `(lo, hi]`, given its critical points `crit` (ascending, inside
 /// `(lo, hi)`), written to `out` (ascending); stops after the first when `first_only`.
+#[allow(clippy::too_many_arguments)]
 fn roots_in_pieces<const M: usize>(
     ders: &[[f64; M]],
     degs: &[usize],
@@ -103,6 +114,7 @@ fn roots_in_pieces<const M: usize>(
     hi: f64,
     first_only: bool,
     out: &mut [f64; M],
+    obs: &mut impl Observer,
 ) -> usize {
     // Critical points (roots of derivatives) only split intervals: an ulp of the interval's
     // magnitude is precision enough for them; roots of `P` itself get full relative precision.
@@ -139,7 +151,7 @@ fn roots_in_pieces<const M: usize>(
             let root = if fb == 0.0 {
                 Some(b)
             } else if (fa < 0.0) != (fb < 0.0) {
-                Some(newton_in_bracket(c, a, b, fa, fb, floor))
+                Some(newton_in_bracket(c, a, b, fa, fb, floor, obs))
             } else {
                 None
             };
@@ -160,7 +172,7 @@ fn roots_in_pieces<const M: usize>(
     count
 }
 
-fn first_impl<const M: usize>(p: &Prepared) -> Option<f64> {
+fn first_impl<const M: usize>(p: &Prepared, obs: &mut impl Observer) -> Option<f64> {
     let n = p.n;
     // ders[k] = k-th derivative of P divided by a positive constant (degree n - k).
     let mut ders = [[0.0; M]; M];
@@ -188,6 +200,7 @@ fn first_impl<const M: usize>(p: &Prepared) -> Option<f64> {
         let l = &ders[n - 1];
         let x = -l[0] / l[1];
         if x > p.lo && x < p.hi {
+            obs.split();
             crit[0] = x;
             ncrit = 1;
         }
@@ -201,11 +214,13 @@ fn first_impl<const M: usize>(p: &Prepared) -> Option<f64> {
                 p.hi,
                 false,
                 &mut next,
+                obs,
             );
             // Roots at `hi` are not interior critical points.
             ncrit = 0;
             for &r in &next[..found] {
                 if r > p.lo && r < p.hi {
+                    obs.split();
                     crit[ncrit] = r;
                     ncrit += 1;
                 }
@@ -221,15 +236,16 @@ fn first_impl<const M: usize>(p: &Prepared) -> Option<f64> {
         p.hi,
         true,
         &mut out,
+        obs,
     );
     (found > 0).then(|| out[0] * p.scale)
 }
 
 /// See [`super::Solver::Yuksel`].
-pub(crate) fn first_root(p: &Prepared) -> Option<f64> {
+pub(crate) fn first_root(p: &Prepared, obs: &mut impl Observer) -> Option<f64> {
     if p.n < 8 {
-        first_impl::<8>(p)
+        first_impl::<8>(p, obs)
     } else {
-        first_impl::<17>(p)
+        first_impl::<17>(p, obs)
     }
 }

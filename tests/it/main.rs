@@ -27,6 +27,7 @@ mod roots_cli;
 mod roots_heart;
 mod roots_reference;
 mod roots_sturm;
+mod roots_trace;
 mod scene_errors;
 mod scene_files;
 mod scene_fuzz;
