@@ -198,7 +198,7 @@ function onBinary(buffer) {
   }
   const ms = performance.now() - stats.firstInput;
   window.kardia.frames.push({ ...header, sinceInput: ms });
-  if (window.kardia.frames.length > 200) window.kardia.frames.shift();
+  if (window.kardia.frames.length > 1000) window.kardia.frames.shift();
   const rate = header.ms > 0 ? header.rays / (header.ms / 1000) : 0;
   $("status").textContent =
     `${header.width}×${header.height}` +
