@@ -321,4 +321,24 @@ mod tests {
         assert!(p.message.starts_with("page.scene:2:16: "), "{}", p.message);
         assert!(p.report.contains("SPHERE (0,0,0) -1"), "{}", p.report);
     }
+
+    #[test]
+    fn hello_carries_a_legend_for_every_study_view() {
+        let legends = view_legends();
+        let names: Vec<_> = legends.iter().map(|l| l.view).collect();
+        let study: Vec<_> = crate::pipeline::View::ALL
+            .iter()
+            .map(|(_, n)| *n)
+            .filter(|n| *n != "shaded")
+            .collect();
+        assert_eq!(names, study);
+        for l in &legends {
+            assert!(l.swatches.iter().all(|(label, c)| !label.is_empty()
+                && c.len() == 7
+                && c.starts_with('#')
+                && c[1..].chars().all(|d| d.is_ascii_hexdigit())));
+        }
+        let json = serde_json::to_string(&legends[0]).unwrap();
+        assert!(json.contains(r##""swatches":[["##), "{json}");
+    }
 }
