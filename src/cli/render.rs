@@ -46,7 +46,9 @@ pub struct RenderArgs {
     /// Root solver for hearts and implicit surfaces.
     #[arg(long, default_value = Solver::default().name(), value_parser = solver_parser())]
     pub solver: Solver,
-    /// What to render: the shaded image, or a study view of the geometry.
+    /// What to render: the shaded image, or a study view of the geometry (normals, depth)
+    /// or of the root finder's work per pixel (roots, path, iterations, conditioning); a
+    /// study view's legend is printed after the summary.
     #[arg(long, default_value = View::default().name(), value_parser = view_parser())]
     pub view: View,
     /// Render only the rectangle X,Y,WIDTH,HEIGHT (pixels of the full image, from its top-left
@@ -265,8 +267,24 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
             rate(stats.rays_per_second()),
             args.output.display()
         );
+        if let Some(legend) = args.view.legend() {
+            eprint!("{}", legend_text(args.view, &legend));
+        }
     }
     Ok(())
+}
+
+/// A view's legend as lines of text: the title, then each colour (`#rrggbb`) and its meaning.
+fn legend_text(view: View, legend: &crate::integrator::Legend) -> String {
+    let mut out = format!("kardia: {view} view: {}\n", legend.title);
+    for s in &legend.swatches {
+        let [r, g, b] = s.srgb;
+        out += &format!("  #{r:02x}{g:02x}{b:02x}  {}\n", s.label);
+    }
+    if !legend.note.is_empty() {
+        out += &format!("  ({})\n", legend.note);
+    }
+    out
 }
 
 /// Renders `request` and encodes it in `format` into `file` (PNG rows are compressed while

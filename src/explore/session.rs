@@ -74,6 +74,7 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
             shared.options.scene_text.clone(),
         ),
         views: View::ALL.iter().map(|(_, name)| *name).collect(),
+        legends: super::protocol::view_legends(),
     };
     let _ = out.send(Message::Text(hello.to_json().into())).await;
 

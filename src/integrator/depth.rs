@@ -26,6 +26,18 @@ impl<'a> Depth<'a> {
     }
 }
 
+/// How to read the view: the grey at a few distances, in units of `d₀`.
+pub fn legend() -> super::Legend {
+    super::Legend::new(
+        "distance d to the first hit as the grey exp(−d / d₀), d₀ the eye-to-look-at distance",
+        [0.25, 0.5, 1.0, 2.0, 4.0].map(|d: f64| {
+            let g = crate::film::linear_to_srgb8((-d).exp());
+            (format!("d = {d} d₀"), [g, g, g])
+        }),
+        "black: no hit",
+    )
+}
+
 impl Shader for Depth<'_> {
     fn radiance(&self, ray: &Ray, sample: &mut Sample) -> DVec3 {
         sample.count_ray();

@@ -1,20 +1,30 @@
 //! Turning rays into pixels: the [`Shader`] trait (one primary ray in, one colour out) and its
-//! implementations, one file each — [`whitted`] (the [`View::Shaded`] image) and the study
-//! views [`normals`] and [`depth`] — plus the sampling of pixels (`sampling`) and the scheduler
-//! that spreads a region's tiles over a thread pool (`scheduler`).
+//! implementations, one file each — [`whitted`] (the [`View::Shaded`] image), the geometry
+//! study views [`normals`] and [`depth`], and the root-finder study views [`roots`],
+//! [`path`], [`iterations`] and [`conditioning`] (one shader, [`solver_view`], with a colour
+//! table each) — with their [`legend`]s, plus the sampling of pixels (`sampling`) and the
+//! scheduler that spreads a region's tiles over a thread pool (`scheduler`).
 //!
 //! The render API callers use is [`crate::pipeline`]; this module is what it runs.
 //!
 //! # Adding a view
 //! Write `src/integrator/NAME.rs` with a type that implements [`Shader`] and a
 //! `new(&ShadeSetup)` constructor, add a variant to [`View`] with its name in [`View::ALL`],
-//! and one arm to the `match` in `with_shader`.
+//! one arm to the `match` in `with_shader`, and its legend to [`View::legend`].
 
+pub mod conditioning;
 pub mod depth;
+pub mod iterations;
+pub mod legend;
 pub mod normals;
+pub mod path;
+pub mod roots;
 mod sampling;
 mod scheduler;
+pub mod solver_view;
 pub mod whitted;
+
+pub use legend::{Legend, Swatch};
 
 pub use sampling::{strata, stratified_point, Sample};
 pub use whitted::{MAX_SHADOW_CROSSINGS, SELF_HIT_EPS};
@@ -63,6 +73,14 @@ pub enum View {
     Normals,
     /// The distance to the first hit as a grey level, `exp(−d / d₀)` ([`depth`]).
     Depth,
+    /// Distinct real roots of the ray's polynomial in its interval ([`roots`]).
+    Roots,
+    /// Which method settled the ray's first root ([`path`]).
+    Path,
+    /// Refinement steps the root finder took ([`iterations`]).
+    Iterations,
+    /// `|∇f|` at the hit, by decades ([`conditioning`]).
+    Conditioning,
 }
 
 impl View {
@@ -71,6 +89,10 @@ impl View {
         (View::Shaded, "shaded"),
         (View::Normals, "normals"),
         (View::Depth, "depth"),
+        (View::Roots, "roots"),
+        (View::Path, "path"),
+        (View::Iterations, "iterations"),
+        (View::Conditioning, "conditioning"),
     ];
 
     /// The view's name.
@@ -79,6 +101,19 @@ impl View {
             .iter()
             .find(|(v, _)| *v == self)
             .map_or("?", |(_, n)| n)
+    }
+
+    /// How to read the view's colours; `None` for the shaded picture.
+    pub fn legend(self) -> Option<Legend> {
+        match self {
+            View::Shaded => None,
+            View::Normals => Some(normals::legend()),
+            View::Depth => Some(depth::legend()),
+            View::Roots => Some(roots::legend()),
+            View::Path => Some(path::legend()),
+            View::Iterations => Some(iterations::legend()),
+            View::Conditioning => Some(conditioning::legend()),
+        }
     }
 }
 
@@ -121,6 +156,10 @@ pub(crate) fn with_shader<W: WithShader>(view: View, setup: &ShadeSetup, work: W
         View::Shaded => work.run(&whitted::Whitted::new(setup)),
         View::Normals => work.run(&normals::Normals::new(setup)),
         View::Depth => work.run(&depth::Depth::new(setup)),
+        View::Roots => work.run(&roots::Roots::new(setup)),
+        View::Path => work.run(&path::PathView::new(setup)),
+        View::Iterations => work.run(&iterations::Iterations::new(setup)),
+        View::Conditioning => work.run(&conditioning::Conditioning::new(setup)),
     }
 }
 
@@ -209,5 +248,16 @@ pub(crate) mod tests {
         assert_eq!("NORMALS".parse::<View>().unwrap(), View::Normals);
         assert!("nonsense".parse::<View>().is_err());
         assert_eq!(View::default(), View::Shaded);
+    }
+
+    #[test]
+    fn every_study_view_has_a_legend() {
+        for (view, name) in View::ALL {
+            let legend = view.legend();
+            assert_eq!(legend.is_none(), *view == View::Shaded, "{name}");
+            if let Some(l) = legend {
+                assert!(!l.title.is_empty() && l.swatches.len() >= 2, "{name}");
+            }
+        }
     }
 }

@@ -20,6 +20,27 @@ impl<'a> Normals<'a> {
     }
 }
 
+/// How to read the view: the colours of the six axis directions.
+pub fn legend() -> super::Legend {
+    let axes = [
+        ("+x", DVec3::X),
+        ("−x", -DVec3::X),
+        ("+y", DVec3::Y),
+        ("−y", -DVec3::Y),
+        ("+z", DVec3::Z),
+        ("−z", -DVec3::Z),
+    ];
+    super::Legend::new(
+        "outward unit normal n as the colour (n + 1) / 2",
+        axes.map(|(name, n)| {
+            let c = (n + DVec3::ONE) * 0.5;
+            let srgb = [c.x, c.y, c.z].map(crate::film::linear_to_srgb8);
+            (format!("normal {name}"), srgb)
+        }),
+        "black: no hit",
+    )
+}
+
 impl Shader for Normals<'_> {
     fn radiance(&self, ray: &Ray, sample: &mut Sample) -> DVec3 {
         sample.count_ray();

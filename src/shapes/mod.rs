@@ -10,6 +10,7 @@ pub mod implicit;
 pub mod placed;
 mod plane;
 mod polygon;
+pub mod report;
 mod sphere;
 
 pub use boxes::Parallelepiped;
@@ -18,6 +19,7 @@ pub use heart::Heart;
 pub use implicit::Implicit;
 pub use plane::Plane;
 pub use polygon::Polygon;
+pub use report::{SettledBy, SolverReport};
 pub use sphere::Sphere;
 
 /// Why a shape's parameters do not describe a valid shape; the message completes the sentence
@@ -50,6 +52,13 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
     fn normal(&self, p: DVec3) -> DVec3;
     /// World-space box containing the surface.
     fn bounds(&self) -> Aabb;
+    /// For a surface found by a polynomial root finder: what the root finder did for this
+    /// ray in `(t_min, t_max)`, from the same queries [`Shape::intersect`] makes (same hit);
+    /// `None` for other shapes, and for rays that never reach the root finder.
+    fn solver_report(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SolverReport> {
+        let _ = (ray, t_min, t_max);
+        None
+    }
 }
 
 /// Parses a finite-check helper used by constructors: true when all vectors are finite.

@@ -5,7 +5,7 @@
 //! not renormalised, so `t` is the same in both spaces) and hands it to the object-space shape
 //! ([`ObjectShape`]) together with the placement, which also maps normals and boxes back.
 
-use super::{Shape, ShapeError};
+use super::{Shape, ShapeError, SolverReport};
 use crate::geometry::{Aabb, DVec3, Frame, FrameError, Ray};
 
 /// A validated object frame (`p_world = M·p_object + position`) and `‖M⁻¹‖∞`, which bounds how
@@ -144,6 +144,18 @@ pub trait ObjectShape: Send + Sync + std::fmt::Debug {
     fn normal(&self, at: &Placement, q: DVec3) -> DVec3;
     /// World-space box containing the surface.
     fn bounds(&self, at: &Placement) -> Aabb;
+    /// See [`Shape::solver_report`]; the rays as for `intersect`.
+    fn solver_report(
+        &self,
+        at: &Placement,
+        world: &Ray,
+        local: &Ray,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<SolverReport> {
+        let _ = (at, world, local, t_min, t_max);
+        None
+    }
 }
 
 /// An object-space shape `S` placed in the world by a [`Placement`]; implements [`Shape`].
@@ -198,6 +210,12 @@ impl<S: ObjectShape> Shape for Placed<S> {
 
     fn bounds(&self) -> Aabb {
         self.shape.bounds(&self.at)
+    }
+
+    fn solver_report(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SolverReport> {
+        let local = self.at.ray_to_object(ray);
+        self.shape
+            .solver_report(&self.at, ray, &local, t_min, t_max)
     }
 }
 

@@ -141,6 +141,27 @@ await check("a study view differs from the shaded view", async () => {
   await fullFrameAfter(seq + 1);
 });
 
+await check("a root-finder study view shows its legend, whose colours are the image's", async () => {
+  assert.ok(await page.isHidden("#legend"), "no legend for the shaded view");
+  const seq = await sentSeq();
+  await page.selectOption("#study", "path");
+  await fullFrameAfter(seq);
+  await page.waitForSelector("#legend:not([hidden]) .swatch");
+  const swatches = await page.$$eval("#legend .swatch", (s) => s.map((e) => e.dataset.colour));
+  assert.ok(swatches.includes("#4c9be8") && swatches.length >= 5, swatches.join(" "));
+  // The heart's middle (the default heart fills the centre): all of a pixel's samples are
+  // settled the same way there, so the pixel is exactly a legend colour.
+  const centre = await page.evaluate(() => {
+    const c = document.getElementById("view");
+    const d = c.getContext("2d").getImageData(c.width >> 1, c.height >> 1, 1, 1).data;
+    return "#" + [d[0], d[1], d[2]].map((v) => v.toString(16).padStart(2, "0")).join("");
+  });
+  assert.ok(swatches.includes(centre), `centre ${centre} not in ${swatches.join(" ")}`);
+  await page.selectOption("#study", "shaded");
+  await fullFrameAfter(seq + 1);
+  assert.ok(await page.isHidden("#legend"));
+});
+
 await check("Save PNG equals `kardia render` of Copy scene", async () => {
   const kardia = process.env.KARDIA_BIN;
   assert.ok(kardia, "KARDIA_BIN names the kardia binary");

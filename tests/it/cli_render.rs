@@ -381,3 +381,26 @@ fn alpha_in_frames_and_apng_but_not_gif_or_parts() {
     }
     assert!(!dir.path().join("t.gif").exists() && !dir.path().join("p.png").exists());
 }
+
+#[test]
+fn a_solver_view_prints_its_legend_and_uses_its_colours() {
+    let dir = setup("SIZE 48 36\nCAMERA (4, 0, 0.1) (0, 0, 0.1) (0, 0, 1) 40\nHEART (0, 0, 0) (1, 0, 0) (0, 1, 0) (0, 0, 1) (0.8, 0.1, 0.1)\n");
+    let o = kardia(
+        dir.path(),
+        &[
+            "render", "s.scene", "-o", "p.png", "--view", "path", "--spp", "1",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("path view: which method settled"), "{err}");
+    assert!(err.contains("#4c9be8  Bernstein test"), "{err}");
+    // The heart's middle: a ray the Bernstein test settles, in the legend's colour exactly.
+    let img = image::open(dir.path().join("p.png")).unwrap().to_rgb8();
+    assert_eq!(img.get_pixel(24, 18).0, [0x4c, 0x9b, 0xe8]);
+    let quiet = kardia(
+        dir.path(),
+        &["render", "s.scene", "-o", "q.png", "--view", "roots", "-q"],
+    );
+    assert_eq!(stderr(&quiet), "");
+}

@@ -236,8 +236,10 @@ function onHello(m) {
     o.value = o.textContent = name;
     study.appendChild(o);
   }
+  legends = Object.fromEntries((m.legends || []).map((l) => [l.view, l]));
   const fromUrl = readUrl();
   study.value = state.view;
+  showLegend();
   if (!fromUrl) {
     openScene(m.initial[0], m.initial[1]);
   }
@@ -381,8 +383,39 @@ function setMode(mode) {
 for (const id of ["save-width", "save-height", "save-spp"]) $(id).addEventListener("change", () => update());
 $("study").addEventListener("change", () => {
   state.view = $("study").value;
+  showLegend();
   update();
 });
+
+// The study view's legend, as the server's library defines it (its colours are the PNG's).
+let legends = {};
+function showLegend() {
+  const box = $("legend");
+  const legend = legends[state.view];
+  box.hidden = !legend;
+  box.replaceChildren();
+  if (!legend) return;
+  const title = document.createElement("p");
+  title.className = "legend-title";
+  title.textContent = legend.title;
+  const list = document.createElement("ul");
+  for (const [label, colour] of legend.swatches) {
+    const item = document.createElement("li");
+    const chip = document.createElement("span");
+    chip.className = "swatch";
+    chip.style.background = colour;
+    chip.dataset.colour = colour;
+    item.append(chip, label);
+    list.appendChild(item);
+  }
+  box.append(title, list);
+  if (legend.note) {
+    const note = document.createElement("p");
+    note.className = "hint";
+    note.textContent = legend.note;
+    box.appendChild(note);
+  }
+}
 $("mode-equation").onclick = () => setMode("equation");
 $("mode-scene").onclick = () => setMode("scene");
 

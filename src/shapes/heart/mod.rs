@@ -40,7 +40,8 @@ pub use surface::{
 };
 
 use super::placed::{ObjectShape, Placed, Placement};
-use super::ShapeError;
+use super::report::Recorder;
+use super::{ShapeError, SolverReport};
 use crate::geometry::{Aabb, DVec3, Frame, Ray};
 use crate::roots::Solver;
 
@@ -54,6 +55,11 @@ pub const SELF_HIT_GUARD: f64 = 1e-6;
 /// a solver may merge into one where `f` is below its rounding over a sliver of the heart
 /// (measured up to ~1e-3 at the equator).
 const POLISH_WINDOW: f64 = 1e-2;
+
+/// How far (in units of the clipped chord) polishing must move the solver's root to count as
+/// having settled the hit (see [`SettledBy::HeartPolish`](super::SettledBy::HeartPolish)):
+/// far above the few ulps a simple root moves, far below the ~1e-5 error of `f`'s triple root.
+const POLISH_VISIBLE: f64 = 1e-9;
 
 /// How many roots may be skipped, at or before the ray's origin (a triple root of `f` splits
 /// into at most three by rounding) or off the surface (near-tangencies), before the ray is
@@ -113,7 +119,14 @@ impl Heart {
         first_root: impl FnMut(&[f64; 7], f64, f64) -> Option<f64>,
     ) -> Option<f64> {
         let local = self.placement().ray_to_object(ray);
-        HeartShape::intersect_with(self.placement(), &local, t_min, t_max, first_root)
+        HeartShape::intersect_with(
+            self.placement(),
+            &local,
+            t_min,
+            t_max,
+            first_root,
+            &mut false,
+        )
     }
 }
 
@@ -139,7 +152,9 @@ impl HeartShape {
         SELF_HIT_GUARD.max(1024.0 * f64::EPSILON * reach)
     }
 
-    /// See [`Heart::intersect_with`]; `r` is the ray in object space.
+    /// See [`Heart::intersect_with`]; `r` is the ray in object space. `polished` is set when
+    /// the checks on `g` (step 6 of the module doc) changed the first query's answer: moved
+    /// its root beyond rounding, replaced it by an earlier crossing, or skipped it.
     #[inline(always)]
     fn intersect_with(
         at: &Placement,
@@ -147,6 +162,7 @@ impl HeartShape {
         t_min: f64,
         t_max: f64,
         mut first_root: impl FnMut(&[f64; 7], f64, f64) -> Option<f64>,
+        polished: &mut bool,
     ) -> Option<f64> {
         // |d|, without the underflow or overflow of squaring tiny or huge components.
         let scale = r.dir.abs().max_element();
@@ -183,6 +199,7 @@ impl HeartShape {
             let Some(mut root) = polish(o, d, s_root, window) else {
                 // Not on the surface (a near-tangency or rounding noise the solver took for a
                 // root), and g keeps its sign within the window around it: go on past it.
+                *polished = true;
                 lo = (s_root + window).max(s_root.next_up());
                 if lo >= 1.0 {
                     return None;
@@ -198,10 +215,14 @@ impl HeartShape {
                     }
                 }
             }
+            if (root.s - s_root).abs() > POLISH_VISIBLE {
+                *polished = true;
+            }
             let t = t0 + root.s * len;
             if t > t_lo {
                 return (t < t_max).then_some(t);
             }
+            *polished = true;
             // The root is the ray's own origin (or another below the guard): rounding of a
             // multiple root may put more copies just after it, spread about as far from the
             // true root as this one; resume the search beyond them.
@@ -277,9 +298,38 @@ impl ObjectShape for HeartShape {
         t_max: f64,
     ) -> Option<f64> {
         let solver = self.solver;
-        Self::intersect_with(at, local, t_min, t_max, |c, lo, hi| {
-            solver.first_root(c, lo, hi)
-        })
+        Self::intersect_with(
+            at,
+            local,
+            t_min,
+            t_max,
+            |c, lo, hi| solver.first_root(c, lo, hi),
+            &mut false,
+        )
+    }
+
+    fn solver_report(
+        &self,
+        at: &Placement,
+        _: &Ray,
+        local: &Ray,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<SolverReport> {
+        let mut recorder = Recorder::new(self.solver);
+        let mut polished = false;
+        let hit = Self::intersect_with(
+            at,
+            local,
+            t_min,
+            t_max,
+            |c, lo, hi| recorder.first_root(c, lo, hi),
+            &mut polished,
+        );
+        // A root the solver found but the checks dropped (the ray misses) was settled by them.
+        let polished = polished || (hit.is_none() && recorder.first_answer().is_some());
+        let gradient = hit.map(|t| gradient_f(local.at(t)).length());
+        recorder.finish(hit, polished, gradient)
     }
 
     fn normal(&self, at: &Placement, q: DVec3) -> DVec3 {

@@ -30,6 +30,8 @@ pub mod presets;
 
 use super::heart::HeartShape;
 use super::placed::{ObjectShape, Placed, Placement};
+use super::report::Recorder;
+use super::SolverReport;
 use crate::geometry::{Aabb, DVec3, Frame, Ray};
 use crate::roots::Solver;
 use dd::Dd;
@@ -489,6 +491,19 @@ impl ImplicitShape {
         Some((t_mid, t_half, mid, r.dir * t_half))
     }
 
+    /// The span of `(t_min, t_max)` the `heart` preset searches: all of it when the clip
+    /// sphere holds the whole heart, else its part inside the sphere; `None` when empty.
+    #[inline]
+    fn heart_span(&self, local: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
+        if self.bound >= presets::HEART_RADIUS {
+            return Some((t_min, t_max));
+        }
+        let (t_mid, t_half, _, _) = self.chord(local)?;
+        let lo = t_min.max(t_mid - t_half);
+        let hi = t_max.min(t_mid + t_half);
+        (lo < hi).then_some((lo, hi))
+    }
+
     /// See [`Implicit::solver_query`]; `ray` in object space.
     fn solver_query(&self, ray: &Ray) -> Option<(Vec<f64>, f64, f64)> {
         match &self.kind {
@@ -553,8 +568,19 @@ impl ImplicitShape {
         })
     }
 
-    /// The generic path of [`ObjectShape::intersect`], `ray` in object space.
-    fn intersect_generic(&self, s: &Surface, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+    /// The generic path of [`ObjectShape::intersect`], `ray` in object space, its first-root
+    /// queries put to `first_root` (the solver's, plain or recorded); `recentred` is set when
+    /// a root was re-solved in double-double arithmetic.
+    #[inline(always)]
+    fn intersect_generic(
+        &self,
+        s: &Surface,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+        first_root: &mut impl FnMut(&[f64], f64, f64) -> Option<f64>,
+        recentred: &mut bool,
+    ) -> Option<f64> {
         let Query {
             t_mid,
             t_half,
@@ -568,7 +594,7 @@ impl ImplicitShape {
             s_hi,
         } = self.first_query(s, ray, t_min, t_max)?;
         for _ in 0..8 {
-            let root = self.solver.first_root(&c[..=deg], s_lo, s_hi)?;
+            let root = first_root(&c[..=deg], s_lo, s_hi)?;
             let radius = ill_conditioned(s, &c[..=deg], inv, mid, e, root);
             if radius == 0.0 {
                 let t = t_mid + root * t_half;
@@ -583,10 +609,11 @@ impl ImplicitShape {
             }
             // f64 cannot tell the roots near `root` apart: solve again there with the
             // polynomial recentred and recomputed in double-double arithmetic.
+            *recentred = true;
             let (w_lo, w_hi) = (root - radius, root + radius);
             if let Some(r) = local_root(
                 s,
-                self.solver,
+                first_root,
                 mid,
                 e,
                 root,
@@ -714,7 +741,7 @@ fn ill_conditioned(s: &Surface, c: &[f64], inv: f64, mid: [f64; 3], e: [f64; 3],
 #[allow(clippy::too_many_arguments)]
 fn local_root(
     s: &Surface,
-    solver: Solver,
+    first_root: &mut impl FnMut(&[f64], f64, f64) -> Option<f64>,
     mid: [f64; 3],
     e: [f64; 3],
     root: f64,
@@ -734,7 +761,7 @@ fn local_root(
     let (deg, _) = normalise(&mut c, s.f.degree)?;
     let u_lo = ((lo - root) / radius).max(-1.0);
     let u_hi = ((hi - root) / radius).min(1.0);
-    let u = solver.first_root(&c[..=deg], u_lo, u_hi)?;
+    let u = first_root(&c[..=deg], u_lo, u_hi)?;
     Some((root + u * radius).clamp(lo, hi))
 }
 
@@ -748,22 +775,57 @@ impl ObjectShape for ImplicitShape {
         t_max: f64,
     ) -> Option<f64> {
         match &self.kind {
-            Kind::Generic(s) => self.intersect_generic(s, local, t_min, t_max),
+            Kind::Generic(s) => {
+                let solver = self.solver;
+                self.intersect_generic(
+                    s,
+                    local,
+                    t_min,
+                    t_max,
+                    &mut |c, lo, hi| solver.first_root(c, lo, hi),
+                    &mut false,
+                )
+            }
             Kind::Heart(h) => {
-                if self.bound >= presets::HEART_RADIUS {
-                    h.intersect(at, world, local, t_min, t_max)
-                } else {
-                    let (t_mid, t_half, _, _) = self.chord(local)?;
-                    let lo = t_min.max(t_mid - t_half);
-                    let hi = t_max.min(t_mid + t_half);
-                    if lo < hi {
-                        h.intersect(at, world, local, lo, hi)
-                    } else {
-                        None
-                    }
-                }
+                let (lo, hi) = self.heart_span(local, t_min, t_max)?;
+                h.intersect(at, world, local, lo, hi)
             }
         }
+    }
+
+    fn solver_report(
+        &self,
+        at: &Placement,
+        world: &Ray,
+        local: &Ray,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<SolverReport> {
+        let s = match &self.kind {
+            Kind::Heart(h) => {
+                let (lo, hi) = self.heart_span(local, t_min, t_max)?;
+                return h.solver_report(at, world, local, lo, hi);
+            }
+            Kind::Generic(s) => s,
+        };
+        let mut recorder = Recorder::new(self.solver);
+        let mut recentred = false;
+        let hit = self.intersect_generic(
+            s,
+            local,
+            t_min,
+            t_max,
+            &mut |c, lo, hi| recorder.first_root(c, lo, hi),
+            &mut recentred,
+        );
+        if recentred {
+            recorder.recentred();
+        }
+        let gradient = hit.map(|t| {
+            let q = local.at(t).to_array();
+            DVec3::new(s.grad[0].eval(q), s.grad[1].eval(q), s.grad[2].eval(q)).length()
+        });
+        recorder.finish(hit, false, gradient)
     }
 
     fn normal(&self, at: &Placement, q: DVec3) -> DVec3 {
