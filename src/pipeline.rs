@@ -70,6 +70,10 @@ pub struct RenderRequest {
     /// (premultiplied; see [`crate::film::Image::alpha`]). `false`: an opaque image, the
     /// scene's background in the misses.
     pub alpha: bool,
+    /// At most this many shadow rays per spherical light for each sample; `None`: each
+    /// light's own `SAMPLES`. An interactive preview takes 1 (its soft shadows converge as
+    /// samples accumulate, in fewer rays a frame); a saved image keeps the scene's.
+    pub max_shadow_rays: Option<u32>,
 }
 
 impl Default for RenderRequest {
@@ -84,6 +88,7 @@ impl Default for RenderRequest {
             region: None,
             view: View::Shaded,
             alpha: false,
+            max_shadow_rays: None,
         }
     }
 }
@@ -337,6 +342,7 @@ impl Renderer {
             camera,
             spp: request.spp.max(1),
             max_depth: request.max_depth,
+            max_shadow_rays: request.max_shadow_rays,
         };
         let job = Job {
             scene,
@@ -389,6 +395,7 @@ pub fn trace_ray(scene: &Scene, request: &RenderRequest, ray: &Ray) -> DVec3 {
         camera: request.camera.as_ref().unwrap_or(&scene.camera),
         spp: request.spp.max(1),
         max_depth: request.max_depth,
+        max_shadow_rays: request.max_shadow_rays,
     };
     integrator::trace_ray(request.view, &setup, request.seed, ray)
 }

@@ -176,6 +176,7 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
         region: args.region,
         view: args.view,
         alpha: args.alpha,
+        max_shadow_rays: None,
     };
     let (full_width, full_height) = match request.full_size(&still) {
         Ok(s) => s,

@@ -205,6 +205,7 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
         region: args.region,
         view: args.view,
         alpha: args.alpha,
+        max_shadow_rays: None,
     };
     let region = request.region_in(&scene).map_err(fail)?;
     let renderer = Renderer::new(args.threads.map_or(0, |t| t as usize)).map_err(fail)?;

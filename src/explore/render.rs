@@ -42,6 +42,11 @@ pub struct PassRequest {
     pub view: View,
     /// A transparent background (the image gets alpha: see [`RenderRequest::alpha`]).
     pub alpha: bool,
+    /// A pass of the live view: one shadow ray per spherical light and sample (see
+    /// [`RenderRequest::max_shadow_rays`]), so a frame costs fewer rays and its soft shadows
+    /// converge as the passes accumulate. `false` (a saved image): each light's `SAMPLES`,
+    /// exactly as `kardia render`.
+    pub preview: bool,
 }
 
 /// One finished pass.
@@ -70,6 +75,7 @@ pub fn render_pass(
         seed: request.seed,
         view: request.view,
         alpha: request.alpha,
+        max_shadow_rays: request.preview.then_some(1),
         ..RenderRequest::default()
     };
     let rendered = renderer

@@ -253,6 +253,7 @@ mod tests {
             camera: &scene.camera,
             spp: 16,
             max_depth: 0,
+            max_shadow_rays: None,
         };
         let whitted = Whitted::new(&setup);
         let opaque = render(&scene, &whitted, 16, false);

@@ -115,7 +115,10 @@ impl<'a> Whitted<'a> {
             .iter()
             .map(|light| {
                 let rays = if light.radius > 0.0 {
-                    light.samples.max(1)
+                    light
+                        .samples
+                        .min(setup.max_shadow_rays.unwrap_or(u32::MAX))
+                        .max(1)
                 } else {
                     1
                 };

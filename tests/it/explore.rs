@@ -249,7 +249,6 @@ async fn a_view_refines_coarse_to_full_to_the_samples_limit() {
         shape,
         vec![
             (16, 12, 1),
-            (32, 24, 1),
             (128, 96, 1),
             (128, 96, 2),
             (128, 96, 4),
