@@ -27,10 +27,10 @@
 //! ```
 
 pub use crate::film::Region;
-pub use crate::integrator::View;
+pub use crate::integrator::{BandDone, View};
 
 use crate::camera::Camera;
-use crate::film::{Image, Vec3};
+use crate::film::Image;
 use crate::geometry::{DVec3, Ray};
 use crate::integrator::{self, Hooks, Job, ShadeSetup};
 use crate::scene::Scene;
@@ -64,6 +64,16 @@ pub struct RenderRequest {
     pub region: Option<Region>,
     /// Which image to make.
     pub view: View,
+    /// A transparent background: the image gets an alpha channel, each pixel's alpha the
+    /// fraction of its samples whose camera ray hit an object (so an anti-aliased edge is
+    /// partly covered), and its colour leaves out the samples that saw only the background
+    /// (premultiplied; see [`crate::film::Image::alpha`]). `false`: an opaque image, the
+    /// scene's background in the misses.
+    pub alpha: bool,
+    /// At most this many shadow rays per spherical light for each sample; `None`: each
+    /// light's own `SAMPLES`. An interactive preview takes 1 (its soft shadows converge as
+    /// samples accumulate, in fewer rays a frame); a saved image keeps the scene's.
+    pub max_shadow_rays: Option<u32>,
 }
 
 impl Default for RenderRequest {
@@ -77,6 +87,8 @@ impl Default for RenderRequest {
             max_depth: 8,
             region: None,
             view: View::Shaded,
+            alpha: false,
+            max_shadow_rays: None,
         }
     }
 }
@@ -305,13 +317,13 @@ impl Renderer {
         request: &RenderRequest,
         control: &Control,
     ) -> Result<Rendered, RenderError> {
-        self.render_in_bands(scene, request, control, &|_, _| {})
+        self.render_in_bands(scene, request, control, &|_, _, _| {})
     }
 
     /// [`Renderer::render`], also handing each finished band of rows to `band_done(first_row,
-    /// rows)` from the worker thread that rendered it (`first_row` counted in the region's
-    /// image; `rows`: whole rows of it, [`integrator::TILE_SIZE`] of them except at the bottom
-    /// edge). Bands are taken in order from the top, so they finish in nearly ascending order,
+    /// rows, alpha)` from the worker thread that rendered it (`first_row` counted in the
+    /// region's image; `rows`: whole rows of it, [`integrator::TILE_SIZE`] of them except at
+    /// the bottom edge; `alpha`: their coverage when the request asks for alpha). Bands are taken in order from the top, so they finish in nearly ascending order,
     /// each exactly once (none after a cancellation). Lets a caller consume the image while
     /// the rest is being rendered (e.g. compress it, [`crate::film::encode_png_streaming`]).
     pub fn render_in_bands(
@@ -319,7 +331,7 @@ impl Renderer {
         scene: &Scene,
         request: &RenderRequest,
         control: &Control,
-        band_done: &(dyn Fn(u32, &[Vec3]) + Sync),
+        band_done: &BandDone<'_>,
     ) -> Result<Rendered, RenderError> {
         let start = Instant::now();
         let (full_width, full_height) = request.full_size(scene)?;
@@ -330,14 +342,17 @@ impl Renderer {
             camera,
             spp: request.spp.max(1),
             max_depth: request.max_depth,
+            max_shadow_rays: request.max_shadow_rays,
         };
         let job = Job {
+            scene,
             camera,
             full_width,
             full_height,
             region,
             spp: request.spp.max(1),
             seed: request.seed,
+            alpha: request.alpha,
         };
         let total = region.pixel_count();
         let done = AtomicU64::new(0);
@@ -380,6 +395,7 @@ pub fn trace_ray(scene: &Scene, request: &RenderRequest, ray: &Ray) -> DVec3 {
         camera: request.camera.as_ref().unwrap_or(&scene.camera),
         spp: request.spp.max(1),
         max_depth: request.max_depth,
+        max_shadow_rays: request.max_shadow_rays,
     };
     integrator::trace_ray(request.view, &setup, request.seed, ray)
 }
@@ -387,6 +403,7 @@ pub fn trace_ray(scene: &Scene, request: &RenderRequest, ray: &Ray) -> DVec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::film::Vec3;
     use crate::scene::{self, LoadOptions};
     use std::sync::Mutex;
 
@@ -447,9 +464,15 @@ mod tests {
         let renderer = Renderer::new(2).unwrap();
         let seen = Mutex::new(Vec::new());
         let rendered = renderer
-            .render_in_bands(&scene, &request, &Control::default(), &|row, rows| {
-                seen.lock().unwrap().push((row, rows.to_vec()));
-            })
+            .render_in_bands(
+                &scene,
+                &request,
+                &Control::default(),
+                &|row, rows, alpha| {
+                    assert!(alpha.is_none());
+                    seen.lock().unwrap().push((row, rows.to_vec()));
+                },
+            )
             .unwrap();
         let mut seen = seen.into_inner().unwrap();
         seen.sort_by_key(|(row, _)| *row);

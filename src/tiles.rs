@@ -547,7 +547,7 @@ fn encode_png_like_render(
         .map(|c| film::srgb8_to_linear(c) as f32)
         .collect();
     let row_bytes = 3 * w as usize;
-    let ((), written) = film::encode_png_streaming(out, w, h, |sink| {
+    let ((), written) = film::encode_png_streaming(out, w, h, false, |sink| {
         for (band, rows) in rgb.chunks(row_bytes * TILE_SIZE as usize).enumerate() {
             let pixels: Vec<film::Vec3> = rows
                 .chunks_exact(3)
@@ -559,7 +559,7 @@ fn encode_png_like_render(
                     )
                 })
                 .collect();
-            sink.rows(band as u32 * TILE_SIZE, &pixels);
+            sink.rows(band as u32 * TILE_SIZE, &pixels, None);
         }
     });
     written

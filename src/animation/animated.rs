@@ -11,7 +11,8 @@ use crate::film::{Image, OutputError};
 pub enum AnimatedFormat {
     /// GIF (`.gif`): 256 colours a frame (NeuQuant quantisation), delays in 1/100 s.
     Gif,
-    /// Animated PNG (`.apng`): full 8-bit RGB frames, lossless.
+    /// Animated PNG (`.apng`): full 8-bit RGB frames (RGBA with straight alpha for frames
+    /// with alpha), lossless.
     Apng,
 }
 
@@ -33,6 +34,8 @@ pub struct AnimatedEncoder<W: Write> {
     inner: Inner<W>,
     width: u32,
     height: u32,
+    /// Whether frames are stored with alpha (APNG only).
+    alpha: bool,
 }
 
 enum Inner<W: Write> {
@@ -55,7 +58,8 @@ fn apng_delay(fps: f64) -> (u16, u16) {
 
 impl<W: Write> AnimatedEncoder<W> {
     /// Starts an animation of `frames` frames of `width × height` pixels shown at `fps` frames
-    /// per second into `out`.
+    /// per second into `out`; with `alpha`, an APNG of RGBA frames with straight alpha (a GIF
+    /// refuses it: its transparency is only on or off).
     pub fn new(
         format: AnimatedFormat,
         out: W,
@@ -63,7 +67,13 @@ impl<W: Write> AnimatedEncoder<W> {
         height: u32,
         frames: u32,
         fps: f64,
+        alpha: bool,
     ) -> Result<Self, OutputError> {
+        if alpha && format == AnimatedFormat::Gif {
+            return Err(OutputError::Encode(
+                "a GIF cannot hold partial transparency: use an APNG for alpha".into(),
+            ));
+        }
         let inner = match format {
             AnimatedFormat::Gif => {
                 let mut encoder = image::codecs::gif::GifEncoder::new_with_speed(out, 10);
@@ -75,7 +85,11 @@ impl<W: Write> AnimatedEncoder<W> {
             }
             AnimatedFormat::Apng => {
                 let mut encoder = png::Encoder::new(out, width, height);
-                encoder.set_color(png::ColorType::Rgb);
+                encoder.set_color(if alpha {
+                    png::ColorType::Rgba
+                } else {
+                    png::ColorType::Rgb
+                });
                 encoder.set_depth(png::BitDepth::Eight);
                 encoder.set_animated(frames, 0).map_err(encode_error)?;
                 let (num, den) = apng_delay(fps);
@@ -87,16 +101,25 @@ impl<W: Write> AnimatedEncoder<W> {
             inner,
             width,
             height,
+            alpha,
         })
     }
 
-    /// Adds the next frame (its size must be the animation's).
+    /// Adds the next frame (its size must be the animation's; in an animation with alpha, a
+    /// frame without alpha is stored opaque).
     pub fn add_frame(&mut self, image: &Image) -> Result<(), OutputError> {
         if (image.width, image.height) != (self.width, self.height) {
             return Err(OutputError::Encode(format!(
                 "a {}×{} frame in a {}×{} animation",
                 image.width, image.height, self.width, self.height
             )));
+        }
+        if self.alpha {
+            let rgba = image.to_srgba8();
+            return match &mut self.inner {
+                Inner::Apng(writer) => writer.write_image_data(&rgba).map_err(encode_error),
+                Inner::Gif(..) => Err(encode_error("a GIF cannot hold alpha")),
+            };
         }
         let rgb = image.to_srgb8();
         match &mut self.inner {
@@ -154,7 +177,7 @@ mod tests {
     fn apng_has_every_frame() {
         let mut bytes = Vec::new();
         let mut enc =
-            AnimatedEncoder::new(AnimatedFormat::Apng, &mut bytes, 4, 3, 2, 10.0).unwrap();
+            AnimatedEncoder::new(AnimatedFormat::Apng, &mut bytes, 4, 3, 2, 10.0, false).unwrap();
         enc.add_frame(&Image::new(4, 3)).unwrap();
         assert!(enc.add_frame(&Image::new(3, 3)).is_err());
         enc.add_frame(&Image::new(4, 3)).unwrap();
@@ -163,5 +186,24 @@ mod tests {
         let reader = decoder.read_info().unwrap();
         let control = reader.info().animation_control.unwrap();
         assert_eq!((control.num_frames, control.num_plays), (2, 0));
+    }
+
+    #[test]
+    fn apng_frames_keep_alpha_and_gif_refuses_it() {
+        let mut bytes = Vec::new();
+        let mut enc =
+            AnimatedEncoder::new(AnimatedFormat::Apng, &mut bytes, 2, 1, 1, 10.0, true).unwrap();
+        let mut frame = Image::transparent(2, 1);
+        frame.set_alpha(1, 0, 1.0);
+        enc.add_frame(&frame).unwrap();
+        enc.finish().unwrap();
+        let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+        let mut reader = decoder.read_info().unwrap();
+        assert_eq!(reader.info().color_type, png::ColorType::Rgba);
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        reader.next_frame(&mut buf).unwrap();
+        assert_eq!(&buf[..8], &[0, 0, 0, 0, 0, 0, 0, 255]);
+        let gif = AnimatedEncoder::new(AnimatedFormat::Gif, Vec::new(), 2, 1, 1, 10.0, true);
+        assert!(gif.is_err());
     }
 }

@@ -235,7 +235,7 @@ impl FrameJob {
     /// setting that changes its pixels, except the region.
     pub fn key(&self, scene: &Scene, request: &RenderRequest, frame: u32) -> String {
         let (w, h) = request.full_size(scene).unwrap_or((0, 0));
-        let settings = format!(
+        let mut settings = format!(
             "size={w}x{h} spp={} seed={} depth={} view={} solver={} frame={frame} count={} \
              turntable={:?} camera={:?}",
             request.spp,
@@ -250,6 +250,9 @@ impl FrameJob {
                 .as_ref()
                 .map(|c| (c.eye, c.look_at, c.up, c.fov_degrees)),
         );
+        if request.alpha {
+            settings.push_str(" alpha");
+        }
         tiles::render_key(&self.source.text, &settings)
     }
 
@@ -268,6 +271,12 @@ impl FrameJob {
         let region = request.region_in(&scene)?;
         let (full_width, full_height) = request.full_size(&scene)?;
         if region != Region::full(full_width, full_height) {
+            if request.alpha {
+                return Err(OutputError::Encode(
+                    "a part of a frame (a region or tile) cannot have alpha".into(),
+                )
+                .into());
+            }
             let rendered = renderer.render(&scene, &request, control)?;
             let info = PartInfo {
                 full_width,
@@ -283,12 +292,17 @@ impl FrameJob {
         }
         let mut file = AtomicFile::create(path)?;
         let rendered = if format == ImageFormat::Png {
-            let (rendered, written) =
-                film::encode_png_streaming(&mut file, region.width, region.height, |sink| {
-                    renderer.render_in_bands(&scene, &request, control, &|row, rows| {
-                        sink.rows(row, rows)
+            let (rendered, written) = film::encode_png_streaming(
+                &mut file,
+                region.width,
+                region.height,
+                request.alpha,
+                |sink| {
+                    renderer.render_in_bands(&scene, &request, control, &|row, rows, alpha| {
+                        sink.rows(row, rows, alpha)
                     })
-                });
+                },
+            );
             let rendered = rendered?;
             written?;
             rendered

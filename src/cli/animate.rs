@@ -136,6 +136,19 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
                 .into(),
         );
     }
+    if args.alpha && animated == Some(AnimatedFormat::Gif) {
+        return usage(
+            "--alpha needs an output with an alpha channel: GIF has only on/off transparency; \
+             use .apng (or .png/.exr frames with `####`)"
+                .into(),
+        );
+    }
+    if args.alpha && (a.tile.is_some() || args.region.is_some()) {
+        return usage(
+            "--alpha is not available for parts: --tile and --region render opaque parts only"
+                .into(),
+        );
+    }
     if animated.is_none() && !pattern && range.len() > 1 {
         return usage(format!(
             "{} frames need `####` in the output name for the frame number (such as \
@@ -162,6 +175,8 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
         max_depth: args.max_depth,
         region: args.region,
         view: args.view,
+        alpha: args.alpha,
+        max_shadow_rays: None,
     };
     let (full_width, full_height) = match request.full_size(&still) {
         Ok(s) => s,
@@ -338,6 +353,7 @@ fn animate_into_one_file(
         region.height,
         range.len(),
         fps,
+        job.request.alpha,
     )?;
     for frame in range.frames() {
         let (scene, request) = job.frame(frame)?;

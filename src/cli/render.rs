@@ -58,6 +58,11 @@ pub struct RenderArgs {
     /// Write an .exr output with 16-bit half-float channels instead of 32-bit float.
     #[arg(long)]
     pub half: bool,
+    /// Transparent background: each pixel's alpha is the fraction of its samples whose camera
+    /// ray hit an object. A .png is RGBA with straight alpha, an .exr RGBA with premultiplied
+    /// colours; also for frames and .apng (not .gif, --tile or --region).
+    #[arg(long)]
+    pub alpha: bool,
     /// Print nothing but errors: no progress bar, no summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -115,6 +120,7 @@ impl Default for RenderArgs {
             view: View::default(),
             region: None,
             half: false,
+            alpha: false,
             quiet: false,
             animation: AnimationArgs::default(),
         }
@@ -198,6 +204,8 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
         max_depth: args.max_depth,
         region: args.region,
         view: args.view,
+        alpha: args.alpha,
+        max_shadow_rays: None,
     };
     let region = request.region_in(&scene).map_err(fail)?;
     let renderer = Renderer::new(args.threads.map_or(0, |t| t as usize)).map_err(fail)?;
@@ -243,10 +251,13 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
                 rendered.full_height
             )
         };
-        let view = match args.view {
+        let mut view = match args.view {
             View::Shaded => String::new(),
             other => format!(", {other} view"),
         };
+        if args.alpha {
+            view.push_str(", transparent background");
+        }
         eprintln!(
             "kardia: {size}{view}, {} spp, {} thread{}, {:.2} s, {} rays, {} → {}",
             request.spp,
@@ -290,8 +301,10 @@ fn render_into(
     if format == ImageFormat::Png {
         let region = request.region_in(scene).map_err(fail)?;
         let (rendered, written) =
-            film::encode_png_streaming(file, region.width, region.height, |sink| {
-                renderer.render_in_bands(scene, request, control, &|row, rows| sink.rows(row, rows))
+            film::encode_png_streaming(file, region.width, region.height, request.alpha, |sink| {
+                renderer.render_in_bands(scene, request, control, &|row, rows, alpha| {
+                    sink.rows(row, rows, alpha)
+                })
             });
         // A cancelled render leaves the PNG unfinished: say so, not what the encoder saw.
         let rendered = rendered.map_err(render_failure)?;
@@ -354,6 +367,7 @@ mod tests {
             "--solver",
             Solver::ALL[0].1,
             "--half",
+            "--alpha",
             "--quiet",
         ])
         .unwrap()
@@ -364,6 +378,7 @@ mod tests {
             (Some(64), Some(32), 9, Some(2))
         );
         assert_eq!((a.max_depth, a.seed, a.half, a.quiet), (3, 7, true, true));
+        assert!(a.alpha);
         assert!(Wrapper::try_parse_from(["render", "--spp", "0"]).is_err());
         assert!(Wrapper::try_parse_from(["render", "--solver", "nonsense"]).is_err());
         assert!(Wrapper::try_parse_from(["render", "--width", "40000"]).is_err());

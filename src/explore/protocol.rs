@@ -49,6 +49,9 @@ pub enum ClientMessage {
         /// Which image: a name of `kardia render --view` (default `shaded`).
         #[serde(default)]
         view: Option<String>,
+        /// A transparent background: an RGBA PNG, as `kardia render --alpha` (default false).
+        #[serde(default)]
+        alpha: bool,
     },
 }
 
@@ -134,6 +137,8 @@ pub enum ServerMessage {
         initial: (String, String),
         /// The names of the views a page may ask for (`shaded` first).
         views: Vec<&'static str>,
+        /// How to read each study view's colours (every view but `shaded`).
+        legends: Vec<ViewLegend>,
     },
     /// The scene of request `seq` did not parse; the last good image stays.
     SceneError {
@@ -160,6 +165,42 @@ pub enum ServerMessage {
         /// What was wrong, for the page to show.
         message: String,
     },
+}
+
+/// A view's legend as the page shows it (see [`crate::integrator::Legend`]).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct ViewLegend {
+    /// The view's name.
+    pub view: &'static str,
+    /// What the view shows.
+    pub title: &'static str,
+    /// `(meaning, "#rrggbb")` in order: the colour as the view's PNG shows it.
+    pub swatches: Vec<(String, String)>,
+    /// Anything else to know (misses); may be empty.
+    pub note: &'static str,
+}
+
+/// The legends of every study view, in [`crate::pipeline::View::ALL`] order.
+pub fn view_legends() -> Vec<ViewLegend> {
+    crate::pipeline::View::ALL
+        .iter()
+        .filter_map(|&(view, name)| {
+            let legend = view.legend()?;
+            Some(ViewLegend {
+                view: name,
+                title: legend.title,
+                swatches: legend
+                    .swatches
+                    .into_iter()
+                    .map(|s| {
+                        let [r, g, b] = s.srgb;
+                        (s.label, format!("#{r:02x}{g:02x}{b:02x}"))
+                    })
+                    .collect(),
+                note: legend.note,
+            })
+        })
+        .collect()
 }
 
 impl ServerMessage {
@@ -282,5 +323,25 @@ mod tests {
         assert_eq!((p.line, p.column, p.length), (2, 16, 2));
         assert!(p.message.starts_with("page.scene:2:16: "), "{}", p.message);
         assert!(p.report.contains("SPHERE (0,0,0) -1"), "{}", p.report);
+    }
+
+    #[test]
+    fn hello_carries_a_legend_for_every_study_view() {
+        let legends = view_legends();
+        let names: Vec<_> = legends.iter().map(|l| l.view).collect();
+        let study: Vec<_> = crate::pipeline::View::ALL
+            .iter()
+            .map(|(_, n)| *n)
+            .filter(|n| *n != "shaded")
+            .collect();
+        assert_eq!(names, study);
+        for l in &legends {
+            assert!(l.swatches.iter().all(|(label, c)| !label.is_empty()
+                && c.len() == 7
+                && c.starts_with('#')
+                && c[1..].chars().all(|d| d.is_ascii_hexdigit())));
+        }
+        let json = serde_json::to_string(&legends[0]).unwrap();
+        assert!(json.contains(r##""swatches":[["##), "{json}");
     }
 }

@@ -40,12 +40,19 @@ pub struct PassRequest {
     pub seed: u64,
     /// Which image to make.
     pub view: View,
+    /// A transparent background (the image gets alpha: see [`RenderRequest::alpha`]).
+    pub alpha: bool,
+    /// A pass of the live view: one shadow ray per spherical light and sample (see
+    /// [`RenderRequest::max_shadow_rays`]), so a frame costs fewer rays and its soft shadows
+    /// converge as the passes accumulate. `false` (a saved image): each light's `SAMPLES`,
+    /// exactly as `kardia render`.
+    pub preview: bool,
 }
 
 /// One finished pass.
 #[derive(Debug, Clone)]
 pub struct PassResult {
-    /// The image, `width × height` linear RGB.
+    /// The image, `width × height` linear RGB (premultiplied, with alpha, when asked for).
     pub image: Image,
     /// Rays traced (primary, secondary and shadow rays).
     pub rays: u64,
@@ -67,6 +74,8 @@ pub fn render_pass(
         spp: request.spp.max(1),
         seed: request.seed,
         view: request.view,
+        alpha: request.alpha,
+        max_shadow_rays: request.preview.then_some(1),
         ..RenderRequest::default()
     };
     let rendered = renderer

@@ -1,17 +1,19 @@
-//! Encoders: an [`Image`] to PNG (8-bit sRGB) or OpenEXR (linear float) on any writer.
+//! Encoders: an [`Image`] to PNG (8-bit sRGB) or OpenEXR (linear float) on any writer; an
+//! image with alpha becomes an RGBA PNG (straight alpha) or an RGBA EXR (premultiplied).
 
-use super::{srgb8_into, AtomicFile, Image, Vec3};
+use super::{srgb8_into, srgba8_into, AtomicFile, Image, Vec3};
 use std::io::{Seek, Write};
 use std::path::Path;
 
 /// The file formats an image can be written in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ImageFormat {
-    /// 8-bit RGB PNG, sRGB-encoded (`.png`).
+    /// 8-bit RGB PNG, sRGB-encoded (`.png`); RGBA with straight alpha for an image with alpha.
     Png,
-    /// OpenEXR RGB, linear, 32-bit float channels (`.exr`, the default for EXR).
+    /// OpenEXR RGB, linear, 32-bit float channels (`.exr`, the default for EXR); RGBA with
+    /// premultiplied colours for an image with alpha.
     ExrFloat,
-    /// OpenEXR RGB, linear, 16-bit half-float channels.
+    /// OpenEXR RGB (or premultiplied RGBA), linear, 16-bit half-float channels.
     ExrHalf,
 }
 
@@ -116,23 +118,24 @@ fn check_size(image: &Image) -> Result<(), OutputError> {
     Ok(())
 }
 
-/// Encodes the image as an 8-bit sRGB PNG (each channel clamped to `[0, 1]`) into `out`.
+/// Encodes the image as an 8-bit sRGB PNG (each channel clamped to `[0, 1]`) into `out`: RGB,
+/// or for an image with alpha RGBA with straight alpha ([`Image::to_srgba8`]).
 pub fn encode_png(image: &Image, mut out: impl Write) -> Result<(), OutputError> {
     use image::ImageEncoder;
     check_size(image)?;
+    let (bytes, colour) = match image.alpha {
+        None => (image.to_srgb8(), image::ExtendedColorType::Rgb8),
+        Some(_) => (image.to_srgba8(), image::ExtendedColorType::Rgba8),
+    };
     image::codecs::png::PngEncoder::new(&mut out)
-        .write_image(
-            &image.to_srgb8(),
-            image.width,
-            image.height,
-            image::ExtendedColorType::Rgb8,
-        )
+        .write_image(&bytes, image.width, image.height, colour)
         .map_err(encode_error)?;
     out.flush().map_err(encode_error)
 }
 
 /// Encodes the image as linear-RGB OpenEXR into `out`: 32-bit float channels, or 16-bit half
-/// floats when `half` (values beyond the half range stored as `±65504`, never infinity).
+/// floats when `half` (values beyond the half range stored as `±65504`, never infinity). An
+/// image with alpha gets an A channel too, its colours premultiplied (OpenEXR's convention).
 pub fn encode_exr(
     image: &Image,
     half: bool,
@@ -143,7 +146,30 @@ pub fn encode_exr(
     let w = image.width as usize;
     let at = |v: Vec2<usize>| image.pixels[v.y() * w + v.x()];
     let size = (w, image.height as usize);
-    if half {
+    if let Some(alpha) = &image.alpha {
+        let a = |v: Vec2<usize>| alpha[v.y() * w + v.x()];
+        if half {
+            let max = f16::MAX.to_f32();
+            let h = |c: f32| f16::from_f32(c.clamp(-max, max));
+            let px = |v: Vec2<usize>| {
+                let p = at(v);
+                (h(p.x), h(p.y), h(p.z), f16::from_f32(a(v)))
+            };
+            Image::from_channels(size, SpecificChannels::rgba(px))
+                .write()
+                .to_buffered(&mut out)
+                .map_err(encode_error)?;
+        } else {
+            let px = |v: Vec2<usize>| {
+                let p = at(v);
+                (p.x, p.y, p.z, a(v))
+            };
+            Image::from_channels(size, SpecificChannels::rgba(px))
+                .write()
+                .to_buffered(&mut out)
+                .map_err(encode_error)?;
+        }
+    } else if half {
         let max = f16::MAX.to_f32();
         let h = |c: f32| f16::from_f32(c.clamp(-max, max));
         let px = |v: Vec2<usize>| {
@@ -167,7 +193,8 @@ pub fn encode_exr(
     out.flush().map_err(encode_error)
 }
 
-/// Encodes a `width × height` PNG (8-bit sRGB, fast compression) into `out` while its rows are
+/// Encodes a `width × height` PNG (8-bit sRGB, fast compression; RGBA with straight alpha
+/// when `alpha`, else RGB) into `out` while its rows are
 /// still being made: `produce` runs on the calling thread and hands finished runs of whole rows
 /// to the [`RowSink`] it is given, from any thread and in any order, each row exactly once;
 /// they are compressed, in order, on a thread of their own as soon as every row above them has
@@ -178,13 +205,15 @@ pub fn encode_png_streaming<R>(
     out: impl Write + Send,
     width: u32,
     height: u32,
+    alpha: bool,
     produce: impl FnOnce(&RowSink) -> R,
 ) -> (R, Result<(), OutputError>) {
     let (sender, receiver) = std::sync::mpsc::channel();
     std::thread::scope(|scope| {
-        let encoder = scope.spawn(move || encode_png_rows(out, width, height, receiver));
+        let encoder = scope.spawn(move || encode_png_rows(out, width, height, alpha, receiver));
         let sink = RowSink {
             width: width as usize,
+            alpha,
             sender,
         };
         let result = produce(&sink);
@@ -200,17 +229,28 @@ pub fn encode_png_streaming<R>(
 /// Where [`encode_png_streaming`]'s producer puts finished rows.
 pub struct RowSink {
     width: usize,
+    /// Whether the PNG is RGBA.
+    alpha: bool,
     sender: std::sync::mpsc::Sender<(u32, Vec<u8>)>,
 }
 
 impl RowSink {
     /// Hands over whole rows from `first_row` down (`pixels.len()` a multiple of the width;
-    /// linear RGB, converted to 8-bit sRGB here, on the caller's thread). Rows after a write
-    /// error are dropped; the error is reported when the file is finished.
-    pub fn rows(&self, first_row: u32, pixels: &[Vec3]) {
+    /// linear RGB, converted to 8-bit sRGB here, on the caller's thread) with their coverage
+    /// (`alpha`, one value a pixel, premultiplied `pixels`; `None`: opaque) for an RGBA PNG,
+    /// which an RGB PNG ignores. Rows after a write error are dropped; the error is reported
+    /// when the file is finished.
+    pub fn rows(&self, first_row: u32, pixels: &[Vec3], alpha: Option<&[f32]>) {
         debug_assert_eq!(pixels.len() % self.width.max(1), 0, "whole rows only");
-        let mut bytes = vec![0u8; 3 * pixels.len()];
-        srgb8_into(pixels, &mut bytes);
+        let bytes = if self.alpha {
+            let mut bytes = vec![0u8; 4 * pixels.len()];
+            srgba8_into(pixels, alpha, &mut bytes);
+            bytes
+        } else {
+            let mut bytes = vec![0u8; 3 * pixels.len()];
+            srgb8_into(pixels, &mut bytes);
+            bytes
+        };
         let _ = self.sender.send((first_row, bytes));
     }
 }
@@ -221,19 +261,25 @@ fn encode_png_rows(
     mut out: impl Write,
     width: u32,
     height: u32,
+    alpha: bool,
     runs: std::sync::mpsc::Receiver<(u32, Vec<u8>)>,
 ) -> Result<(), String> {
     if width == 0 || height == 0 {
         return Err(format!("the image is {width}×{height}"));
     }
     let mut encoder = png::Encoder::new(&mut out, width, height);
-    encoder.set_color(png::ColorType::Rgb);
+    let channels = if alpha { 4 } else { 3 };
+    encoder.set_color(if alpha {
+        png::ColorType::Rgba
+    } else {
+        png::ColorType::Rgb
+    });
     encoder.set_depth(png::BitDepth::Eight);
     encoder.set_compression(png::Compression::Fast);
     encoder.set_filter(png::Filter::Adaptive);
     let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
     let mut stream = writer.stream_writer().map_err(|e| e.to_string())?;
-    let row_bytes = 3 * width as usize;
+    let row_bytes = channels * width as usize;
     let mut waiting = std::collections::BTreeMap::new();
     let mut next_row = 0u32;
     for (first_row, bytes) in runs {
@@ -306,6 +352,58 @@ mod tests {
     }
 
     #[test]
+    fn alpha_round_trips_through_png_and_exr() {
+        // Premultiplied (0.25, 0.1, 0) at coverage 0.5 is the straight colour (0.5, 0.2, 0).
+        let mut img = Image::transparent(3, 1);
+        img.set(0, 0, DVec3::new(0.25, 0.1, 0.0));
+        img.set_alpha(0, 0, 0.5);
+        img.set(1, 0, DVec3::new(1.0, 0.5, 0.0));
+        img.set_alpha(1, 0, 1.0);
+        let mut png = Vec::new();
+        encode_png(&img, &mut png).unwrap();
+        let decoded = image::load_from_memory(&png).unwrap();
+        assert_eq!(decoded.color(), image::ColorType::Rgba8);
+        let decoded = decoded.to_rgba8();
+        let straight = [
+            crate::film::linear_to_srgb8(0.5),
+            crate::film::linear_to_srgb8(0.2),
+            0,
+            128,
+        ];
+        assert_eq!(decoded.get_pixel(0, 0).0, straight);
+        assert_eq!(decoded.get_pixel(1, 0).0, [255, 188, 0, 255]);
+        assert_eq!(
+            decoded.get_pixel(2, 0).0,
+            [0, 0, 0, 0],
+            "uncovered: transparent"
+        );
+        for half in [false, true] {
+            let mut exr = std::io::Cursor::new(Vec::new());
+            encode_exr(&img, half, &mut exr).unwrap();
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join("a.exr");
+            std::fs::write(&path, exr.into_inner()).unwrap();
+            let read = exr::prelude::read_first_rgba_layer_from_file(
+                &path,
+                |res, _| vec![(0.0f32, 0.0f32, 0.0f32, 0.0f32); res.width() * res.height()],
+                |v, pos, px: (f32, f32, f32, f32)| v[pos.x()] = px,
+            )
+            .unwrap();
+            let px = &read.layer_data.channel_data.pixels;
+            let tolerance = if half { 1e-3 } else { 0.0 };
+            let (r, g, b, a) = px[0];
+            assert!((r - 0.25).abs() <= tolerance && (g - 0.1).abs() <= tolerance);
+            assert_eq!((b, a), (0.0, 0.5), "premultiplied colour, coverage in A");
+            assert_eq!(px[2], (0.0, 0.0, 0.0, 0.0));
+        }
+        // Without alpha nothing changes: an RGB PNG.
+        let mut opaque = Vec::new();
+        encode_png(&Image::new(2, 2), &mut opaque).unwrap();
+        let decoded = image::load_from_memory(&opaque).unwrap();
+        assert_eq!(decoded.color(), image::ColorType::Rgb8);
+    }
+
+    #[test]
     fn encoders_write_to_memory() {
         let mut img = Image::new(2, 2);
         img.set(0, 0, DVec3::new(1e9, 0.5, -1.0));
@@ -335,56 +433,72 @@ mod tests {
 
     #[test]
     fn streamed_png_has_the_same_pixels_whatever_the_order_of_rows() {
-        let dir = tempfile::tempdir().unwrap();
-        let (w, h) = (37u32, 29u32);
-        let mut img = Image::new(w, h);
-        for y in 0..h {
-            for x in 0..w {
-                let v = DVec3::new(x as f64 / 36.0, y as f64 / 28.0, ((x * y) % 7) as f64 / 5.0);
-                img.set(x, y, v);
-            }
-        }
-        let whole = dir.path().join("whole.png");
-        write_image(&img, &whole).unwrap();
-        let streamed = dir.path().join("streamed.png");
-        let row = |y: u32| &img.pixels[(y * w) as usize..((y + 1) * w) as usize];
-        let mut file = AtomicFile::create(&streamed).unwrap();
-        let (answer, written) = encode_png_streaming(&mut file, w, h, |sink| {
-            // Bottom runs first, from two threads, in runs of uneven size.
-            std::thread::scope(|s| {
-                s.spawn(|| {
-                    sink.rows(20, &img.pixels[(20 * w) as usize..]);
-                    sink.rows(10, &img.pixels[(10 * w) as usize..(20 * w) as usize]);
-                });
-                s.spawn(|| {
-                    for y in (0..10).rev() {
-                        sink.rows(y, row(y));
+        for alpha in [false, true] {
+            let dir = tempfile::tempdir().unwrap();
+            let (w, h) = (37u32, 29u32);
+            let mut img = Image::new(w, h);
+            for y in 0..h {
+                for x in 0..w {
+                    let v =
+                        DVec3::new(x as f64 / 36.0, y as f64 / 28.0, ((x * y) % 7) as f64 / 5.0);
+                    img.set(x, y, v);
+                    if alpha {
+                        img.set_alpha(x, y, ((x + y) % 5) as f64 / 4.0);
                     }
+                }
+            }
+            let whole = dir.path().join("whole.png");
+            write_image(&img, &whole).unwrap();
+            let streamed = dir.path().join("streamed.png");
+            let rows = |y0: u32, y1: u32| {
+                let range = (y0 * w) as usize..(y1 * w) as usize;
+                let alpha = img.alpha.as_ref().map(|a| &a[range.clone()]);
+                (&img.pixels[range], alpha)
+            };
+            let mut file = AtomicFile::create(&streamed).unwrap();
+            let (answer, written) = encode_png_streaming(&mut file, w, h, alpha, |sink| {
+                // Bottom runs first, from two threads, in runs of uneven size.
+                std::thread::scope(|s| {
+                    s.spawn(|| {
+                        let (p, a) = rows(20, h);
+                        sink.rows(20, p, a);
+                        let (p, a) = rows(10, 20);
+                        sink.rows(10, p, a);
+                    });
+                    s.spawn(|| {
+                        for y in (0..10).rev() {
+                            let (p, a) = rows(y, y + 1);
+                            sink.rows(y, p, a);
+                        }
+                    });
                 });
+                42
             });
-            42
-        });
-        written.unwrap();
-        file.commit().unwrap();
-        assert_eq!(answer, 42);
-        let a = image::open(&whole).unwrap().to_rgb8();
-        let b = image::open(&streamed).unwrap().to_rgb8();
-        assert_eq!(a, b);
-        assert_eq!(listing_len(dir.path()), 2, "a temporary file was left");
+            written.unwrap();
+            file.commit().unwrap();
+            assert_eq!(answer, 42);
+            let a = image::open(&whole).unwrap();
+            let b = image::open(&streamed).unwrap();
+            assert_eq!(a.color().has_alpha(), alpha);
+            assert_eq!(b.color().has_alpha(), alpha);
+            assert_eq!(a.to_rgba8(), b.to_rgba8());
+            assert_eq!(listing_len(dir.path()), 2, "a temporary file was left");
+        }
     }
 
     #[test]
     fn streamed_png_with_missing_or_repeated_rows_fails() {
         let img = Image::new(4, 3);
-        let (_, missing) =
-            encode_png_streaming(Vec::new(), 4, 3, |sink| sink.rows(0, &img.pixels[..8]));
+        let (_, missing) = encode_png_streaming(Vec::new(), 4, 3, false, |sink| {
+            sink.rows(0, &img.pixels[..8], None)
+        });
         assert!(missing.is_err());
-        let (_, twice) = encode_png_streaming(Vec::new(), 4, 3, |sink| {
-            sink.rows(0, &img.pixels);
-            sink.rows(1, &img.pixels[4..8]);
+        let (_, twice) = encode_png_streaming(Vec::new(), 4, 3, true, |sink| {
+            sink.rows(0, &img.pixels, None);
+            sink.rows(1, &img.pixels[4..8], None);
         });
         assert!(twice.is_err());
-        let (_, empty) = encode_png_streaming(Vec::new(), 0, 3, |_| ());
+        let (_, empty) = encode_png_streaming(Vec::new(), 0, 3, false, |_| ());
         assert!(empty.is_err());
     }
 
@@ -397,6 +511,7 @@ mod tests {
             width: 2,
             height: 2,
             pixels: vec![Vec3::ZERO; 3],
+            alpha: None,
         };
         assert!(write_image(&bad, &target).is_err());
         assert_eq!(std::fs::read(&target).unwrap(), b"old");

@@ -9,6 +9,12 @@
 //! The film never stores NaN or infinity, whatever the scene: at store time a NaN channel
 //! becomes 0 and a channel beyond the `f32` range becomes `±f32::MAX` ([`to_stored`]).
 //!
+//! An image may carry coverage ([`Image::alpha`], a transparent background): then its colours
+//! are premultiplied (the background's samples contribute nothing) and each pixel has the
+//! fraction of its samples whose camera ray hit an object. PNG stores that as straight
+//! (unassociated) 8-bit alpha, as the PNG specification says ([`Image::to_srgba8`]); EXR
+//! stores the premultiplied colours and the A channel, as OpenEXR's convention says.
+//!
 //! Output: [`encode_png`] and [`encode_exr`] write an image to any writer,
 //! [`encode_png_streaming`] compresses a PNG's rows while they are still being rendered, and
 //! [`AtomicFile`] makes a file appear complete or not at all.
@@ -27,7 +33,8 @@ use crate::geometry::DVec3;
 pub use glam::Vec3;
 
 /// A rendered image: `width × height` linear-RGB pixels, row-major, top row first, each
-/// channel stored as an `f32` (the nearest to the `f64` value rendered).
+/// channel stored as an `f32` (the nearest to the `f64` value rendered), and optionally the
+/// coverage of each pixel (`alpha`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Image {
     /// Width in pixels.
@@ -36,8 +43,13 @@ pub struct Image {
     pub height: u32,
     /// Pixels, `width·height` of them, row-major from the top-left; linear RGB in `f32`,
     /// unclamped (values above 1 and negative values are kept as rendered). Everything the
-    /// renderer and [`Image::set`] store is finite (see [`to_stored`]).
+    /// renderer and [`Image::set`] store is finite (see [`to_stored`]). With `alpha`, these
+    /// are premultiplied: a pixel's colour already weighted by its coverage.
     pub pixels: Vec<Vec3>,
+    /// `None`: an opaque image (the scene's background fills the misses). `Some`: one value
+    /// a pixel, in the order of `pixels`, each in `[0, 1]` (never NaN): the fraction of the
+    /// pixel's samples whose camera ray hit an object, 0 where only background was seen.
+    pub alpha: Option<Vec<f32>>,
 }
 
 impl Image {
@@ -47,7 +59,37 @@ impl Image {
             width,
             height,
             pixels: vec![Vec3::ZERO; width as usize * height as usize],
+            alpha: None,
         }
+    }
+
+    /// A fully transparent image of the given size (colour 0 and alpha 0 everywhere).
+    pub fn transparent(width: u32, height: u32) -> Self {
+        let count = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            pixels: vec![Vec3::ZERO; count],
+            alpha: Some(vec![0.0; count]),
+        }
+    }
+
+    /// The coverage of the pixel at column `x`, row `y`: its alpha, or 1 in an opaque image.
+    /// Panics outside the image.
+    pub fn alpha_at(&self, x: u32, y: u32) -> f64 {
+        assert!(x < self.width && y < self.height, "pixel out of range");
+        let index = y as usize * self.width as usize + x as usize;
+        self.alpha.as_ref().map_or(1.0, |a| a[index] as f64)
+    }
+
+    /// Stores the coverage `alpha` of the pixel at column `x`, row `y`, clamped to `[0, 1]`
+    /// (NaN stored as 0), making the image one with alpha (every other pixel opaque) if it
+    /// was not. Panics outside the image.
+    pub fn set_alpha(&mut self, x: u32, y: u32, alpha: f64) {
+        assert!(x < self.width && y < self.height, "pixel out of range");
+        let index = y as usize * self.width as usize + x as usize;
+        let count = self.pixels.len();
+        self.alpha.get_or_insert_with(|| vec![1.0; count])[index] = to_stored_alpha(alpha);
     }
 
     /// The pixel at column `x`, row `y` (row 0 at the top), widened exactly from the stored
@@ -67,18 +109,29 @@ impl Image {
     /// The pixels of `region` as an image of its own. Panics unless the region lies inside.
     pub fn crop(&self, region: Region) -> Image {
         assert!(region.fits(self.width, self.height), "region out of range");
-        let mut out = Image::new(region.width, region.height);
         let (w, rw) = (self.width as usize, region.width as usize);
-        for (row, dst) in out.pixels.chunks_exact_mut(rw.max(1)).enumerate() {
+        let rows = |row: usize| {
             let start = (region.y as usize + row) * w + region.x as usize;
-            dst.copy_from_slice(&self.pixels[start..start + rw]);
+            start..start + rw
+        };
+        let height = region.height as usize;
+        Image {
+            width: region.width,
+            height: region.height,
+            pixels: (0..height)
+                .flat_map(|row| self.pixels[rows(row)].iter().copied())
+                .collect(),
+            alpha: self.alpha.as_ref().map(|alpha| {
+                (0..height)
+                    .flat_map(|row| alpha[rows(row)].iter().copied())
+                    .collect()
+            }),
         }
-        out
     }
 
     /// Copies `tile` into this image with its top-left corner at column `x`, row `y` (e.g. a
-    /// rendered region back into the full image at the region's corner). Panics unless the
-    /// tile lies inside.
+    /// rendered region back into the full image at the region's corner), alpha included.
+    /// Panics unless the tile lies inside and both images have alpha or neither has.
     pub fn paste(&mut self, x: u32, y: u32, tile: &Image) {
         let at = Region {
             x,
@@ -87,10 +140,21 @@ impl Image {
             height: tile.height,
         };
         assert!(at.fits(self.width, self.height), "tile out of range");
+        assert_eq!(
+            self.alpha.is_some(),
+            tile.alpha.is_some(),
+            "a tile with alpha pasted into an image without, or the other way round"
+        );
         let (w, tw) = (self.width as usize, tile.width as usize);
         for (row, src) in tile.pixels.chunks_exact(tw.max(1)).enumerate() {
             let start = (y as usize + row) * w + x as usize;
             self.pixels[start..start + tw].copy_from_slice(src);
+        }
+        if let (Some(dst), Some(src)) = (self.alpha.as_mut(), tile.alpha.as_ref()) {
+            for (row, src) in src.chunks_exact(tw.max(1)).enumerate() {
+                let start = (y as usize + row) * w + x as usize;
+                dst[start..start + tw].copy_from_slice(src);
+            }
         }
     }
 
@@ -103,6 +167,29 @@ impl Image {
             .par_chunks_mut(3 * 4096)
             .zip(self.pixels.par_chunks(4096))
             .for_each(|(out, px)| srgb8_into(px, out));
+        bytes
+    }
+
+    /// The image as 8-bit sRGB bytes with straight (unassociated) alpha, `R, G, B, A` per
+    /// pixel, row-major: the colour of the covered part of each pixel (its premultiplied
+    /// colour divided by its coverage, then as [`Image::to_srgb8`]) and the coverage rounded to
+    /// the nearest of 0 ..= 255. A pixel whose alpha rounds to 0 is `0, 0, 0, 0`; an opaque
+    /// image gives alpha 255 everywhere and the colours of [`Image::to_srgb8`].
+    pub fn to_srgba8(&self) -> Vec<u8> {
+        use rayon::prelude::*;
+        let mut bytes = vec![0u8; self.pixels.len() * 4];
+        let chunk = 4096;
+        bytes
+            .par_chunks_mut(4 * chunk)
+            .zip(self.pixels.par_chunks(chunk))
+            .enumerate()
+            .for_each(|(i, (out, px))| {
+                let alpha = self
+                    .alpha
+                    .as_ref()
+                    .map(|a| &a[i * chunk..i * chunk + px.len()]);
+                srgba8_into(px, alpha, out);
+            });
         bytes
     }
 }
@@ -164,6 +251,35 @@ pub fn to_stored(value: DVec3) -> Vec3 {
         }
     };
     Vec3::new(channel(value.x), channel(value.y), channel(value.z))
+}
+
+/// The value the film stores for a coverage `alpha`: clamped to `[0, 1]`, NaN as 0.
+#[inline]
+pub fn to_stored_alpha(alpha: f64) -> f32 {
+    if alpha.is_nan() {
+        0.0
+    } else {
+        alpha.clamp(0.0, 1.0) as f32
+    }
+}
+
+/// Writes premultiplied `pixels` with coverage `alpha` (`None`: opaque) as straight-alpha
+/// 8-bit sRGBA bytes (see [`Image::to_srgba8`]) into `out`, which holds four bytes a pixel.
+pub(crate) fn srgba8_into(pixels: &[Vec3], alpha: Option<&[f32]>, out: &mut [u8]) {
+    let table = srgb8_table();
+    for (i, (o, p)) in out.chunks_exact_mut(4).zip(pixels).enumerate() {
+        let a = alpha.map_or(1.0, |a| a[i] as f64);
+        let a8 = (a * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8;
+        if a8 == 0 {
+            o.copy_from_slice(&[0; 4]);
+            continue;
+        }
+        let straight = |c: f32| if a >= 1.0 { c as f64 } else { c as f64 / a };
+        o[0] = table.code(straight(p.x));
+        o[1] = table.code(straight(p.y));
+        o[2] = table.code(straight(p.z));
+        o[3] = a8;
+    }
 }
 
 /// Writes `pixels` as 8-bit sRGB bytes (`R, G, B` each) into `out`, which holds three bytes
@@ -319,6 +435,42 @@ mod tests {
         let mut img = Image::new(1, 1);
         img.set(0, 0, DVec3::splat(f64::NAN));
         assert_eq!(img.pixels[0], Vec3::ZERO);
+    }
+
+    #[test]
+    fn alpha_is_stored_in_range_and_follows_crop_and_paste() {
+        let mut img = Image::new(4, 3);
+        assert_eq!(img.alpha_at(1, 1), 1.0, "opaque without alpha");
+        img.set_alpha(1, 1, 0.25);
+        assert_eq!(img.alpha_at(1, 1), 0.25);
+        assert_eq!(img.alpha_at(0, 0), 1.0, "the others stay opaque");
+        img.set_alpha(2, 1, f64::NAN);
+        img.set_alpha(3, 1, 7.0);
+        img.set_alpha(0, 2, -1.0);
+        assert_eq!(
+            (img.alpha_at(2, 1), img.alpha_at(3, 1), img.alpha_at(0, 2)),
+            (0.0, 1.0, 0.0)
+        );
+        let region = Region {
+            x: 1,
+            y: 1,
+            width: 3,
+            height: 2,
+        };
+        let tile = img.crop(region);
+        assert_eq!(tile.alpha_at(0, 0), 0.25);
+        let mut back = Image::transparent(4, 3);
+        back.paste(1, 1, &tile);
+        assert_eq!(back.crop(region), tile);
+        assert_eq!(back.alpha_at(0, 0), 0.0);
+        let rgba = img.to_srgba8();
+        assert_eq!(&rgba[..4], &[0, 0, 0, 255]);
+        assert_eq!(&rgba[4 * 5..4 * 5 + 4], &[0, 0, 0, 64]);
+        assert_eq!(&rgba[4 * 6..4 * 6 + 4], &[0, 0, 0, 0]);
+        assert_eq!(
+            Image::new(2, 1).to_srgba8(),
+            vec![0, 0, 0, 255, 0, 0, 0, 255]
+        );
     }
 
     #[test]

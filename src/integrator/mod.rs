@@ -29,6 +29,7 @@ pub use legend::{Legend, Swatch};
 pub use sampling::{strata, stratified_point, Sample};
 pub use whitted::{MAX_SHADOW_CROSSINGS, SELF_HIT_EPS};
 
+pub use scheduler::BandDone;
 pub(crate) use scheduler::{Hooks, Job};
 
 use crate::camera::Camera;
@@ -60,6 +61,9 @@ pub struct ShadeSetup<'a> {
     pub spp: u32,
     /// Maximum depth of reflection and refraction (0 = primary hits only).
     pub max_depth: u32,
+    /// At most this many shadow rays per spherical light and sample (`None`: each light's
+    /// `SAMPLES`; see [`crate::pipeline::RenderRequest::max_shadow_rays`]).
+    pub max_shadow_rays: Option<u32>,
 }
 
 /// Which image a render makes: the shaded picture or a study view of the geometry.
@@ -217,6 +221,7 @@ pub(crate) mod tests {
             camera: &scene.camera,
             spp: 1,
             max_depth: 0,
+            max_shadow_rays: None,
         }
     }
 

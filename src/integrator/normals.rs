@@ -44,7 +44,9 @@ pub fn legend() -> super::Legend {
 impl Shader for Normals<'_> {
     fn radiance(&self, ray: &Ray, sample: &mut Sample) -> DVec3 {
         sample.count_ray();
-        match self.scene.intersect(ray, 0.0, f64::INFINITY) {
+        let hit = self.scene.intersect(ray, 0.0, f64::INFINITY);
+        sample.report_primary_hit(hit.is_some());
+        match hit {
             Some(hit) => (hit.normal + DVec3::ONE) * 0.5,
             None => DVec3::ZERO,
         }

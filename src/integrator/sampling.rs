@@ -53,7 +53,8 @@ pub(crate) fn pixel_key(mixed_seed: u64, x: u32, y: u32) -> u64 {
 
 /// The state of one pixel's samples, handed to a [`Shader`](super::Shader) with each primary
 /// ray: the pixel's random stream, which sample of the pixel this is (for stratified light
-/// sampling), and a counter of the rays traced.
+/// sampling), a counter of the rays traced, and whether the primary ray hit an object (for
+/// the coverage of a transparent background).
 pub struct Sample {
     rng: rand_pcg::Pcg64Mcg,
     /// Key of the pixel, to derive each light's stratum rotation.
@@ -64,6 +65,9 @@ pub struct Sample {
     count: u32,
     /// Rays traced so far for this pixel (a plain integer: no atomics per ray).
     pub(crate) rays: u64,
+    /// What the shader said of the current sample's primary ray ([`Sample::report_primary_hit`]);
+    /// `None` until it says.
+    pub(crate) primary_hit: Option<bool>,
 }
 
 impl Sample {
@@ -76,6 +80,18 @@ impl Sample {
             index,
             count: count.max(1),
             rays: 0,
+            primary_hit: None,
+        }
+    }
+
+    /// Says whether this sample's primary (camera) ray hit an object; only the first report
+    /// of a sample counts, so a shader may call it for every ray it traces, the primary one
+    /// first. Optional: a shader that does not report spares nothing, and the render traces
+    /// the primary ray once more when it needs the pixel's coverage (a transparent background).
+    #[inline]
+    pub fn report_primary_hit(&mut self, hit: bool) {
+        if self.primary_hit.is_none() {
+            self.primary_hit = Some(hit);
         }
     }
 

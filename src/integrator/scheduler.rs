@@ -1,18 +1,23 @@
 //! The scheduler: a region of the image cut into bands of [`TILE_SIZE`] rows (each rendered as
 //! `TILE_SIZE`-square tiles), taken in order from a shared counter by the threads of a pool,
 //! each written straight into its rows of the region's image; cancellation checked before every
-//! tile, progress reported after every tile, finished bands handed to a hook.
+//! tile, progress reported after every tile, finished bands handed to a hook. With `alpha`,
+//! each pixel also gets its coverage (the fraction of its samples whose camera ray hit an
+//! object) and its colour leaves out the samples that saw only the background.
 
 use super::sampling::{mix, pixel_key, point_in_grid, strata, Sample};
 use super::{Shader, TILE_SIZE};
 use crate::camera::Camera;
 use crate::film::{self, Image, Region, Vec3};
+use crate::scene::Scene;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 /// What one render samples: the camera, the full image's size, the region of it to render,
-/// the samples per pixel and the seed.
+/// the samples per pixel and the seed, and whether to measure coverage.
 pub(crate) struct Job<'a> {
+    /// The scene the shader shades (to find the coverage of a shader that does not report it).
+    pub scene: &'a Scene,
     pub camera: &'a Camera,
     pub full_width: u32,
     pub full_height: u32,
@@ -20,7 +25,13 @@ pub(crate) struct Job<'a> {
     pub region: Region,
     pub spp: u32,
     pub seed: u64,
+    /// Make an image with alpha (see the module docs).
+    pub alpha: bool,
 }
+
+/// A hook handed each finished band of a render: its first row, its pixels and, for a
+/// render with alpha, their coverage (see [`Hooks::band_done`]).
+pub type BandDone<'a> = dyn Fn(u32, &[Vec3], Option<&[f32]>) + Sync + 'a;
 
 /// The caller's side of a render, all called from worker threads.
 pub(crate) struct Hooks<'a> {
@@ -28,11 +39,12 @@ pub(crate) struct Hooks<'a> {
     pub cancelled: &'a (dyn Fn() -> bool + Sync),
     /// Told how many pixels each finished tile held.
     pub tile_done: &'a (dyn Fn(u64) + Sync),
-    /// Handed each finished band: its first row (in the region's image) and its pixels (whole
-    /// rows of the region's image, [`TILE_SIZE`] of them except at the bottom edge). Bands are
-    /// taken in order from the top, so they finish in nearly ascending order, each exactly
-    /// once; never called for a band left unfinished by a cancellation.
-    pub band_done: &'a (dyn Fn(u32, &[Vec3]) + Sync),
+    /// Handed each finished band: its first row (in the region's image), its pixels (whole
+    /// rows of the region's image, [`TILE_SIZE`] of them except at the bottom edge) and, for
+    /// a job with alpha, their coverage. Bands are taken in order from the top, so they
+    /// finish in nearly ascending order, each exactly once; never called for a band left
+    /// unfinished by a cancellation.
+    pub band_done: &'a BandDone<'a>,
 }
 
 /// Renders `job.region` with `shader` on the threads of `pool`; returns the region's image and
@@ -46,20 +58,33 @@ pub(crate) fn run<S: Shader>(
     let region = job.region;
     let (width, height) = (region.width, region.height);
     let sampler = PixelSampler {
+        scene: job.scene,
+        alpha: job.alpha,
         camera: job.camera,
         full: (job.full_width, job.full_height),
         spp: job.spp.max(1),
         pixel_grid: strata(job.spp),
         seed: mix(job.seed),
     };
-    let mut image = Image::new(width, height);
+    let mut image = if job.alpha {
+        Image::transparent(width, height)
+    } else {
+        Image::new(width, height)
+    };
     // Each band of TILE_SIZE rows is a disjoint slice of the image, filled in place tile by
     // tile: no per-tile buffers, so the film exists once. Workers take the next band from a
     // shared counter: bands finish in order from the top, and a worker that runs out of work
     // waits for one band at most.
     let band_len = width as usize * TILE_SIZE as usize;
-    let bands: Vec<Mutex<&mut [Vec3]>> =
-        image.pixels.chunks_mut(band_len).map(Mutex::new).collect();
+    let mut alpha_bands = image.alpha.as_mut().map(|a| a.chunks_mut(band_len));
+    let bands: Vec<Mutex<Band>> = image
+        .pixels
+        .chunks_mut(band_len)
+        .map(|pixels| {
+            let alpha = alpha_bands.as_mut().and_then(Iterator::next);
+            Mutex::new(Band { pixels, alpha })
+        })
+        .collect();
     let next_band = AtomicUsize::new(0);
     let rays = AtomicU64::new(0);
     let stopped = AtomicBool::new(false);
@@ -84,7 +109,7 @@ pub(crate) fn run<S: Shader>(
             (hooks.tile_done)(((x1 - x0) * (y1 - y0)) as u64);
         }
         rays.fetch_add(band_rays, Ordering::Relaxed);
-        (hooks.band_done)(y0, &out);
+        (hooks.band_done)(y0, &*out.pixels, out.alpha.as_deref());
     };
     pool.broadcast(|_| worker());
     drop(bands);
@@ -94,8 +119,17 @@ pub(crate) fn run<S: Shader>(
     Some((image, rays.into_inner()))
 }
 
+/// One band of rows of the region's image: its pixels and, with alpha, their coverage.
+struct Band<'a> {
+    pixels: &'a mut [Vec3],
+    alpha: Option<&'a mut [f32]>,
+}
+
 /// Everything fixed for one render's pixels.
 struct PixelSampler<'a> {
+    scene: &'a Scene,
+    /// Whether to find each pixel's coverage (and leave the misses out of its colour).
+    alpha: bool,
     camera: &'a Camera,
     /// The full image's size, which the camera spans.
     full: (u32, u32),
@@ -110,7 +144,9 @@ impl PixelSampler<'_> {
     /// Renders the tile of columns `xs` and rows `ys` of the region's image into `band`, the
     /// region's rows from `ys.0` on (`width` wide), each pixel's `f64` mean stored as the film
     /// stores it; returns the rays traced. Pixel `(x, y)` of the region is pixel
-    /// `(region.x + x, region.y + y)` of the full image, and is sampled as that pixel.
+    /// `(region.x + x, region.y + y)` of the full image, and is sampled as that pixel. With
+    /// alpha, a sample whose primary ray hit nothing adds nothing to the colour (which is thus
+    /// premultiplied) and the pixel's alpha is the fraction of samples that hit.
     fn tile<S: Shader>(
         &self,
         shader: &S,
@@ -118,7 +154,7 @@ impl PixelSampler<'_> {
         (x0, x1): (u32, u32),
         (y0, y1): (u32, u32),
         width: u32,
-        band: &mut [Vec3],
+        band: &mut Band,
     ) -> u64 {
         let mut rays = 0;
         let inv = 1.0 / self.spp as f64;
@@ -129,19 +165,131 @@ impl PixelSampler<'_> {
                 let image_x = region.x + x;
                 let mut state = Sample::new(pixel_key(self.seed, image_x, image_y), 0, self.spp);
                 let mut sum = crate::geometry::DVec3::ZERO;
+                let mut hits = 0u32;
                 for i in 0..self.spp {
                     state.index = i;
+                    state.primary_hit = None;
                     let (u, v) = (state.uniform(), state.uniform());
                     let (dx, dy) = point_in_grid(i, self.pixel_grid, u, v);
                     let ray =
                         self.camera
                             .ray(image_x as f64 + dx, image_y as f64 + dy, full_w, full_h);
-                    sum += shader.radiance(&ray, &mut state);
+                    let colour = shader.radiance(&ray, &mut state);
+                    if !self.alpha {
+                        sum += colour;
+                    } else if self.primary_hit(&ray, &mut state) {
+                        sum += colour;
+                        hits += 1;
+                    }
                 }
                 rays += state.rays;
-                band[((y - y0) * width + x) as usize] = film::to_stored(sum * inv);
+                let index = ((y - y0) * width + x) as usize;
+                band.pixels[index] = film::to_stored(sum * inv);
+                if let Some(alpha) = band.alpha.as_deref_mut() {
+                    alpha[index] = film::to_stored_alpha(hits as f64 * inv);
+                }
             }
         }
         rays
+    }
+
+    /// Whether the sample's primary `ray` hit an object: as its shader reported, or else
+    /// found here (one more ray traced).
+    fn primary_hit(&self, ray: &crate::geometry::Ray, state: &mut Sample) -> bool {
+        state.primary_hit.unwrap_or_else(|| {
+            state.count_ray();
+            self.scene.intersect(ray, 0.0, f64::INFINITY).is_some()
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{DVec3, Ray};
+    use crate::integrator::tests::unit_sphere_scene;
+    use crate::integrator::{whitted::Whitted, ShadeSetup};
+
+    /// White wherever it looks, and says nothing of what its rays hit.
+    struct Silent;
+    impl Shader for Silent {
+        fn radiance(&self, _: &Ray, _: &mut Sample) -> DVec3 {
+            DVec3::ONE
+        }
+    }
+
+    fn render<S: Shader>(scene: &Scene, shader: &S, spp: u32, alpha: bool) -> Image {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let job = Job {
+            scene,
+            camera: &scene.camera,
+            full_width: scene.width,
+            full_height: scene.height,
+            region: Region::full(scene.width, scene.height),
+            spp,
+            seed: 3,
+            alpha,
+        };
+        let hooks = Hooks {
+            cancelled: &|| false,
+            tile_done: &|_| {},
+            band_done: &|_, pixels, band_alpha| {
+                assert_eq!(band_alpha.map(<[f32]>::len), alpha.then_some(pixels.len()));
+            },
+        };
+        run(&pool, shader, &job, &hooks).unwrap().0
+    }
+
+    #[test]
+    fn coverage_is_the_fraction_of_samples_that_hit() {
+        let mut scene = unit_sphere_scene();
+        scene.background = DVec3::new(0.2, 0.4, 0.6);
+        scene.ambient = DVec3::ONE;
+        let setup = ShadeSetup {
+            scene: &scene,
+            camera: &scene.camera,
+            spp: 16,
+            max_depth: 0,
+            max_shadow_rays: None,
+        };
+        let whitted = Whitted::new(&setup);
+        let opaque = render(&scene, &whitted, 16, false);
+        assert_eq!(opaque.alpha, None);
+        let image = render(&scene, &whitted, 16, true);
+        let alpha = image.alpha.clone().unwrap();
+        assert_eq!(
+            image.alpha_at(0, 0),
+            0.0,
+            "a corner sees only the background"
+        );
+        assert_eq!(image.get(0, 0), DVec3::ZERO, "and keeps none of its colour");
+        assert_eq!(
+            opaque.get(0, 0),
+            DVec3::new(0.2, 0.4, 0.6).as_vec3().as_dvec3()
+        );
+        assert_eq!(image.alpha_at(4, 4), 1.0, "the sphere covers the centre");
+        assert_eq!(
+            image.get(4, 4),
+            opaque.get(4, 4),
+            "a covered pixel keeps its colour"
+        );
+        let edges: Vec<f32> = alpha
+            .iter()
+            .copied()
+            .filter(|a| *a > 0.0 && *a < 1.0)
+            .collect();
+        assert!(!edges.is_empty(), "the silhouette is partly covered");
+        for a in &alpha {
+            assert_eq!((a * 16.0).fract(), 0.0, "a multiple of 1/16: {a}");
+        }
+        // A shader that does not report its hits gets the same coverage (found again).
+        let silent = render(&scene, &Silent, 16, true);
+        assert_eq!(silent.alpha, image.alpha);
+        for (p, a) in silent.pixels.iter().zip(&alpha) {
+            assert_eq!(*p, Vec3::splat(*a), "white premultiplied by its coverage");
+        }
     }
 }

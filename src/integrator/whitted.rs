@@ -117,7 +117,10 @@ impl<'a> Whitted<'a> {
             .iter()
             .map(|light| {
                 let rays = if light.radius > 0.0 {
-                    light.samples.max(1)
+                    light
+                        .samples
+                        .min(setup.max_shadow_rays.unwrap_or(u32::MAX))
+                        .max(1)
                 } else {
                     1
                 };
@@ -140,7 +143,11 @@ impl<'a> Whitted<'a> {
     fn trace(&self, ray: &Ray, t_min: f64, depth: u32, s: &mut Sample) -> DVec3 {
         s.count_ray();
         let scene = self.scene;
-        let Some(hit) = scene.intersect(ray, t_min, f64::INFINITY) else {
+        let hit = scene.intersect(ray, t_min, f64::INFINITY);
+        if depth == 0 {
+            s.report_primary_hit(hit.is_some());
+        }
+        let Some(hit) = hit else {
             return scene.background;
         };
         let m = &scene.objects[hit.object].material;

@@ -140,3 +140,55 @@ impl Recorder {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{DVec3, Ray};
+    use crate::shapes::{Heart, Shape};
+
+    fn heart() -> Heart {
+        Heart::new(DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z).unwrap()
+    }
+
+    #[test]
+    fn reports_agree_with_the_intersection() {
+        let h = heart();
+        for (o, d) in [
+            (DVec3::new(3.0, 0.0, 0.1), DVec3::new(-1.0, 0.0, 0.0)),
+            (DVec3::new(0.0, -3.0, 1.05), DVec3::Y),
+            (DVec3::new(0.3, -3.0, 1.3), DVec3::new(0.0, 1.0, -0.05)),
+            (DVec3::new(1.0 / 2f64.sqrt(), -3.0, 0.0), DVec3::Y),
+        ] {
+            let ray = Ray::new(o, d);
+            let r = h.solver_report(&ray, 0.0, f64::INFINITY).expect("queried");
+            assert_eq!(r.hit, h.intersect(&ray, 0.0, f64::INFINITY), "{o} {d}");
+            assert_eq!(r.degree, 6);
+            assert!(r.trace.queries >= 1);
+            assert_eq!(r.gradient_norm.is_some(), r.hit.is_some());
+        }
+    }
+
+    #[test]
+    fn hard_rays_are_settled_past_the_bernstein_test() {
+        // A camera ray grazing the equator curve from above (found by scanning 640 000 rays
+        // from four cameras: 24 were settled by the heart's checks, 704 by the subdivision).
+        let h = heart();
+        let d = DVec3::new(
+            -0.7753928328783044,
+            0.07073378062855698,
+            -0.7140419714547241,
+        );
+        let grazing = Ray::new(DVec3::new(2.0, -1.0, 1.5), d);
+        let r = h
+            .solver_report(&grazing, 0.0, f64::INFINITY)
+            .expect("queried");
+        assert!(r.hit.is_some());
+        assert_eq!(r.settled_by, SettledBy::HeartPolish, "{r:?}");
+        // The sixfold root where the plane Z = 0 touches the equator curve.
+        let equator = Ray::new(DVec3::new(1.0 / 2f64.sqrt(), -3.0, 0.0), DVec3::Y);
+        let r = h.solver_report(&equator, 0.0, f64::INFINITY).unwrap();
+        assert_ne!(r.settled_by, SettledBy::Solver(Path::Bernstein), "{r:?}");
+        assert_eq!(r.distinct_roots, 1, "{r:?}");
+    }
+}

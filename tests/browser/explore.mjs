@@ -7,6 +7,7 @@ import { execFileSync } from "node:child_process";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
 import assert from "node:assert/strict";
+import pngjs from "pngjs";
 
 const url = process.argv[2];
 if (!url) throw new Error("usage: node tests/browser/explore.mjs URL");
@@ -140,6 +141,27 @@ await check("a study view differs from the shaded view", async () => {
   await fullFrameAfter(seq + 1);
 });
 
+await check("a root-finder study view shows its legend, whose colours are the image's", async () => {
+  assert.ok(await page.isHidden("#legend"), "no legend for the shaded view");
+  const seq = await sentSeq();
+  await page.selectOption("#study", "path");
+  await fullFrameAfter(seq);
+  await page.waitForSelector("#legend:not([hidden]) .swatch");
+  const swatches = await page.$$eval("#legend .swatch", (s) => s.map((e) => e.dataset.colour));
+  assert.ok(swatches.includes("#4c9be8") && swatches.length >= 5, swatches.join(" "));
+  // The heart's middle (the default heart fills the centre): all of a pixel's samples are
+  // settled the same way there, so the pixel is exactly a legend colour.
+  const centre = await page.evaluate(() => {
+    const c = document.getElementById("view");
+    const d = c.getContext("2d").getImageData(c.width >> 1, c.height >> 1, 1, 1).data;
+    return "#" + [d[0], d[1], d[2]].map((v) => v.toString(16).padStart(2, "0")).join("");
+  });
+  assert.ok(swatches.includes(centre), `centre ${centre} not in ${swatches.join(" ")}`);
+  await page.selectOption("#study", "shaded");
+  await fullFrameAfter(seq + 1);
+  assert.ok(await page.isHidden("#legend"));
+});
+
 await check("Save PNG equals `kardia render` of Copy scene", async () => {
   const kardia = process.env.KARDIA_BIN;
   assert.ok(kardia, "KARDIA_BIN names the kardia binary");
@@ -176,6 +198,50 @@ await check("Save PNG equals `kardia render` of Copy scene", async () => {
   assert.equal(same.differing, 0, "every pixel equal");
 });
 
+await check("a transparent Save PNG equals `kardia render --alpha` of Copy scene", async () => {
+  const kardia = process.env.KARDIA_BIN;
+  assert.ok(kardia, "KARDIA_BIN names the kardia binary");
+  await page.click('#gallery button[data-preset="heart"]');
+  await fullFrameAfter((await sentSeq()) - 1);
+  const [w, h, spp] = ["160", "120", "2"];
+  await page.fill("#save-width", w);
+  await page.fill("#save-height", h);
+  await page.fill("#save-spp", spp);
+  await page.check("#save-alpha");
+  assert.match(page.url(), /[#&]alpha=1(&|$)/, "the option is in the URL");
+  await page.evaluate(() => { window.kardia.lastPng = null; });
+  await page.click("#save");
+  await page.waitForFunction(() => window.kardia.lastPng, null, { timeout: 60000 });
+  const saved = Buffer.from(await page.evaluate(async () => {
+    const bytes = new Uint8Array(await window.kardia.lastPng.arrayBuffer());
+    let s = "";
+    for (const b of bytes) s += String.fromCharCode(b);
+    return btoa(s);
+  }), "base64");
+  await page.click("#copy-scene");
+  const scene = await page.evaluate(() => window.kardia.clipboard);
+  const dir = mkdtempSync(join(tmpdir(), "kardia-save-"));
+  writeFileSync(join(dir, "copied.scene"), scene);
+  execFileSync(kardia, ["render", join(dir, "copied.scene"), "-o", join(dir, "cli.png"),
+    "--width", w, "--height", h, "--spp", spp, "--alpha", "--quiet"]);
+  const cli = readFileSync(join(dir, "cli.png"));
+  rmSync(dir, { recursive: true, force: true });
+  // Decoded exactly (a canvas would premultiply), straight RGBA as the files hold it.
+  const a = pngjs.PNG.sync.read(saved), b = pngjs.PNG.sync.read(cli);
+  assert.deepEqual([a.width, a.height, a.colorType, a.depth], [160, 120, 6, 8], "the saved PNG is 8-bit RGBA");
+  assert.deepEqual([b.width, b.height, b.colorType, b.depth], [160, 120, 6, 8]);
+  const alphaAt = (png, x, y) => png.data[(y * png.width + x) * 4 + 3];
+  assert.equal(alphaAt(a, 0, 0), 0, "a corner is transparent");
+  assert.equal(alphaAt(a, 80, 60), 255, "the heart's centre is opaque");
+  const partial = a.data.filter((v, i) => i % 4 === 3 && v > 0 && v < 255).length;
+  assert.ok(partial > 0, "the silhouette is partly transparent");
+  let differing = 0;
+  for (let i = 0; i < a.width * a.height; i++) {
+    if (a.data.readUInt32BE(4 * i) !== b.data.readUInt32BE(4 * i)) differing++;
+  }
+  assert.equal(differing, 0, "every RGBA pixel equal");
+});
+
 await check("a copied link restores the view", async () => {
   const box = await page.locator("#view").boundingBox();
   await page.mouse.move(box.x + 100, box.y + 100);
@@ -193,6 +259,7 @@ await check("a copied link restores the view", async () => {
   assert.equal(await second.evaluate(() => window.kardia.currentScene()), text);
   assert.equal(await second.inputValue("#equation"), scene);
   assert.equal(await second.evaluate(() => window.kardia.state.mode), "equation");
+  assert.ok(await second.isChecked("#save-alpha"), "the transparent background comes back");
   await second.close();
 });
 

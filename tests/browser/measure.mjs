@@ -1,14 +1,50 @@
-// Measures `kardia explore` in chromium (a script, not a test): for each surface, the time
-// from an input event (a drag step, handled at once by the page) to the first coarse frame
-// drawn and to the full 800×600 frame at 1 sample, and frames drawn per second during a
-// steady drag. Usage: node tests/browser/measure.mjs URL [RUNS] [SCREENSHOT_DIR]
+// Measures `kardia explore` in chromium (a script, not a test): for the heart and Barth's
+// sextic in equation mode at a fixed 800×600 view, the time from an input event (a drag step;
+// the page sends the view from its event handler) to the first coarse frame drawn and to the
+// full 800×600 frame at 1 sample, over RUNS drag steps, and the frames drawn per second during
+// RUNS steady drags of 3 s; prints one JSON line per surface with the medians (and every run).
+//
+// Usage:
+//   node tests/browser/measure.mjs --kardia target/release/kardia [RUNS] [SCREENSHOT_DIR]
+//     starts `kardia explore --port 0` itself (stopped at the end), or
+//   node tests/browser/measure.mjs URL [RUNS] [SCREENSHOT_DIR]
+//     measures a server already running at URL.
+// RUNS defaults to 5; with SCREENSHOT_DIR, a screenshot of each surface at ≥ 8 spp is saved
+// there as explorer_PRESET.png.
 import { chromium } from "playwright-core";
+import { spawn } from "node:child_process";
 import { mkdtempSync, rmSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
 
-const [url, runsArg, shots] = process.argv.slice(2);
-const runs = Number(runsArg || 5);
+const args = process.argv.slice(2);
+let server = null;
+let url;
+if (args[0] === "--kardia") {
+  if (!args[1]) throw new Error("usage: measure.mjs --kardia BINARY [RUNS] [SCREENSHOT_DIR]");
+  server = spawn(args[1], ["explore", "--port", "0"], { stdio: ["ignore", "pipe", "inherit"] });
+  url = await new Promise((resolve, reject) => {
+    let out = "";
+    server.stdout.on("data", (chunk) => {
+      out += chunk;
+      const m = out.match(/kardia explore: (http:\/\/\S+)/);
+      if (m) resolve(m[1]);
+    });
+    server.on("exit", (code) => reject(new Error(`kardia explore exited (${code}) before printing its URL`)));
+    setTimeout(() => reject(new Error("kardia explore printed no URL within 30 s")), 30000);
+  });
+  args.splice(0, 2);
+} else {
+  url = args.shift();
+  if (!url || !/^http:\/\//.test(url)) {
+    throw new Error("usage: measure.mjs (--kardia BINARY | URL) [RUNS] [SCREENSHOT_DIR]");
+  }
+}
+const runs = Number(args[0] || 5);
+if (!Number.isInteger(runs) || runs < 1) throw new Error(`RUNS must be a whole number ≥ 1, not ${args[0]}`);
+const shots = args[1];
+const [W, H] = [800, 600];
+
 const profile = mkdtempSync(join(tmpdir(), "kardia-chromium-"));
 const context = await chromium.launchPersistentContext(profile, {
   executablePath: process.env.CHROMIUM || "/usr/bin/chromium",
@@ -18,58 +54,92 @@ const context = await chromium.launchPersistentContext(profile, {
   viewport: { width: 1200, height: 760 },
 });
 const page = context.pages()[0] || (await context.newPage());
-const median = (xs) => [...xs].sort((a, b) => a - b)[Math.floor(xs.length / 2)];
+const pageErrors = [];
+page.on("pageerror", (e) => pageErrors.push(e.message));
+const median = (xs) => {
+  const s = [...xs].sort((a, b) => a - b);
+  const m = s.length >> 1;
+  return s.length % 2 ? s[m] : (s[m - 1] + s[m]) / 2;
+};
+const isFull = (f) => f.width === W && f.height === H;
+const sent = () => page.evaluate(() => window.kardia.sent());
+// Frames of requests after `seq` received so far (the page keeps the last 200).
+const framesAfter = (seq) => page.evaluate((s) => window.kardia.frames.filter((f) => f.seq > s), seq);
 
-for (const preset of ["heart", "barth_sextic"]) {
-  await page.goto("about:blank");
-  await page.goto(`${url}#mode=equation&preset=${preset}&size=800x600`);
-  await page.waitForFunction(() => window.kardia.frames.some((f) => f.width === 800 && f.spp === 1), null, { timeout: 120000 });
-  if (shots) {
-    await page.waitForFunction(() => window.kardia.frames.at(-1).spp >= 8, null, { timeout: 120000 }).catch(() => {});
-    await page.screenshot({ path: join(shots, `explorer_${preset}.png`) });
+try {
+  for (const preset of ["heart", "barth_sextic"]) {
+    await page.goto("about:blank");
+    await page.goto(`${url}#mode=equation&preset=${preset}&size=${W}x${H}`);
+    await page.waitForFunction(([w, h]) => window.kardia.frames.some((f) => f.width === w && f.height === h),
+      [W, H], { timeout: 120000 });
+    if (shots) {
+      await page.waitForFunction(() => window.kardia.frames.at(-1).spp >= 8, null, { timeout: 120000 }).catch(() => {});
+      await page.screenshot({ path: join(shots, `explorer_${preset}.png`) });
+    }
+    const box = await page.locator("#view").boundingBox();
+    const [cx, cy] = [box.x + box.width / 2, box.y + box.height / 2];
+    const coarse = [], full = [], fullPassMs = [], coarsePassMs = [];
+    for (let i = 0; i < runs; i++) {
+      // Each step starts while the previous view is refining, as when a user drags again.
+      await page.waitForTimeout(300);
+      const seq = await sent();
+      await page.mouse.move(cx, cy);
+      await page.mouse.down();
+      await page.mouse.move(cx + 12, cy + 2);
+      await page.mouse.up();
+      if ((await sent()) !== seq + 1) throw new Error(`a drag step sent ${(await sent()) - seq} views, not 1`);
+      await page.waitForFunction(([s, w, h]) => window.kardia.frames.some((f) => f.seq > s && f.width === w && f.height === h),
+        [seq, W, H], { timeout: 120000 });
+      const frames = await framesAfter(seq);
+      const first = frames[0];
+      if (isFull(first) || first.pass !== 0) throw new Error(`the first frame was not a coarse one: ${JSON.stringify(first)}`);
+      const f = frames.find(isFull);
+      if (f.spp !== 1) throw new Error(`the first full-size frame has ${f.spp} spp`);
+      coarse.push(first.sinceInput);
+      coarsePassMs.push(first.ms);
+      full.push(f.sinceInput);
+      fullPassMs.push(f.ms);
+    }
+    // Steady drags: one move every 16 ms for 3 s each.
+    const fps = [], fullFps = [], sentPerSecond = [];
+    for (let i = 0; i < runs; i++) {
+      await page.waitForTimeout(300);
+      const seqBefore = await sent();
+      await page.mouse.move(cx, cy);
+      await page.mouse.down();
+      const start = Date.now();
+      let step = 0;
+      while (Date.now() - start < 3000) {
+        step += 1;
+        await page.mouse.move(cx + 100 * Math.sin(step / 20), cy + 30 * Math.cos(step / 20));
+        await page.waitForTimeout(16);
+      }
+      const seconds = (Date.now() - start) / 1000;
+      const drawn = await framesAfter(seqBefore);
+      await page.mouse.up();
+      fps.push(drawn.length / seconds);
+      fullFps.push(drawn.filter(isFull).length / seconds);
+      sentPerSecond.push(((await sent()) - seqBefore) / seconds);
+    }
+    const round = (xs) => xs.map((x) => Math.round(x));
+    const tenth = (x) => Math.round(x * 10) / 10;
+    console.log(JSON.stringify({
+      surface: preset,
+      runs,
+      first_coarse_ms_median: Math.round(median(coarse)),
+      first_coarse_ms: round(coarse),
+      coarse_pass_render_ms_median: tenth(median(coarsePassMs)),
+      full_800x600_1spp_ms_median: Math.round(median(full)),
+      full_ms: round(full),
+      full_pass_render_ms_median: Math.round(median(fullPassMs)),
+      drag_frames_per_second_median: tenth(median(fps)),
+      drag_full_size_frames_per_second_median: tenth(median(fullFps)),
+      drag_views_sent_per_second_median: tenth(median(sentPerSecond)),
+    }));
   }
-  const box = await page.locator("#view").boundingBox();
-  const [cx, cy] = [box.x + box.width / 2, box.y + box.height / 2];
-  const coarse = [], full = [], passMs = [];
-  for (let i = 0; i < runs; i++) {
-    const seq = await page.evaluate(() => window.kardia.sent());
-    await page.mouse.move(cx, cy);
-    await page.mouse.down();
-    await page.mouse.move(cx + 12, cy + 2);
-    await page.mouse.up();
-    await page.waitForFunction((s) => window.kardia.frames.some((f) => f.seq > s && f.width === 800), seq, { timeout: 120000 });
-    const frames = await page.evaluate((s) => window.kardia.frames.filter((f) => f.seq > s), seq);
-    coarse.push(frames[0].sinceInput);
-    const f = frames.find((f) => f.width === 800);
-    full.push(f.sinceInput);
-    passMs.push(f.ms);
-  }
-  // A steady drag: one move every 16 ms for 3 s.
-  const seqBefore = await page.evaluate(() => window.kardia.sent());
-  const start = Date.now();
-  await page.mouse.move(cx, cy);
-  await page.mouse.down();
-  let i = 0;
-  while (Date.now() - start < 3000) {
-    i += 1;
-    await page.mouse.move(cx + 100 * Math.sin(i / 20), cy + 30 * Math.cos(i / 20));
-    await page.waitForTimeout(16);
-  }
-  await page.mouse.up();
-  const seconds = (Date.now() - start) / 1000;
-  const drawn = await page.evaluate((s) => window.kardia.frames.filter((f) => f.seq > s).length, seqBefore);
-  const sent = (await page.evaluate(() => window.kardia.sent())) - seqBefore;
-  console.log(JSON.stringify({
-    surface: preset,
-    runs,
-    first_coarse_ms_median: Math.round(median(coarse)),
-    first_coarse_ms: coarse.map(Math.round),
-    full_800x600_1spp_ms_median: Math.round(median(full)),
-    full_ms: full.map(Math.round),
-    full_pass_render_ms_median: Math.round(median(passMs)),
-    drag_frames_per_second: +(drawn / seconds).toFixed(1),
-    drag_views_sent_per_second: +(sent / seconds).toFixed(1),
-  }));
+  if (pageErrors.length) throw new Error(`script errors on the page: ${pageErrors.join("; ")}`);
+} finally {
+  await context.close();
+  rmSync(profile, { recursive: true, force: true });
+  if (server) server.kill("SIGINT");
 }
-await context.close();
-rmSync(profile, { recursive: true, force: true });

@@ -253,3 +253,154 @@ fn interrupt_exits_130_and_writes_nothing() {
     assert_eq!(status.code(), Some(130), "{status:?}");
     assert_eq!(listing(dir.path()), ["s.scene"]);
 }
+
+/// SCENE without its floor: the sphere alone in front of the background.
+fn sphere_alone() -> String {
+    SCENE
+        .lines()
+        .filter(|l| !l.starts_with("PLANE"))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn alpha_png_is_rgba_with_transparent_background_and_partial_edges() {
+    let dir = setup(&sphere_alone());
+    let run = |args: &[&str]| {
+        let o = kardia(dir.path(), args);
+        assert!(o.status.success(), "{}", stderr(&o));
+    };
+    run(&[
+        "render", "s.scene", "-o", "a.png", "--spp", "4", "--alpha", "--quiet",
+    ]);
+    run(&["render", "s.scene", "-o", "o.png", "--spp", "4", "--quiet"]);
+    let alpha = image::open(dir.path().join("a.png")).unwrap();
+    assert_eq!(alpha.color(), image::ColorType::Rgba8);
+    let opaque = image::open(dir.path().join("o.png")).unwrap();
+    assert_eq!(
+        opaque.color(),
+        image::ColorType::Rgb8,
+        "no --alpha: RGB as before"
+    );
+    let (alpha, opaque) = (alpha.to_rgba8(), opaque.to_rgb8());
+    for (x, y) in [(0, 0), (39, 0), (0, 29), (39, 29)] {
+        assert_eq!(alpha.get_pixel(x, y).0, [0, 0, 0, 0], "corner ({x}, {y})");
+    }
+    let centre = alpha.get_pixel(20, 15).0;
+    assert_eq!(centre[3], 255);
+    assert_eq!(
+        centre[..3],
+        opaque.get_pixel(20, 15).0,
+        "a covered pixel keeps its colour"
+    );
+    let partial = alpha.pixels().filter(|p| p[3] > 0 && p[3] < 255).count();
+    assert!(
+        partial > 10,
+        "{partial} partly covered pixels on the silhouette"
+    );
+
+    run(&[
+        "render", "s.scene", "-o", "a.exr", "--spp", "4", "--alpha", "--quiet",
+    ]);
+    let exr = exr::prelude::read_first_rgba_layer_from_file(
+        dir.path().join("a.exr"),
+        |res, _| vec![(0.0f32, 0.0f32, 0.0f32, 0.0f32); res.width() * res.height()],
+        |v, pos, px: (f32, f32, f32, f32)| v[pos.y() * 40 + pos.x()] = px,
+    )
+    .unwrap();
+    let px = &exr.layer_data.channel_data.pixels;
+    assert_eq!(
+        px[0],
+        (0.0, 0.0, 0.0, 0.0),
+        "premultiplied: a miss is all zero"
+    );
+    assert_eq!(px[15 * 40 + 20].3, 1.0);
+}
+
+#[test]
+fn alpha_in_frames_and_apng_but_not_gif_or_parts() {
+    let dir = setup(&sphere_alone());
+    let o = kardia(
+        dir.path(),
+        &[
+            "render",
+            "s.scene",
+            "--turntable",
+            "2",
+            "-o",
+            "f_####.png",
+            "--alpha",
+            "--quiet",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    for frame in ["f_0000.png", "f_0001.png"] {
+        let image = image::open(dir.path().join(frame)).unwrap();
+        assert_eq!(image.color(), image::ColorType::Rgba8, "{frame}");
+        assert_eq!(image.to_rgba8().get_pixel(0, 0).0[3], 0);
+    }
+    let o = kardia(
+        dir.path(),
+        &[
+            "render",
+            "s.scene",
+            "--turntable",
+            "2",
+            "-o",
+            "t.apng",
+            "--alpha",
+            "--quiet",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let reader = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(dir.path().join("t.apng")).unwrap(),
+    ))
+    .read_info()
+    .unwrap();
+    assert_eq!(reader.info().color_type, png::ColorType::Rgba);
+    for (args, says) in [
+        (
+            &["-o", "t.gif", "--turntable", "2"][..],
+            "GIF has only on/off transparency",
+        ),
+        (
+            &["-o", "p.png", "--tile", "0/2"][..],
+            "--alpha is not available for parts",
+        ),
+        (
+            &["-o", "p.png", "--region", "0,0,8,8"][..],
+            "--alpha is not available for parts",
+        ),
+    ] {
+        let mut all = vec!["render", "s.scene", "--alpha", "--quiet"];
+        all.extend_from_slice(args);
+        let o = kardia(dir.path(), &all);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        assert!(stderr(&o).contains(says), "{args:?}: {}", stderr(&o));
+    }
+    assert!(!dir.path().join("t.gif").exists() && !dir.path().join("p.png").exists());
+}
+
+#[test]
+fn a_solver_view_prints_its_legend_and_uses_its_colours() {
+    let dir = setup("SIZE 48 36\nCAMERA (4, 0, 0.1) (0, 0, 0.1) (0, 0, 1) 40\nHEART (0, 0, 0) (1, 0, 0) (0, 1, 0) (0, 0, 1) (0.8, 0.1, 0.1)\n");
+    let o = kardia(
+        dir.path(),
+        &[
+            "render", "s.scene", "-o", "p.png", "--view", "path", "--spp", "1",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("path view: which method settled"), "{err}");
+    assert!(err.contains("#4c9be8  Bernstein test"), "{err}");
+    // The heart's middle: a ray the Bernstein test settles, in the legend's colour exactly.
+    let img = image::open(dir.path().join("p.png")).unwrap().to_rgb8();
+    assert_eq!(img.get_pixel(24, 18).0, [0x4c, 0x9b, 0xe8]);
+    let quiet = kardia(
+        dir.path(),
+        &["render", "s.scene", "-o", "q.png", "--view", "roots", "-q"],
+    );
+    assert_eq!(stderr(&quiet), "");
+}

@@ -18,8 +18,10 @@ fn missing_tools(root: &Path) -> Vec<String> {
     if Command::new("node").arg("--version").output().is_err() {
         missing.push("node".into());
     }
-    if !root.join("node_modules/playwright-core").exists() {
-        missing.push("node_modules/playwright-core (run `npm ci`)".into());
+    for package in ["playwright-core", "pngjs"] {
+        if !root.join("node_modules").join(package).exists() {
+            missing.push(format!("node_modules/{package} (run `npm ci`)"));
+        }
     }
     missing
 }

@@ -34,3 +34,4 @@ mod scene_fuzz;
 mod scene_ranges;
 mod shapes_props;
 mod specks;
+mod study_views;

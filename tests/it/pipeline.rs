@@ -460,3 +460,42 @@ fn cli_renders_regions_and_views() {
         ["normals.png", "part.png", "whole.png"]
     );
 }
+
+/// `max_shadow_rays` caps each spherical light's shadow rays per sample (the explorer's live
+/// view takes 1); without it the scene's `SAMPLES` hold, and the cap changes nothing for a
+/// light that has fewer.
+#[test]
+fn shadow_rays_per_light_can_be_capped_for_previews() {
+    let scene = default_heart(); // a spherical light with SAMPLES 4, and a point light
+    let renderer = Renderer::new(2).unwrap();
+    let render = |cap: Option<u32>| {
+        let request = RenderRequest {
+            width: Some(48),
+            height: Some(48),
+            spp: 2,
+            max_shadow_rays: cap,
+            ..RenderRequest::default()
+        };
+        renderer
+            .render(&scene, &request, &Control::default())
+            .unwrap()
+    };
+    let full = render(None);
+    let same = render(Some(4));
+    let preview = render(Some(1));
+    assert_eq!(full.image.to_srgb8(), same.image.to_srgb8());
+    assert_eq!(full.stats.rays, same.stats.rays);
+    assert!(
+        preview.stats.rays * 10 < full.stats.rays * 7,
+        "{} vs {}",
+        preview.stats.rays,
+        full.stats.rays
+    );
+    // Same picture up to the soft shadows' noise: the mean colour within 2 %.
+    let mean = |r: &Rendered| {
+        let v = r.image.to_srgb8();
+        v.iter().map(|&c| c as f64).sum::<f64>() / v.len() as f64
+    };
+    let (a, b) = (mean(&full), mean(&preview));
+    assert!((a - b).abs() < 0.02 * a, "{a} vs {b}");
+}

@@ -170,6 +170,7 @@ fn background8() -> [u8; 3] {
         width: 1,
         height: 1,
         pixels: vec![BACKGROUND.as_vec3()],
+        alpha: None,
     })[0]
 }
 

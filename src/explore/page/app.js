@@ -198,7 +198,7 @@ function onBinary(buffer) {
   }
   const ms = performance.now() - stats.firstInput;
   window.kardia.frames.push({ ...header, sinceInput: ms });
-  if (window.kardia.frames.length > 200) window.kardia.frames.shift();
+  if (window.kardia.frames.length > 1000) window.kardia.frames.shift();
   const rate = header.ms > 0 ? header.rays / (header.ms / 1000) : 0;
   $("status").textContent =
     `${header.width}×${header.height}` +
@@ -236,8 +236,10 @@ function onHello(m) {
     o.value = o.textContent = name;
     study.appendChild(o);
   }
+  legends = Object.fromEntries((m.legends || []).map((l) => [l.view, l]));
   const fromUrl = readUrl();
   study.value = state.view;
+  showLegend();
   if (!fromUrl) {
     openScene(m.initial[0], m.initial[1]);
   }
@@ -381,8 +383,39 @@ function setMode(mode) {
 for (const id of ["save-width", "save-height", "save-spp"]) $(id).addEventListener("change", () => update());
 $("study").addEventListener("change", () => {
   state.view = $("study").value;
+  showLegend();
   update();
 });
+
+// The study view's legend, as the server's library defines it (its colours are the PNG's).
+let legends = {};
+function showLegend() {
+  const box = $("legend");
+  const legend = legends[state.view];
+  box.hidden = !legend;
+  box.replaceChildren();
+  if (!legend) return;
+  const title = document.createElement("p");
+  title.className = "legend-title";
+  title.textContent = legend.title;
+  const list = document.createElement("ul");
+  for (const [label, colour] of legend.swatches) {
+    const item = document.createElement("li");
+    const chip = document.createElement("span");
+    chip.className = "swatch";
+    chip.style.background = colour;
+    chip.dataset.colour = colour;
+    item.append(chip, label);
+    list.appendChild(item);
+  }
+  box.append(title, list);
+  if (legend.note) {
+    const note = document.createElement("p");
+    note.className = "hint";
+    note.textContent = legend.note;
+    box.appendChild(note);
+  }
+}
 $("mode-equation").onclick = () => setMode("equation");
 $("mode-scene").onclick = () => setMode("scene");
 
@@ -529,8 +562,10 @@ $("save").onclick = () => {
   const spp = Number($("save-spp").value) || 1;
   pendingSave = { seq: seq + 1000000 };
   $("message").textContent = `rendering ${width}×${height} at ${spp} spp…`;
-  send({ type: "save", seq: pendingSave.seq, scene: currentScene(), width, height, spp, view: state.view });
+  const alpha = $("save-alpha").checked;
+  send({ type: "save", seq: pendingSave.seq, scene: currentScene(), width, height, spp, view: state.view, alpha });
 };
+$("save-alpha").addEventListener("change", () => writeUrl());
 
 function onPng(header, payload) {
   const blob = new Blob([payload], { type: "image/png" });
@@ -576,6 +611,7 @@ function writeUrl() {
   }
   if (state.view !== "shaded") q.set("view", state.view);
   q.set("save", [...saveSize(), Number($("save-spp").value) || 1].join("x"));
+  if ($("save-alpha").checked) q.set("alpha", "1");
   if (state.mode === "equation") q.set("scale", fmt(state.scale));
   if (state.fixedSize) q.set("size", state.fixedSize.join("x"));
   history.replaceState(null, "", "#" + q.toString());
@@ -589,6 +625,7 @@ function readUrl() {
   if (hello.views.includes(q.get("view"))) state.view = q.get("view");
   const save = (q.get("save") || "").match(/^(\d+)x(\d+)x(\d+)$/);
   if (save) [$("save-width").value, $("save-height").value, $("save-spp").value] = save.slice(1);
+  $("save-alpha").checked = q.get("alpha") === "1";
   if (!q.has("mode")) return false;
   if (q.has("scale")) state.scale = Number(q.get("scale")) || 1;
   state.mode = q.get("mode") === "equation" ? "equation" : "scene";

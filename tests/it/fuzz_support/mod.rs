@@ -716,6 +716,7 @@ pub fn renders_finite(scene: &Scene, seed: u64) -> bool {
         camera: &scene.camera,
         spp: 1,
         max_depth: 8,
+        max_shadow_rays: None,
     };
     let traced_ok = (0..height).all(|y| {
         (0..width).all(|x| {
