@@ -7,8 +7,8 @@
 //!   another camera, size, region or view: nothing here mutates the scene.
 //! - Keep one [`Renderer`] per process: it owns the thread pool, reused by every render, and
 //!   may serve several renders at once from several threads.
-//! - A [`Control`] carries a [`CancelToken`] (checked before every 16×16 tile) and a progress
-//!   callback.
+//! - A [`Control`] carries a [`CancelToken`] (checked before every row of every 16×16 tile)
+//!   and a progress callback.
 //! - A [`Region`] renders exactly the pixels the full image has there (the same samples, byte
 //!   for byte), so regions rendered apart, on any machines, join into the whole image.
 //! - Encode the result with [`crate::film::encode_png`] / [`crate::film::encode_exr`] to any

@@ -39,7 +39,7 @@ use crate::scene::Scene;
 
 /// Side of the square image tiles, in pixels; each band of tiles one `TILE_SIZE` tall is one
 /// unit of parallel work, rendered straight into its rows of the image. Cancellation is
-/// checked before every tile.
+/// checked before every row of every tile.
 pub const TILE_SIZE: u32 = 16;
 
 /// One way of shading a ray: the colour (linear RGB, finite or not: the film makes it finite)

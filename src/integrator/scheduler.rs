@@ -1,7 +1,8 @@
 //! The scheduler: a region of the image cut into bands of [`TILE_SIZE`] rows (each rendered as
 //! `TILE_SIZE`-square tiles), taken in order from a shared counter by the threads of a pool,
-//! each written straight into its rows of the region's image; cancellation checked before every
-//! tile, progress reported after every tile, finished bands handed to a hook. With `alpha`,
+//! each written straight into its rows of the region's image; cancellation checked before
+//! every row of every tile, progress reported after every tile, finished bands handed to a
+//! hook. With `alpha`,
 //! each pixel also gets its coverage (the fraction of its samples whose camera ray hit an
 //! object) and its colour leaves out the samples that saw only the background.
 
@@ -35,7 +36,7 @@ pub type BandDone<'a> = dyn Fn(u32, &[Vec3], Option<&[f32]>) + Sync + 'a;
 
 /// The caller's side of a render, all called from worker threads.
 pub(crate) struct Hooks<'a> {
-    /// Asked before each tile; once it answers true, no more tiles are started.
+    /// Asked before each row of each tile; once it answers true, no more rows are started.
     pub cancelled: &'a (dyn Fn() -> bool + Sync),
     /// Told how many pixels each finished tile held.
     pub tile_done: &'a (dyn Fn(u64) + Sync),
@@ -105,7 +106,21 @@ pub(crate) fn run<S: Shader>(
                 return;
             }
             let x1 = (x0 + TILE_SIZE).min(width);
-            band_rays += sampler.tile(shader, region, (x0, x1), (y0, y1), width, &mut out);
+            let (tile_rays, finished) = sampler.tile(
+                shader,
+                region,
+                (x0, x1),
+                (y0, y1),
+                width,
+                &mut out,
+                hooks.cancelled,
+            );
+            band_rays += tile_rays;
+            if !finished {
+                stopped.store(true, Ordering::Relaxed);
+                rays.fetch_add(band_rays, Ordering::Relaxed);
+                return;
+            }
             (hooks.tile_done)(((x1 - x0) * (y1 - y0)) as u64);
         }
         rays.fetch_add(band_rays, Ordering::Relaxed);
@@ -147,6 +162,9 @@ impl PixelSampler<'_> {
     /// `(region.x + x, region.y + y)` of the full image, and is sampled as that pixel. With
     /// alpha, a sample whose primary ray hit nothing adds nothing to the colour (which is thus
     /// premultiplied) and the pixel's alpha is the fraction of samples that hit.
+    /// `cancelled` is asked before each row of the tile (a tile at many samples a pixel takes
+    /// long enough for a page to notice): `false` with the rays so far when it says stop.
+    #[allow(clippy::too_many_arguments)]
     fn tile<S: Shader>(
         &self,
         shader: &S,
@@ -155,11 +173,15 @@ impl PixelSampler<'_> {
         (y0, y1): (u32, u32),
         width: u32,
         band: &mut Band,
-    ) -> u64 {
+        cancelled: &(dyn Fn() -> bool + Sync),
+    ) -> (u64, bool) {
         let mut rays = 0;
         let inv = 1.0 / self.spp as f64;
         let (full_w, full_h) = self.full;
         for y in y0..y1 {
+            if y > y0 && cancelled() {
+                return (rays, false);
+            }
             let image_y = region.y + y;
             for x in x0..x1 {
                 let image_x = region.x + x;
@@ -190,7 +212,7 @@ impl PixelSampler<'_> {
                 }
             }
         }
-        rays
+        (rays, true)
     }
 
     /// Whether the sample's primary `ray` hit an object: as its shader reported, or else
