@@ -288,23 +288,19 @@ pub struct PoolError(String);
 /// pool's threads).
 #[derive(Debug)]
 pub struct Renderer {
-    pool: rayon::ThreadPool,
+    pool: integrator::RenderPool,
 }
 
 impl Renderer {
     /// A renderer with `threads` worker threads (0: one per available core).
     pub fn new(threads: usize) -> Result<Self, PoolError> {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .thread_name(|i| format!("kardia-render-{i}"))
-            .build()
-            .map_err(|e| PoolError(e.to_string()))?;
+        let pool = integrator::RenderPool::new(threads).map_err(|e| PoolError(e.to_string()))?;
         Ok(Self { pool })
     }
 
     /// Worker threads in the pool.
     pub fn threads(&self) -> usize {
-        self.pool.current_num_threads()
+        self.pool.threads()
     }
 
     /// Renders `request` of `scene`: the region's image (linear RGB, every pixel finite), or

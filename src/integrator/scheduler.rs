@@ -48,10 +48,47 @@ pub(crate) struct Hooks<'a> {
     pub band_done: &'a BandDone<'a>,
 }
 
+/// The threads renders run on, shared by every render of a `Renderer`, with the number of
+/// renders running on them now: when there is more than one, each render's threads hand
+/// over after every band, so that renders started together share the threads band by band
+/// (a page's coarse frame does not wait for another page's long refinement pass).
+pub(crate) struct RenderPool {
+    threads: rayon::ThreadPool,
+    active: AtomicUsize,
+}
+
+impl RenderPool {
+    /// A pool of `threads` threads (0: one per available core).
+    pub(crate) fn new(threads: usize) -> Result<Self, rayon::ThreadPoolBuildError> {
+        let threads = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|i| format!("kardia-render-{i}"))
+            .build()?;
+        Ok(Self {
+            threads,
+            active: AtomicUsize::new(0),
+        })
+    }
+
+    /// Threads in the pool.
+    pub(crate) fn threads(&self) -> usize {
+        self.threads.current_num_threads()
+    }
+}
+
+impl std::fmt::Debug for RenderPool {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RenderPool")
+            .field("threads", &self.threads())
+            .field("active", &self.active.load(Ordering::Relaxed))
+            .finish()
+    }
+}
+
 /// Renders `job.region` with `shader` on the threads of `pool`; returns the region's image and
 /// the rays traced, or `None` when cancelled before every tile was done.
 pub(crate) fn run<S: Shader>(
-    pool: &rayon::ThreadPool,
+    pool: &RenderPool,
     shader: &S,
     job: &Job,
     hooks: &Hooks,
@@ -125,8 +162,19 @@ pub(crate) fn run<S: Shader>(
         }
         rays.fetch_add(band_rays, Ordering::Relaxed);
         (hooks.band_done)(y0, &*out.pixels, out.alpha.as_deref());
+        drop(out);
+        if pool.active.load(Ordering::Relaxed) > 1 {
+            // Another render waits for these threads: let it have them for a band.
+            return;
+        }
     };
-    pool.broadcast(|_| worker());
+    pool.active.fetch_add(1, Ordering::Relaxed);
+    // Until every band is taken (or the render is cancelled): each round ends when every
+    // thread has left the worker, after one band each while other renders are running.
+    while !stopped.load(Ordering::Relaxed) && next_band.load(Ordering::Relaxed) < bands.len() {
+        pool.threads.broadcast(|_| worker());
+    }
+    pool.active.fetch_sub(1, Ordering::Relaxed);
     drop(bands);
     if stopped.into_inner() {
         return None;
@@ -241,10 +289,7 @@ mod tests {
     }
 
     fn render<S: Shader>(scene: &Scene, shader: &S, spp: u32, alpha: bool) -> Image {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
+        let pool = RenderPool::new(2).unwrap();
         let job = Job {
             scene,
             camera: &scene.camera,
