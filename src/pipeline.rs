@@ -7,8 +7,8 @@
 //!   another camera, size, region or view: nothing here mutates the scene.
 //! - Keep one [`Renderer`] per process: it owns the thread pool, reused by every render, and
 //!   may serve several renders at once from several threads.
-//! - A [`Control`] carries a [`CancelToken`] (checked before every 16×16 tile) and a progress
-//!   callback.
+//! - A [`Control`] carries a [`CancelToken`] (checked before every row of every 16×16 tile)
+//!   and a progress callback.
 //! - A [`Region`] renders exactly the pixels the full image has there (the same samples, byte
 //!   for byte), so regions rendered apart, on any machines, join into the whole image.
 //! - Encode the result with [`crate::film::encode_png`] / [`crate::film::encode_exr`] to any
@@ -288,23 +288,19 @@ pub struct PoolError(String);
 /// pool's threads).
 #[derive(Debug)]
 pub struct Renderer {
-    pool: rayon::ThreadPool,
+    pool: integrator::RenderPool,
 }
 
 impl Renderer {
     /// A renderer with `threads` worker threads (0: one per available core).
     pub fn new(threads: usize) -> Result<Self, PoolError> {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .thread_name(|i| format!("kardia-render-{i}"))
-            .build()
-            .map_err(|e| PoolError(e.to_string()))?;
+        let pool = integrator::RenderPool::new(threads).map_err(|e| PoolError(e.to_string()))?;
         Ok(Self { pool })
     }
 
     /// Worker threads in the pool.
     pub fn threads(&self) -> usize {
-        self.pool.current_num_threads()
+        self.pool.threads()
     }
 
     /// Renders `request` of `scene`: the region's image (linear RGB, every pixel finite), or

@@ -30,7 +30,7 @@ pub use sampling::{strata, stratified_point, Sample};
 pub use whitted::{MAX_SHADOW_CROSSINGS, SELF_HIT_EPS};
 
 pub use scheduler::BandDone;
-pub(crate) use scheduler::{Hooks, Job};
+pub(crate) use scheduler::{Hooks, Job, RenderPool};
 
 use crate::camera::Camera;
 use crate::film::Image;
@@ -39,7 +39,7 @@ use crate::scene::Scene;
 
 /// Side of the square image tiles, in pixels; each band of tiles one `TILE_SIZE` tall is one
 /// unit of parallel work, rendered straight into its rows of the image. Cancellation is
-/// checked before every tile.
+/// checked before every row of every tile.
 pub const TILE_SIZE: u32 = 16;
 
 /// One way of shading a ray: the colour (linear RGB, finite or not: the film makes it finite)
@@ -169,14 +169,14 @@ pub(crate) fn with_shader<W: WithShader>(view: View, setup: &ShadeSetup, work: W
 /// Renders `job` in `view` on `pool`: the region's image and the rays traced, or `None` when
 /// cancelled.
 pub(crate) fn render(
-    pool: &rayon::ThreadPool,
+    pool: &scheduler::RenderPool,
     view: View,
     setup: &ShadeSetup,
     job: &Job,
     hooks: &Hooks,
 ) -> Option<(Image, u64)> {
     struct Render<'a> {
-        pool: &'a rayon::ThreadPool,
+        pool: &'a scheduler::RenderPool,
         job: &'a Job<'a>,
         hooks: &'a Hooks<'a>,
     }

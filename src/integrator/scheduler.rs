@@ -1,7 +1,8 @@
 //! The scheduler: a region of the image cut into bands of [`TILE_SIZE`] rows (each rendered as
 //! `TILE_SIZE`-square tiles), taken in order from a shared counter by the threads of a pool,
-//! each written straight into its rows of the region's image; cancellation checked before every
-//! tile, progress reported after every tile, finished bands handed to a hook. With `alpha`,
+//! each written straight into its rows of the region's image; cancellation checked before
+//! every row of every tile, progress reported after every tile, finished bands handed to a
+//! hook. With `alpha`,
 //! each pixel also gets its coverage (the fraction of its samples whose camera ray hit an
 //! object) and its colour leaves out the samples that saw only the background.
 
@@ -35,7 +36,7 @@ pub type BandDone<'a> = dyn Fn(u32, &[Vec3], Option<&[f32]>) + Sync + 'a;
 
 /// The caller's side of a render, all called from worker threads.
 pub(crate) struct Hooks<'a> {
-    /// Asked before each tile; once it answers true, no more tiles are started.
+    /// Asked before each row of each tile; once it answers true, no more rows are started.
     pub cancelled: &'a (dyn Fn() -> bool + Sync),
     /// Told how many pixels each finished tile held.
     pub tile_done: &'a (dyn Fn(u64) + Sync),
@@ -47,10 +48,47 @@ pub(crate) struct Hooks<'a> {
     pub band_done: &'a BandDone<'a>,
 }
 
+/// The threads renders run on, shared by every render of a `Renderer`, with the number of
+/// renders running on them now: when there is more than one, each render's threads hand
+/// over after every band, so that renders started together share the threads band by band
+/// (a page's coarse frame does not wait for another page's long refinement pass).
+pub(crate) struct RenderPool {
+    threads: rayon::ThreadPool,
+    active: AtomicUsize,
+}
+
+impl RenderPool {
+    /// A pool of `threads` threads (0: one per available core).
+    pub(crate) fn new(threads: usize) -> Result<Self, rayon::ThreadPoolBuildError> {
+        let threads = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|i| format!("kardia-render-{i}"))
+            .build()?;
+        Ok(Self {
+            threads,
+            active: AtomicUsize::new(0),
+        })
+    }
+
+    /// Threads in the pool.
+    pub(crate) fn threads(&self) -> usize {
+        self.threads.current_num_threads()
+    }
+}
+
+impl std::fmt::Debug for RenderPool {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RenderPool")
+            .field("threads", &self.threads())
+            .field("active", &self.active.load(Ordering::Relaxed))
+            .finish()
+    }
+}
+
 /// Renders `job.region` with `shader` on the threads of `pool`; returns the region's image and
 /// the rays traced, or `None` when cancelled before every tile was done.
 pub(crate) fn run<S: Shader>(
-    pool: &rayon::ThreadPool,
+    pool: &RenderPool,
     shader: &S,
     job: &Job,
     hooks: &Hooks,
@@ -105,13 +143,38 @@ pub(crate) fn run<S: Shader>(
                 return;
             }
             let x1 = (x0 + TILE_SIZE).min(width);
-            band_rays += sampler.tile(shader, region, (x0, x1), (y0, y1), width, &mut out);
+            let (tile_rays, finished) = sampler.tile(
+                shader,
+                region,
+                (x0, x1),
+                (y0, y1),
+                width,
+                &mut out,
+                hooks.cancelled,
+            );
+            band_rays += tile_rays;
+            if !finished {
+                stopped.store(true, Ordering::Relaxed);
+                rays.fetch_add(band_rays, Ordering::Relaxed);
+                return;
+            }
             (hooks.tile_done)(((x1 - x0) * (y1 - y0)) as u64);
         }
         rays.fetch_add(band_rays, Ordering::Relaxed);
         (hooks.band_done)(y0, &*out.pixels, out.alpha.as_deref());
+        drop(out);
+        if pool.active.load(Ordering::Relaxed) > 1 {
+            // Another render waits for these threads: let it have them for a band.
+            return;
+        }
     };
-    pool.broadcast(|_| worker());
+    pool.active.fetch_add(1, Ordering::Relaxed);
+    // Until every band is taken (or the render is cancelled): each round ends when every
+    // thread has left the worker, after one band each while other renders are running.
+    while !stopped.load(Ordering::Relaxed) && next_band.load(Ordering::Relaxed) < bands.len() {
+        pool.threads.broadcast(|_| worker());
+    }
+    pool.active.fetch_sub(1, Ordering::Relaxed);
     drop(bands);
     if stopped.into_inner() {
         return None;
@@ -147,6 +210,9 @@ impl PixelSampler<'_> {
     /// `(region.x + x, region.y + y)` of the full image, and is sampled as that pixel. With
     /// alpha, a sample whose primary ray hit nothing adds nothing to the colour (which is thus
     /// premultiplied) and the pixel's alpha is the fraction of samples that hit.
+    /// `cancelled` is asked before each row of the tile (a tile at many samples a pixel takes
+    /// long enough for a page to notice): `false` with the rays so far when it says stop.
+    #[allow(clippy::too_many_arguments)]
     fn tile<S: Shader>(
         &self,
         shader: &S,
@@ -155,11 +221,15 @@ impl PixelSampler<'_> {
         (y0, y1): (u32, u32),
         width: u32,
         band: &mut Band,
-    ) -> u64 {
+        cancelled: &(dyn Fn() -> bool + Sync),
+    ) -> (u64, bool) {
         let mut rays = 0;
         let inv = 1.0 / self.spp as f64;
         let (full_w, full_h) = self.full;
         for y in y0..y1 {
+            if y > y0 && cancelled() {
+                return (rays, false);
+            }
             let image_y = region.y + y;
             for x in x0..x1 {
                 let image_x = region.x + x;
@@ -190,7 +260,7 @@ impl PixelSampler<'_> {
                 }
             }
         }
-        rays
+        (rays, true)
     }
 
     /// Whether the sample's primary `ray` hit an object: as its shader reported, or else
@@ -219,10 +289,7 @@ mod tests {
     }
 
     fn render<S: Shader>(scene: &Scene, shader: &S, spp: u32, alpha: bool) -> Image {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
+        let pool = RenderPool::new(2).unwrap();
         let job = Job {
             scene,
             camera: &scene.camera,

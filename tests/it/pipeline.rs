@@ -499,3 +499,58 @@ fn shadow_rays_per_light_can_be_capped_for_previews() {
     let (a, b) = (mean(&full), mean(&preview));
     assert!((a - b).abs() < 0.02 * a, "{a} vs {b}");
 }
+
+/// Two renders on one `Renderer` share its threads band by band: a small render started
+/// while a long one runs finishes long before it (before the fix, it waited for the whole
+/// long render, as a page's coarse frame waited for another page's refinement pass).
+#[test]
+fn a_small_render_does_not_wait_for_a_long_one_on_the_same_renderer() {
+    let scene = Arc::new(default_heart());
+    let renderer = Arc::new(Renderer::new(2).unwrap());
+    let long_done = Arc::new(Mutex::new(None::<Instant>));
+    let started = Arc::new(AtomicU64::new(0));
+    let long = {
+        let (scene, renderer, long_done, started) = (
+            scene.clone(),
+            renderer.clone(),
+            long_done.clone(),
+            started.clone(),
+        );
+        std::thread::spawn(move || {
+            let request = RenderRequest {
+                width: Some(192),
+                height: Some(192),
+                spp: 48,
+                ..RenderRequest::default()
+            };
+            let progress = move |_: Progress| {
+                started.store(1, Ordering::Relaxed);
+            };
+            let control = Control {
+                progress: Box::new(progress),
+                ..Control::default()
+            };
+            renderer.render(&scene, &request, &control).unwrap();
+            *long_done.lock().unwrap() = Some(Instant::now());
+        })
+    };
+    while started.load(Ordering::Relaxed) == 0 {
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    let small = RenderRequest {
+        width: Some(32),
+        height: Some(32),
+        spp: 1,
+        ..RenderRequest::default()
+    };
+    renderer
+        .render(&scene, &small, &Control::default())
+        .unwrap();
+    let small_done = Instant::now();
+    assert!(
+        long_done.lock().unwrap().is_none(),
+        "the small render waited for the long one"
+    );
+    long.join().unwrap();
+    assert!(long_done.lock().unwrap().unwrap() > small_done);
+}
