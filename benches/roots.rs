@@ -11,24 +11,20 @@ use kardia::shapes::heart::heart_corpus;
 use kardia::shapes::implicit::{typed_corpus, TYPED_SURFACES};
 use std::hint::black_box;
 
+/// Hits among `queries` (coefficients, lo, hi) by `solver`: one pass over the corpus.
+fn hits<'a>(solver: Solver, queries: impl Iterator<Item = (&'a [f64], f64, f64)>) -> usize {
+    queries
+        .filter(|&(c, lo, hi)| solver.first_root(black_box(c), lo, hi).is_some())
+        .count()
+}
+
 fn bench(c: &mut Criterion) {
     let corpus = heart_corpus();
     let mut group = c.benchmark_group("first_root");
     group.throughput(Throughput::Elements(corpus.len() as u64));
     for &(solver, name) in Solver::ALL {
         group.bench_function(name, |b| {
-            b.iter(|| {
-                let mut hits = 0usize;
-                for r in &corpus {
-                    if solver
-                        .first_root(black_box(&r.coeffs), r.lo, r.hi)
-                        .is_some()
-                    {
-                        hits += 1;
-                    }
-                }
-                hits
-            })
+            b.iter(|| hits(solver, corpus.iter().map(|r| (&r.coeffs[..], r.lo, r.hi))))
         });
     }
     group.finish();
@@ -40,18 +36,7 @@ fn bench(c: &mut Criterion) {
         group.throughput(Throughput::Elements(rays.len() as u64));
         for &(solver, name) in Solver::ALL {
             group.bench_function(format!("degree {degree}/{name}"), |b| {
-                b.iter(|| {
-                    let mut hits = 0usize;
-                    for r in &rays {
-                        if solver
-                            .first_root(black_box(&r.coeffs), r.lo, r.hi)
-                            .is_some()
-                        {
-                            hits += 1;
-                        }
-                    }
-                    hits
-                })
+                b.iter(|| hits(solver, rays.iter().map(|r| (&r.coeffs[..], r.lo, r.hi))))
             });
         }
     }

@@ -11,8 +11,7 @@ use super::render::{RenderArgs, INTERRUPTED};
 use crate::animation::animated::{AnimatedEncoder, AnimatedFormat};
 use crate::animation::{self, FrameError, FrameJob, FrameRange, SceneSource};
 use crate::film::{self, AtomicFile, ImageFormat};
-use crate::pipeline::{CancelToken, Control, RenderError, RenderRequest, Renderer};
-use crate::scene::LoadOptions;
+use crate::pipeline::{CancelToken, Control, RenderError, Renderer};
 use crate::tiles;
 
 /// The animation and farm options of `kardia render`.
@@ -87,10 +86,7 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
         Ok(s) => s,
         Err(e) => return report(e),
     };
-    let options = LoadOptions {
-        solver: args.solver,
-        ..LoadOptions::default()
-    };
+    let options = args.load_options();
     let (still, declared) = match source.still(&options) {
         Ok(s) => s,
         Err(e) => return report(e),
@@ -166,18 +162,7 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
             Err(e) => return report(e),
         }
     };
-    let mut request = RenderRequest {
-        width: args.width,
-        height: args.height,
-        camera: None,
-        spp: args.spp,
-        seed: args.seed,
-        max_depth: args.max_depth,
-        region: args.region,
-        view: args.view,
-        alpha: args.alpha,
-        max_shadow_rays: None,
-    };
+    let mut request = args.request();
     let (full_width, full_height) = match request.full_size(&still) {
         Ok(s) => s,
         Err(e) => return report(e),

@@ -71,6 +71,33 @@ pub struct RenderArgs {
     pub animation: AnimationArgs,
 }
 
+impl RenderArgs {
+    /// How the scene is loaded: with the chosen solver, at no particular time.
+    pub(super) fn load_options(&self) -> LoadOptions {
+        LoadOptions {
+            solver: self.solver,
+            ..LoadOptions::default()
+        }
+    }
+
+    /// The render these arguments ask for (every field written out, so that a new one is
+    /// decided here): the scene's camera, each light's own shadow samples.
+    pub(super) fn request(&self) -> RenderRequest {
+        RenderRequest {
+            width: self.width,
+            height: self.height,
+            camera: None,
+            spp: self.spp,
+            seed: self.seed,
+            max_depth: self.max_depth,
+            region: self.region,
+            view: self.view,
+            alpha: self.alpha,
+            max_shadow_rays: None,
+        }
+    }
+}
+
 fn solver_parser() -> impl TypedValueParser<Value = Solver> {
     PossibleValuesParser::new(Solver::ALL.iter().map(|(_, name)| *name))
         .map(|name| name.parse::<Solver>().unwrap_or_default())
@@ -186,27 +213,13 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
     if args.half && format == ImageFormat::ExrFloat {
         format = ImageFormat::ExrHalf;
     }
-    let options = LoadOptions {
-        solver: args.solver,
-        ..LoadOptions::default()
-    };
+    let options = args.load_options();
     let scene = match &args.scene {
         Some(path) => scene::parse_file(path, &options),
         None => scene::parse(scene::DEFAULT_SCENE, "scenes/heart.scene", &options),
     }
     .map_err(fail)?;
-    let request = RenderRequest {
-        width: args.width,
-        height: args.height,
-        camera: None,
-        spp: args.spp,
-        seed: args.seed,
-        max_depth: args.max_depth,
-        region: args.region,
-        view: args.view,
-        alpha: args.alpha,
-        max_shadow_rays: None,
-    };
+    let request = args.request();
     let region = request.region_in(&scene).map_err(fail)?;
     let renderer = Renderer::new(args.threads.map_or(0, |t| t as usize)).map_err(fail)?;
 
@@ -238,19 +251,8 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
     file.commit().map_err(fail)?;
     if !args.quiet {
         let stats = rendered.stats;
-        let size = if region == Region::full(rendered.full_width, rendered.full_height) {
-            format!("{}×{}", region.width, region.height)
-        } else {
-            format!(
-                "{}×{} at ({}, {}) of {}×{}",
-                region.width,
-                region.height,
-                region.x,
-                region.y,
-                rendered.full_width,
-                rendered.full_height
-            )
-        };
+        // A still of the whole image: `--region` renders through `animate` (part metadata).
+        let size = format!("{}×{}", rendered.full_width, rendered.full_height);
         let mut view = match args.view {
             View::Shaded => String::new(),
             other => format!(", {other} view"),

@@ -192,13 +192,11 @@ fn animated_outputs_hold_every_frame() {
         assert_eq!(&buffer[..], still.as_raw().as_slice(), "frame {f}");
     }
     // Only the animation is left: no temporary files.
-    let mut names: Vec<String> = std::fs::read_dir(d)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+    let hidden: Vec<String> = crate::cli_render::listing(d)
+        .into_iter()
         .filter(|n| n.starts_with('.'))
         .collect();
-    names.sort();
-    assert!(names.is_empty(), "{names:?}");
+    assert!(hidden.is_empty(), "{hidden:?}");
 }
 
 #[test]

@@ -32,8 +32,8 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-/// The names in a directory, sorted.
-fn listing(dir: &Path) -> Vec<String> {
+/// The names in a directory, sorted (the other test modules use it too).
+pub(crate) fn listing(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

@@ -154,6 +154,21 @@ fn pixel(header: &Value, payload: &[u8], x: u64, y: u64) -> [u8; 4] {
     payload[i..i + 4].try_into().unwrap()
 }
 
+/// A new page on the server gets a `width × height` view rendered to its full size.
+async fn assert_still_renders(addr: SocketAddr, width: u32, height: u32) {
+    let mut again = connect(addr).await;
+    again
+        .send(view(1, &sphere_scene(0.0, "(1, 0, 0)"), width, height))
+        .await
+        .unwrap();
+    let frames = frames_until_done(&mut again).await;
+    let (last, _) = frames.last().expect("frames for the new page");
+    assert_eq!(
+        (last["width"].as_u64(), last["height"].as_u64()),
+        (Some(width.into()), Some(height.into()))
+    );
+}
+
 async fn http_get(addr: SocketAddr, path: &str, host: &str) -> String {
     let mut stream = tokio::net::TcpStream::connect(addr).await.unwrap();
     let request = format!("GET {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n");
@@ -413,15 +428,7 @@ async fn malformed_and_oversized_messages_are_answered_and_the_server_stays_up()
     })
     .await;
     // The server stays up.
-    let mut again = connect(server.addr).await;
-    again
-        .send(view(1, &sphere_scene(0.0, "(1, 0, 0)"), 64, 48))
-        .await
-        .unwrap();
-    assert_eq!(
-        frames_until_done(&mut again).await.last().unwrap().0["width"],
-        64
-    );
+    assert_still_renders(server.addr, 64, 48).await;
     server.stop().await;
 }
 
@@ -510,12 +517,7 @@ async fn a_page_that_leaves_mid_render_frees_its_work_at_once() {
     })
     .await;
     eprintln!("render freed {freed:?} after the page left");
-    let mut again = connect(server.addr).await;
-    again
-        .send(view(1, &sphere_scene(0.0, "(1, 0, 0)"), 64, 48))
-        .await
-        .unwrap();
-    assert!(!frames_until_done(&mut again).await.is_empty());
+    assert_still_renders(server.addr, 64, 48).await;
     server.stop().await;
 }
 
@@ -788,15 +790,7 @@ async fn random_messages_are_each_answered_and_the_server_stays_up() {
         errors > 100 && frames_seen > 10,
         "{errors} errors, {frames_seen} frames"
     );
-    let mut again = connect(server.addr).await;
-    again
-        .send(view(1, &sphere_scene(0.0, "(0, 1, 0)"), 16, 12))
-        .await
-        .unwrap();
-    assert_eq!(
-        frames_until_done(&mut again).await.last().unwrap().0["width"],
-        16
-    );
+    assert_still_renders(server.addr, 16, 12).await;
     server.stop().await;
 }
 

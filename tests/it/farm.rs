@@ -55,11 +55,7 @@ fn gnu_parallel_over_frames_gives_the_files_of_a_sequential_run() {
             "seq_####.png",
         ],
     );
-    let mut made: Vec<String> = std::fs::read_dir(d.join("farm"))
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    made.sort();
+    let made = crate::cli_render::listing(&d.join("farm"));
     assert_eq!(
         made,
         [

@@ -2,6 +2,7 @@
 //! progress, re-rendering one loaded scene, study views, finite pixels, and the CLI's
 //! `--region` and `--view`.
 
+use crate::cli_render::listing;
 use kardia::camera::Camera;
 use kardia::film::{self, Image, ImageFormat, Region};
 use kardia::geometry::DVec3;
@@ -61,15 +62,6 @@ fn quarters(w: u32, h: u32) -> [Region; 4] {
             height: h - cy,
         },
     ]
-}
-
-fn names_in(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
 }
 
 fn read_exr(path: &Path) -> Vec<(f32, f32, f32)> {
@@ -169,7 +161,7 @@ fn four_regions_in_four_threads_join_into_the_whole_image() {
             .collect()
     };
     assert_eq!(bits(&joined_exr), bits(&whole_exr), "EXR bits differ");
-    let mut names = names_in(dir.path());
+    let mut names = listing(dir.path());
     names.retain(|n| n.starts_with('.'));
     assert!(names.is_empty(), "temporary files left: {names:?}");
 }
@@ -456,7 +448,7 @@ fn cli_renders_regions_and_views() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("does not lie inside the 48×48 image"), "{err}");
     assert_eq!(
-        names_in(dir.path()),
+        listing(dir.path()),
         ["normals.png", "part.png", "whole.png"]
     );
 }

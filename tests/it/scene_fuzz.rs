@@ -1,6 +1,7 @@
 //! The parser never panics: random bytes, token soup and random mutations of the scenes in
 //! scenes/ all give a scene or an error (and every error renders with its caret).
 
+use crate::fuzz_support::WORDS;
 use kardia::scene::{parse, LoadOptions, SceneError};
 use proptest::prelude::*;
 use std::sync::OnceLock;
@@ -46,35 +47,9 @@ fn scenes() -> &'static [String] {
     })
 }
 
-/// Pieces that are likely to reach deep into the parser.
-const VOCABULARY: &[&str] = &[
-    "SIZE",
-    "CAMERA",
-    "BACKGROUND",
-    "AMBIENT",
-    "LIGHT",
-    "MATERIAL",
-    "SPHERE",
-    "PLANE",
-    "BOX",
-    "POLYGON",
-    "ELLIPSOID",
-    "HEART",
-    "IMPLICIT",
-    "SPECULAR",
-    "REFLECT",
-    "TRANSMIT",
-    "IOR",
-    "ATTENUATION",
-    "CHECKER",
-    "INSIDE",
-    "BOUND",
-    "torus",
-    "kummer",
-    "heart",
-    "glass",
-    "(",
-    ")",
+/// Pieces besides the fuzzer's keywords and names (`fuzz_support::WORDS`) that are likely to
+/// reach deep into the parser: punctuation, line ends, numbers at and past their limits.
+const PIECES: &[&str] = &[
     ",",
     "\"",
     "\"x^2 + y^2 = 1\"",
@@ -107,14 +82,18 @@ const VOCABULARY: &[&str] = &[
     "(0,0,1)",
     "(1,1,1)",
     "(1e300,1,1)",
-    "é",
-    "\u{feff}",
 ];
+
+/// Every piece the soups and edits draw from: the keywords and names, then [`PIECES`].
+fn vocabulary() -> &'static [&'static str] {
+    static ALL: OnceLock<Vec<&'static str>> = OnceLock::new();
+    ALL.get_or_init(|| WORDS.iter().chain(PIECES).copied().collect())
+}
 
 fn soup() -> impl Strategy<Value = String> {
     proptest::collection::vec(
         (
-            0..VOCABULARY.len(),
+            0..vocabulary().len(),
             prop_oneof![Just(" "), Just(""), Just("\n")],
         ),
         0..80,
@@ -122,7 +101,7 @@ fn soup() -> impl Strategy<Value = String> {
     .prop_map(|parts| {
         let mut s = String::from("CAMERA (5,0,0) (0,0,0) (0,0,1) 40\n");
         for (i, sep) in parts {
-            s.push_str(VOCABULARY[i]);
+            s.push_str(vocabulary()[i]);
             s.push_str(sep);
         }
         s
@@ -140,7 +119,7 @@ enum Edit {
 fn edit() -> impl Strategy<Value = Edit> {
     prop_oneof![
         (any::<usize>(), 1..12usize).prop_map(|(at, n)| Edit::Delete(at, n)),
-        (any::<usize>(), 0..VOCABULARY.len()).prop_map(|(at, i)| Edit::Insert(at, i)),
+        (any::<usize>(), 0..vocabulary().len()).prop_map(|(at, i)| Edit::Insert(at, i)),
         (any::<usize>(), any::<char>()).prop_map(|(at, c)| Edit::InsertChar(at, c)),
         (any::<usize>(), 1..40usize).prop_map(|(at, n)| Edit::Duplicate(at, n)),
     ]
@@ -159,7 +138,7 @@ fn mutate(text: &str, edits: &[Edit]) -> String {
             }
             Edit::Insert(at, i) => {
                 let a = pos(at);
-                chars.splice(a..a, VOCABULARY[i].chars());
+                chars.splice(a..a, vocabulary()[i].chars());
             }
             Edit::InsertChar(at, c) => chars.insert(pos(at), c),
             Edit::Duplicate(at, n) => {

@@ -111,6 +111,12 @@ struct Surface {
 }
 
 impl Surface {
+    /// `∇f` at the object-space point `p`, in `f64` (zero at singular points).
+    fn gradient(&self, p: DVec3) -> DVec3 {
+        let q = p.to_array();
+        DVec3::from_array(self.grad.each_ref().map(|g| g.eval(q)))
+    }
+
     /// A vector along the outward normal at the surface point `q` (not normalised; zero at a
     /// singular point where no direction can be told). Normally `∇f` in `f64`. Where `∇f` is
     /// not far above its rounding (close to a curve where it vanishes, such as the equator of
@@ -437,19 +443,8 @@ impl Implicit {
     /// The symbolic gradient at an object-space point (may be zero at singular points).
     pub fn gradient(&self, p: DVec3) -> DVec3 {
         match &self.object().kind {
-            Kind::Generic(s) => {
-                let q = p.to_array();
-                DVec3::new(s.grad[0].eval(q), s.grad[1].eval(q), s.grad[2].eval(q))
-            }
-            Kind::Heart(_) => {
-                let a = 2.0 * p.x * p.x + p.y * p.y + p.z * p.z - 1.0;
-                let (a2, z2, z3) = (a * a, p.z * p.z, p.z * p.z * p.z);
-                DVec3::new(
-                    12.0 * p.x * a2 - 0.2 * p.x * z3,
-                    6.0 * p.y * a2 - 2.0 * p.y * z3,
-                    6.0 * p.z * a2 - 3.0 * z2 * (0.1 * p.x * p.x + p.y * p.y),
-                )
-            }
+            Kind::Generic(s) => s.gradient(p),
+            Kind::Heart(_) => super::heart::gradient_f(p),
         }
     }
 
@@ -824,10 +819,7 @@ impl ObjectShape for ImplicitShape {
         if recentred {
             recorder.recentred();
         }
-        let gradient = hit.map(|t| {
-            let q = local.at(t).to_array();
-            DVec3::new(s.grad[0].eval(q), s.grad[1].eval(q), s.grad[2].eval(q)).length()
-        });
+        let gradient = hit.map(|t| s.gradient(local.at(t)).length());
         recorder.finish(hit, false, gradient)
     }
 
