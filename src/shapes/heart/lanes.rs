@@ -178,14 +178,22 @@ fn chords_in(
         t0[i] = c0;
         t1[i] = c1;
     }
-    std::array::from_fn(|i| {
+    // The chord and its sextic, every lane (a dead lane's values are never read).
+    let mut chords = [Chord {
+        t_lo: 0.0,
+        t0: 0.0,
+        len: 0.0,
+        o: DVec3::ZERO,
+        d: DVec3::ZERO,
+        coeffs: [0.0; 7],
+        window: 0.0,
+    }; LANES];
+    for (i, chord) in chords.iter_mut().enumerate() {
         let len = t1[i] - t0[i];
-        if !(alive[i] && len > 0.0 && len.is_finite()) {
-            return None;
-        }
+        alive[i] &= (len > 0.0) & len.is_finite();
         let o = DVec3::new(ox[i], oy[i], oz[i]) + t0[i] * DVec3::new(dx[i], dy[i], dz[i]);
         let d = DVec3::new(dx[i], dy[i], dz[i]) * len;
-        Some(Chord {
+        *chord = Chord {
             t_lo: t_lo[i],
             t0: t0[i],
             len,
@@ -193,8 +201,9 @@ fn chords_in(
             d,
             coeffs: sextic_coefficients(o, d),
             window: POLISH_WINDOW / (dir_len[i] * len),
-        })
-    })
+        };
+    }
+    std::array::from_fn(|i| alive[i].then_some(chords[i]))
 }
 
 impl HeartShape {
