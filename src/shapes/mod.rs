@@ -1,6 +1,7 @@
 //! Shapes: everything a ray can hit. Each shape implements the small [`Shape`] trait; a new
 //! primitive is one new file here plus one keyword in `scene::parser`.
 
+pub use crate::geometry::LANES;
 use crate::geometry::{Aabb, DVec3, Ray};
 
 mod boxes;
@@ -83,10 +84,6 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
         None
     }
 }
-
-/// How many rays [`Shape::intersect_lanes`] takes at once (primary rays of neighbouring
-/// pixels): four `f64` lanes fill one 256-bit vector register.
-pub const LANES: usize = 4;
 
 /// Parses a finite-check helper used by constructors: true when all vectors are finite.
 pub(crate) fn all_finite(vs: &[DVec3]) -> bool {
