@@ -27,7 +27,7 @@
 //! it used are exact for the given coefficients, so the answer is the exact one: the same
 //! hit/miss the full method gives away from numerically multiple roots.
 
-use super::prep::{horner, Prepared};
+use super::prep::{horner, Fixed, Prepared};
 use super::refine::refine_simple;
 use super::trace::Observer;
 
@@ -115,25 +115,20 @@ fn keep_right<const D: usize>(b: &mut [f64; D], lambda: f64) {
 
 /// See the module documentation.
 pub(crate) fn first_root(p: &Prepared, obs: &mut impl Observer) -> Fast {
-    match p.n {
-        1 => search::<2, _>(p, obs),
-        2 => search::<3, _>(p, obs),
-        3 => search::<4, _>(p, obs),
-        4 => search::<5, _>(p, obs),
-        5 => search::<6, _>(p, obs),
-        6 => search::<7, _>(p, obs),
-        7 => search::<8, _>(p, obs),
-        8 => search::<9, _>(p, obs),
-        9 => search::<10, _>(p, obs),
-        10 => search::<11, _>(p, obs),
-        11 => search::<12, _>(p, obs),
-        12 => search::<13, _>(p, obs),
-        13 => search::<14, _>(p, obs),
-        14 => search::<15, _>(p, obs),
-        15 => search::<16, _>(p, obs),
-        16 => search::<17, _>(p, obs),
-        _ => Fast::Undecided,
+    macro_rules! fixed {
+        ($($d:literal)*) => {
+            match p.n + 1 {
+                $($d => search::<$d, _>(&Fixed {
+                    c: p.c[..$d].try_into().expect("degree D - 1"),
+                    scale: p.scale,
+                    lo: p.lo,
+                    hi: p.hi,
+                }, obs),)*
+                _ => Fast::Undecided,
+            }
+        };
     }
+    fixed!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17)
 }
 
 /// The Bernstein coefficients on `[a, b]` of a polynomial of degree `D − 1` (a fixed size, so
@@ -179,13 +174,13 @@ pub(super) fn bernstein_fixed<const D: usize>(c: &[f64; D], a: f64, b: f64) -> (
 /// when the end values do not confirm the bracket.
 #[inline(always)]
 fn root_of_piece<const D: usize, O: Observer>(
-    p: &Prepared,
-    c: &[f64; D],
+    p: &Fixed<D>,
     b: &[f64; D],
     (s0, s1): (f64, f64),
     obs: &mut O,
 ) -> Fast {
     let n = D - 1;
+    let c = &p.c;
     let (lo, hi) = (p.lo, p.hi);
     let w = hi - lo;
     let ta = if s0 == 0.0 { lo } else { lo + w * s0 };
@@ -208,10 +203,10 @@ fn root_of_piece<const D: usize, O: Observer>(
 }
 
 /// The search for a polynomial of degree `D − 1` (a fixed size, so that the loops unroll and
-/// the coefficients stay in registers).
-fn search<const D: usize, O: Observer>(p: &Prepared, obs: &mut O) -> Fast {
+/// the coefficients stay in registers); see the module documentation.
+pub(crate) fn search<const D: usize, O: Observer>(p: &Fixed<D>, obs: &mut O) -> Fast {
     let n = D - 1;
-    let c: &[f64; D] = p.c[..D].try_into().expect("degree D - 1");
+    let c = &p.c;
     let (lo, hi) = (p.lo, p.hi);
     let w = hi - lo;
     // On [lo, hi]; the rounding bound below (from |lo| + w) covers either expansion end.
@@ -228,7 +223,7 @@ fn search<const D: usize, O: Observer>(p: &Prepared, obs: &mut O) -> Fast {
     let mut known = Some(variations(&root, 64.0 * unit));
     match known {
         Some(Some(0)) => return Fast::NoRoot,
-        Some(Some(1)) => return root_of_piece(p, c, &root, (0.0, 1.0), obs),
+        Some(Some(1)) => return root_of_piece(p, &root, (0.0, 1.0), obs),
         _ => {}
     }
     // Depth-first over pieces `[s0, s1]` of `[0, 1]`, left first. A pending right half waits
@@ -258,7 +253,7 @@ fn search<const D: usize, O: Observer>(p: &Prepared, obs: &mut O) -> Fast {
                 keep_right(&mut b, s0 / s1);
                 continue;
             }
-            Some(1) => return root_of_piece(p, c, &b, (s0, s1), obs),
+            Some(1) => return root_of_piece(p, &b, (s0, s1), obs),
             _ => {}
         }
         if depth as usize + 1 >= MAX_DEPTH {
