@@ -76,18 +76,24 @@ pub(crate) fn prepare_fixed<const D: usize>(coeffs: &[f64; D], lo: f64, hi: f64)
     }
     let n = D - 1;
     let r = lo.abs().max(hi.abs());
-    if coeffs[n] == 0.0 || !r.is_finite() || trimmed_degree(coeffs, n, r) != n {
+    let cn = coeffs[n];
+    if cn == 0.0 || !r.is_finite() {
         return Usual::Other;
     }
     let er = exponent(r) + 1;
-    if !(-1000..=999).contains(&er) {
-        return Usual::Other;
-    }
-    let en = exponent(coeffs[n]);
-    let reaches = if er == 1 {
+    let en = exponent(cn);
+    let reaches = if r == 1.0 {
+        // `trimmed_degree`'s and `scale`'s shortcuts for an interval reaching 1 (then
+        // `e_R = 1`) test the same largest lower coefficient.
         let big = max_abs(&coeffs[..n]);
+        if cn.abs() <= TRIM_EPS * big {
+            return Usual::Other;
+        }
         big != 0.0 && exponent(big) - en + 1 > 0
     } else {
+        if trimmed_degree(coeffs, n, r) != n || !(-1000..=999).contains(&er) {
+            return Usual::Other;
+        }
         let mut reaches = false;
         for k in 1..=n {
             let ck = coeffs[n - k];
@@ -105,12 +111,14 @@ pub(crate) fn prepare_fixed<const D: usize>(coeffs: &[f64; D], lo: f64, hi: f64)
         let k = j as i32 * er + first;
         *cj *= f64::from_bits(((k + 1023) as u64) << 52);
     }
-    let scale = mul_pow2(1.0, er);
+    // `1 / scale` is exact (a power of two of normal exponent), so multiplying by it rounds
+    // like dividing by `scale`.
+    let (scale, inv) = (mul_pow2(1.0, er), mul_pow2(1.0, -er));
     Usual::Fixed(Fixed {
         c,
         scale,
-        lo: lo / scale,
-        hi: hi / scale,
+        lo: lo * inv,
+        hi: hi * inv,
     })
 }
 
