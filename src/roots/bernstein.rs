@@ -28,11 +28,12 @@
 //! hit/miss the full method gives away from numerically multiple roots.
 
 use super::prep::{horner, Fixed, Prepared};
-use super::refine::refine_simple;
+use super::refine::{refine_simple, size_at};
 use super::trace::Observer;
 
 /// Halvings after which a piece that still has more than one sign variation is left to the
-/// full method (a numerically multiple root or an unresolvable cluster).
+/// full method (a numerically multiple root or an unresolvable cluster). At most 63 (the
+/// search keeps its pending pieces as the bits of a `u64`).
 const MAX_DEPTH: usize = 40;
 
 /// Pieces examined at most (each costs one de Casteljau split).
@@ -68,21 +69,29 @@ pub(crate) const INV_BINOMIAL: [[f64; 17]; 17] = {
     t
 };
 
-/// Number of sign variations of `b`, or `None` when an interior coefficient is within
-/// `margin` of zero (its sign uncertain).
-#[inline]
-fn variations(b: &[f64], margin: f64) -> Option<u32> {
-    let mut v = 0;
-    let mut neg = b[0] < 0.0;
-    for &x in &b[1..] {
-        if x.abs() <= margin {
-            return None;
-        }
-        let xn = x < 0.0;
-        v += u32::from(xn != neg);
-        neg = xn;
-    }
-    Some(v)
+/// Bit `i` set when `b[i] < 0`.
+#[inline(always)]
+fn negative_bits<const D: usize>(b: &[f64; D]) -> u32 {
+    b.iter()
+        .enumerate()
+        .fold(0, |bits, (i, &x)| bits | u32::from(x < 0.0) << i)
+}
+
+/// Bit `i` set when `b[i]` and `b[i + 1]` differ in sign (`< 0` or not), for `i < D − 1`.
+#[inline(always)]
+fn sign_changes<const D: usize>(b: &[f64; D]) -> u32 {
+    let neg = negative_bits(b);
+    (neg ^ (neg >> 1)) & ((1 << (D - 1)) - 1)
+}
+
+/// Number of sign variations of `b`, or `None` when an interior coefficient (or the last
+/// one) is within `margin` of zero (its sign uncertain).
+#[inline(always)]
+fn variations<const D: usize>(b: &[f64; D], margin: f64) -> Option<u32> {
+    // Branch-free over the whole array (the loops unroll and pair up); the same answer as
+    // stopping at the first uncertain coefficient.
+    let uncertain = b[1..].iter().fold(false, |u, &x| u | (x.abs() <= margin));
+    (!uncertain).then(|| sign_changes(b).count_ones())
 }
 
 /// De Casteljau in place: `b` (a piece `[0, 1]`) becomes the Bernstein coefficients of its
@@ -177,6 +186,7 @@ fn root_of_piece<const D: usize, O: Observer>(
     p: &Fixed<D>,
     b: &[f64; D],
     (s0, s1): (f64, f64),
+    size: f64,
     obs: &mut O,
 ) -> Fast {
     let n = D - 1;
@@ -185,7 +195,10 @@ fn root_of_piece<const D: usize, O: Observer>(
     let w = hi - lo;
     let ta = if s0 == 0.0 { lo } else { lo + w * s0 };
     let tb = if s1 == 1.0 { hi } else { lo + w * s1 };
-    let (fa, fb) = (horner(c, ta), horner(c, tb));
+    // `P(0)` by Horner's rule is `c₀` (or a zero of either sign when `c₀` is zero: all this
+    // code asks of it is its comparisons with zero).
+    let fa = if ta == 0.0 { c[0] } else { horner(c, ta) };
+    let fb = horner(c, tb);
     if fb == 0.0 {
         return Fast::Root(tb * p.scale);
     }
@@ -194,12 +207,22 @@ fn root_of_piece<const D: usize, O: Observer>(
     }
     // Start where the piece's control polygon crosses zero: on a piece with one sign
     // variation it is close to the root, closer than false position on the end values.
-    let i = (0..n)
-        .find(|&i| (b[i] < 0.0) != (b[i + 1] < 0.0))
-        .unwrap_or(0);
+    let changes = sign_changes(b);
+    let i = if changes == 0 {
+        0
+    } else {
+        changes.trailing_zeros() as usize
+    };
     let s = (i as f64 + b[i] / (b[i] - b[i + 1])) / n as f64;
     let start = ta + (tb - ta) * s;
-    Fast::Root(refine_simple(c, ta, tb, fa, start, obs) * p.scale)
+    // The size of `P`'s terms at every point of `[ta, tb]` is at most its size at the end
+    // farther from zero; from `lo = 0` that is at most the search's `size` (at `hi`).
+    let size = if lo == 0.0 {
+        size
+    } else {
+        size_at(c, ta.abs().max(tb.abs()))
+    };
+    Fast::Root(refine_simple(c, ta, tb, fa, start, size, obs) * p.scale)
 }
 
 /// The search for a polynomial of degree `D − 1` (a fixed size, so that the loops unroll and
@@ -212,24 +235,26 @@ pub(crate) fn search<const D: usize, O: Observer>(p: &Fixed<D>, obs: &mut O) -> 
     // On [lo, hi]; the rounding bound below (from |lo| + w) covers either expansion end.
     let (root, _) = bernstein_fixed(c, lo, hi);
     let r = lo.abs() + w;
-    let size = c.iter().rev().fold(0.0, |s, a| s * r + a.abs());
+    let size = size_at(c, r);
     let unit = (n + 1) as f64 * f64::EPSILON * size;
     if !unit.is_finite() || root[0].abs() <= 64.0 * unit || root[n].abs() <= 64.0 * unit {
         return Fast::Undecided;
     }
-    // The whole interval first: most queries end there, before the stack below is made
-    // (zeroing it is about 40 instructions). The loop's first piece is this one again, with
-    // its variations already counted.
+    // The whole interval first: most queries end there. The loop's first piece is this one
+    // again, with its variations already counted.
     let mut known = Some(variations(&root, 64.0 * unit));
     match known {
         Some(Some(0)) => return Fast::NoRoot,
-        Some(Some(1)) => return root_of_piece(p, &root, (0.0, 1.0), obs),
+        Some(Some(1)) => return root_of_piece(p, &root, (0.0, 1.0), size, obs),
         _ => {}
     }
-    // Depth-first over pieces `[s0, s1]` of `[0, 1]`, left first. A pending right half waits
-    // on the stack as its range only; its coefficients are cut from the root's when needed.
-    let mut stack = [(0.0f64, 0.0f64, 0u32); MAX_DEPTH];
-    let mut top = 0;
+    // Depth-first over pieces `[s0, s1]` of `[0, 1]`, left first. The piece at depth `d` was
+    // reached from its parent by the left or the right half; bit `d` of `pending` is set
+    // when it was the left one, its right sibling still to search. The next pending piece is
+    // the deepest one, and its range is found again by repeating the same halvings from
+    // `[0, 1]` (the same operations, so the same bits); its coefficients are cut from the
+    // root's.
+    let mut pending = 0u64;
     let mut b = root;
     let (mut s0, mut s1, mut depth) = (0.0f64, 1.0f64, 0u32);
     for _ in 0..MAX_NODES {
@@ -241,11 +266,20 @@ pub(crate) fn search<const D: usize, O: Observer>(p: &Fixed<D>, obs: &mut O) -> 
         match v {
             Some(0) => {
                 // No root here: the next pending piece.
-                if top == 0 {
+                if pending == 0 {
                     return Fast::NoRoot;
                 }
-                top -= 1;
-                (s0, s1, depth) = stack[top];
+                depth = 63 - pending.leading_zeros();
+                pending &= !(1 << depth);
+                (s0, s1) = (0.0, 1.0);
+                for level in 1..=depth {
+                    let sm = s0 + SPLIT * (s1 - s0);
+                    if level < depth && pending & (1 << level) != 0 {
+                        s1 = sm;
+                    } else {
+                        s0 = sm;
+                    }
+                }
                 b = root;
                 if s1 < 1.0 {
                     keep_left(&mut b, s1);
@@ -253,7 +287,7 @@ pub(crate) fn search<const D: usize, O: Observer>(p: &Fixed<D>, obs: &mut O) -> 
                 keep_right(&mut b, s0 / s1);
                 continue;
             }
-            Some(1) => return root_of_piece(p, &b, (s0, s1), obs),
+            Some(1) => return root_of_piece(p, &b, (s0, s1), size, obs),
             _ => {}
         }
         if depth as usize + 1 >= MAX_DEPTH {
@@ -266,8 +300,7 @@ pub(crate) fn search<const D: usize, O: Observer>(p: &Fixed<D>, obs: &mut O) -> 
             return Fast::Undecided;
         }
         depth += 1;
-        stack[top] = (sm, s1, depth);
-        top += 1;
+        pending |= 1 << depth;
         s1 = sm;
     }
     Fast::Undecided
@@ -311,5 +344,23 @@ mod tests {
             Fast::NoRoot => panic!("expected a root"),
             Fast::Undecided => {}
         }
+    }
+
+    #[test]
+    fn comes_back_to_every_pending_half() {
+        // ((t − 0.3)² + 1e-6)·(t − 0.9): the complex pair near 0.3 shows as two sign
+        // variations on every piece around it until the pieces are far smaller than 0.3,
+        // so the search goes deep on the left and returns to many pending right halves
+        // before the root at 0.9 (and, without it, proves there is no root).
+        let pair = [0.09 + 1e-6, -0.6, 1.0];
+        let c = [-0.9 * pair[0], pair[0] - 0.9 * pair[1], pair[1] - 0.9, 1.0];
+        let mut trace = crate::roots::Trace::default();
+        let p = prepare(&c, 0.0, 1.0).expect("a polynomial");
+        match first_root(&p, &mut trace) {
+            Fast::Root(t) => assert!((t - 0.9).abs() <= 4.0 * f64::EPSILON, "{t}"),
+            _ => panic!("expected the root at 0.9"),
+        }
+        assert!(trace.splits >= 8, "{trace:?}");
+        assert!(matches!(fast(&pair, 0.0, 1.0), Fast::NoRoot));
     }
 }
