@@ -84,14 +84,24 @@ fn sign_changes<const D: usize>(b: &[f64; D]) -> u32 {
     (neg ^ (neg >> 1)) & ((1 << (D - 1)) - 1)
 }
 
-/// Number of sign variations of `b`, or `None` when an interior coefficient (or the last
-/// one) is within `margin` of zero (its sign uncertain).
+/// Number of sign variations of `b` (0, 1, or 2 for two or more: all the search needs to
+/// know), or `None` when an interior coefficient (or the last one) is within `margin` of zero
+/// (its sign uncertain).
 #[inline(always)]
 fn variations<const D: usize>(b: &[f64; D], margin: f64) -> Option<u32> {
     // Branch-free over the whole array (the loops unroll and pair up); the same answer as
     // stopping at the first uncertain coefficient.
     let uncertain = b[1..].iter().fold(false, |u, &x| u | (x.abs() <= margin));
-    (!uncertain).then(|| sign_changes(b).count_ones())
+    let changes = sign_changes(b);
+    // No bit, one bit (clearing the lowest leaves none), or more.
+    let count = if changes == 0 {
+        0
+    } else if changes & (changes - 1) == 0 {
+        1
+    } else {
+        2
+    };
+    (!uncertain).then_some(count)
 }
 
 /// De Casteljau in place: `b` (a piece `[0, 1]`) becomes the Bernstein coefficients of its
@@ -112,14 +122,16 @@ fn keep_left<const D: usize>(b: &mut [f64; D], lambda: f64) {
 
 /// De Casteljau in place: `b` (a piece `[0, 1]`) becomes the Bernstein coefficients of its
 /// part `[λ, 1]`.
-#[inline]
+#[inline(always)]
 fn keep_right<const D: usize>(b: &mut [f64; D], lambda: f64) {
-    let n = D - 1;
-    for k in 1..=n {
-        for j in 0..=n - k {
-            b[j] += lambda * (b[j + 1] - b[j]);
+    // On a copy with fixed bounds, as `keep_left` (the in-place loops did not unroll).
+    let mut row = *b;
+    for k in 1..D {
+        for j in 0..D - k {
+            row[j] += lambda * (row[j + 1] - row[j]);
         }
     }
+    *b = row;
 }
 
 /// See the module documentation.
@@ -226,7 +238,9 @@ fn root_of_piece<const D: usize, O: Observer>(
 }
 
 /// The search for a polynomial of degree `D − 1` (a fixed size, so that the loops unroll and
-/// the coefficients stay in registers); see the module documentation.
+/// the coefficients stay in registers); see the module documentation. Inlined into the
+/// fixed-size preparation's caller, so that the prepared copy stays in registers.
+#[inline(always)]
 pub(crate) fn search<const D: usize, O: Observer>(p: &Fixed<D>, obs: &mut O) -> Fast {
     let n = D - 1;
     let c = &p.c;
