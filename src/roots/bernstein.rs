@@ -27,12 +27,13 @@
 //! it used are exact for the given coefficients, so the answer is the exact one: the same
 //! hit/miss the full method gives away from numerically multiple roots.
 
-use super::prep::{horner, Prepared};
-use super::refine::refine_simple;
+use super::prep::{horner, Fixed, Prepared};
+use super::refine::{refine_simple, size_at};
 use super::trace::Observer;
 
 /// Halvings after which a piece that still has more than one sign variation is left to the
-/// full method (a numerically multiple root or an unresolvable cluster).
+/// full method (a numerically multiple root or an unresolvable cluster). At most 63 (the
+/// search keeps its pending pieces as the bits of a `u64`).
 const MAX_DEPTH: usize = 40;
 
 /// Pieces examined at most (each costs one de Casteljau split).
@@ -68,21 +69,39 @@ pub(crate) const INV_BINOMIAL: [[f64; 17]; 17] = {
     t
 };
 
-/// Number of sign variations of `b`, or `None` when an interior coefficient is within
-/// `margin` of zero (its sign uncertain).
-#[inline]
-fn variations(b: &[f64], margin: f64) -> Option<u32> {
-    let mut v = 0;
-    let mut neg = b[0] < 0.0;
-    for &x in &b[1..] {
-        if x.abs() <= margin {
-            return None;
-        }
-        let xn = x < 0.0;
-        v += u32::from(xn != neg);
-        neg = xn;
-    }
-    Some(v)
+/// Bit `i` set when `b[i] < 0`.
+#[inline(always)]
+fn negative_bits<const D: usize>(b: &[f64; D]) -> u32 {
+    b.iter()
+        .enumerate()
+        .fold(0, |bits, (i, &x)| bits | u32::from(x < 0.0) << i)
+}
+
+/// Bit `i` set when `b[i]` and `b[i + 1]` differ in sign (`< 0` or not), for `i < D − 1`.
+#[inline(always)]
+fn sign_changes<const D: usize>(b: &[f64; D]) -> u32 {
+    let neg = negative_bits(b);
+    (neg ^ (neg >> 1)) & ((1 << (D - 1)) - 1)
+}
+
+/// Number of sign variations of `b` (0, 1, or 2 for two or more: all the search needs to
+/// know), or `None` when an interior coefficient (or the last one) is within `margin` of zero
+/// (its sign uncertain).
+#[inline(always)]
+fn variations<const D: usize>(b: &[f64; D], margin: f64) -> Option<u32> {
+    // Branch-free over the whole array (the loops unroll and pair up); the same answer as
+    // stopping at the first uncertain coefficient.
+    let uncertain = b[1..].iter().fold(false, |u, &x| u | (x.abs() <= margin));
+    let changes = sign_changes(b);
+    // No bit, one bit (clearing the lowest leaves none), or more.
+    let count = if changes == 0 {
+        0
+    } else if changes & (changes - 1) == 0 {
+        1
+    } else {
+        2
+    };
+    (!uncertain).then_some(count)
 }
 
 /// De Casteljau in place: `b` (a piece `[0, 1]`) becomes the Bernstein coefficients of its
@@ -103,37 +122,34 @@ fn keep_left<const D: usize>(b: &mut [f64; D], lambda: f64) {
 
 /// De Casteljau in place: `b` (a piece `[0, 1]`) becomes the Bernstein coefficients of its
 /// part `[λ, 1]`.
-#[inline]
+#[inline(always)]
 fn keep_right<const D: usize>(b: &mut [f64; D], lambda: f64) {
-    let n = D - 1;
-    for k in 1..=n {
-        for j in 0..=n - k {
-            b[j] += lambda * (b[j + 1] - b[j]);
+    // On a copy with fixed bounds, as `keep_left` (the in-place loops did not unroll).
+    let mut row = *b;
+    for k in 1..D {
+        for j in 0..D - k {
+            row[j] += lambda * (row[j + 1] - row[j]);
         }
     }
+    *b = row;
 }
 
 /// See the module documentation.
 pub(crate) fn first_root(p: &Prepared, obs: &mut impl Observer) -> Fast {
-    match p.n {
-        1 => search::<2, _>(p, obs),
-        2 => search::<3, _>(p, obs),
-        3 => search::<4, _>(p, obs),
-        4 => search::<5, _>(p, obs),
-        5 => search::<6, _>(p, obs),
-        6 => search::<7, _>(p, obs),
-        7 => search::<8, _>(p, obs),
-        8 => search::<9, _>(p, obs),
-        9 => search::<10, _>(p, obs),
-        10 => search::<11, _>(p, obs),
-        11 => search::<12, _>(p, obs),
-        12 => search::<13, _>(p, obs),
-        13 => search::<14, _>(p, obs),
-        14 => search::<15, _>(p, obs),
-        15 => search::<16, _>(p, obs),
-        16 => search::<17, _>(p, obs),
-        _ => Fast::Undecided,
+    macro_rules! fixed {
+        ($($d:literal)*) => {
+            match p.n + 1 {
+                $($d => search::<$d, _>(&Fixed {
+                    c: p.c[..$d].try_into().expect("degree D - 1"),
+                    scale: p.scale,
+                    lo: p.lo,
+                    hi: p.hi,
+                }, obs),)*
+                _ => Fast::Undecided,
+            }
+        };
     }
+    fixed!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17)
 }
 
 /// The Bernstein coefficients on `[a, b]` of a polynomial of degree `D − 1` (a fixed size, so
@@ -179,18 +195,22 @@ pub(super) fn bernstein_fixed<const D: usize>(c: &[f64; D], a: f64, b: f64) -> (
 /// when the end values do not confirm the bracket.
 #[inline(always)]
 fn root_of_piece<const D: usize, O: Observer>(
-    p: &Prepared,
-    c: &[f64; D],
+    p: &Fixed<D>,
     b: &[f64; D],
     (s0, s1): (f64, f64),
+    size: f64,
     obs: &mut O,
 ) -> Fast {
     let n = D - 1;
+    let c = &p.c;
     let (lo, hi) = (p.lo, p.hi);
     let w = hi - lo;
     let ta = if s0 == 0.0 { lo } else { lo + w * s0 };
     let tb = if s1 == 1.0 { hi } else { lo + w * s1 };
-    let (fa, fb) = (horner(c, ta), horner(c, tb));
+    // `P(0)` by Horner's rule is `c₀` (or a zero of either sign when `c₀` is zero: all this
+    // code asks of it is its comparisons with zero).
+    let fa = if ta == 0.0 { c[0] } else { horner(c, ta) };
+    let fb = horner(c, tb);
     if fb == 0.0 {
         return Fast::Root(tb * p.scale);
     }
@@ -199,42 +219,56 @@ fn root_of_piece<const D: usize, O: Observer>(
     }
     // Start where the piece's control polygon crosses zero: on a piece with one sign
     // variation it is close to the root, closer than false position on the end values.
-    let i = (0..n)
-        .find(|&i| (b[i] < 0.0) != (b[i + 1] < 0.0))
-        .unwrap_or(0);
+    let changes = sign_changes(b);
+    let i = if changes == 0 {
+        0
+    } else {
+        changes.trailing_zeros() as usize
+    };
     let s = (i as f64 + b[i] / (b[i] - b[i + 1])) / n as f64;
     let start = ta + (tb - ta) * s;
-    Fast::Root(refine_simple(c, ta, tb, fa, start, obs) * p.scale)
+    // The size of `P`'s terms at every point of `[ta, tb]` is at most its size at the end
+    // farther from zero; from `lo = 0` that is at most the search's `size` (at `hi`).
+    let size = if lo == 0.0 {
+        size
+    } else {
+        size_at(c, ta.abs().max(tb.abs()))
+    };
+    Fast::Root(refine_simple(c, ta, tb, fa, start, size, obs) * p.scale)
 }
 
 /// The search for a polynomial of degree `D − 1` (a fixed size, so that the loops unroll and
-/// the coefficients stay in registers).
-fn search<const D: usize, O: Observer>(p: &Prepared, obs: &mut O) -> Fast {
+/// the coefficients stay in registers); see the module documentation. Inlined into the
+/// fixed-size preparation's caller, so that the prepared copy stays in registers.
+#[inline(always)]
+pub(crate) fn search<const D: usize, O: Observer>(p: &Fixed<D>, obs: &mut O) -> Fast {
     let n = D - 1;
-    let c: &[f64; D] = p.c[..D].try_into().expect("degree D - 1");
+    let c = &p.c;
     let (lo, hi) = (p.lo, p.hi);
     let w = hi - lo;
     // On [lo, hi]; the rounding bound below (from |lo| + w) covers either expansion end.
     let (root, _) = bernstein_fixed(c, lo, hi);
     let r = lo.abs() + w;
-    let size = c.iter().rev().fold(0.0, |s, a| s * r + a.abs());
+    let size = size_at(c, r);
     let unit = (n + 1) as f64 * f64::EPSILON * size;
     if !unit.is_finite() || root[0].abs() <= 64.0 * unit || root[n].abs() <= 64.0 * unit {
         return Fast::Undecided;
     }
-    // The whole interval first: most queries end there, before the stack below is made
-    // (zeroing it is about 40 instructions). The loop's first piece is this one again, with
-    // its variations already counted.
+    // The whole interval first: most queries end there. The loop's first piece is this one
+    // again, with its variations already counted.
     let mut known = Some(variations(&root, 64.0 * unit));
     match known {
         Some(Some(0)) => return Fast::NoRoot,
-        Some(Some(1)) => return root_of_piece(p, c, &root, (0.0, 1.0), obs),
+        Some(Some(1)) => return root_of_piece(p, &root, (0.0, 1.0), size, obs),
         _ => {}
     }
-    // Depth-first over pieces `[s0, s1]` of `[0, 1]`, left first. A pending right half waits
-    // on the stack as its range only; its coefficients are cut from the root's when needed.
-    let mut stack = [(0.0f64, 0.0f64, 0u32); MAX_DEPTH];
-    let mut top = 0;
+    // Depth-first over pieces `[s0, s1]` of `[0, 1]`, left first. The piece at depth `d` was
+    // reached from its parent by the left or the right half; bit `d` of `pending` is set
+    // when it was the left one, its right sibling still to search. The next pending piece is
+    // the deepest one, and its range is found again by repeating the same halvings from
+    // `[0, 1]` (the same operations, so the same bits); its coefficients are cut from the
+    // root's.
+    let mut pending = 0u64;
     let mut b = root;
     let (mut s0, mut s1, mut depth) = (0.0f64, 1.0f64, 0u32);
     for _ in 0..MAX_NODES {
@@ -246,11 +280,20 @@ fn search<const D: usize, O: Observer>(p: &Prepared, obs: &mut O) -> Fast {
         match v {
             Some(0) => {
                 // No root here: the next pending piece.
-                if top == 0 {
+                if pending == 0 {
                     return Fast::NoRoot;
                 }
-                top -= 1;
-                (s0, s1, depth) = stack[top];
+                depth = 63 - pending.leading_zeros();
+                pending &= !(1 << depth);
+                (s0, s1) = (0.0, 1.0);
+                for level in 1..=depth {
+                    let sm = s0 + SPLIT * (s1 - s0);
+                    if level < depth && pending & (1 << level) != 0 {
+                        s1 = sm;
+                    } else {
+                        s0 = sm;
+                    }
+                }
                 b = root;
                 if s1 < 1.0 {
                     keep_left(&mut b, s1);
@@ -258,7 +301,7 @@ fn search<const D: usize, O: Observer>(p: &Prepared, obs: &mut O) -> Fast {
                 keep_right(&mut b, s0 / s1);
                 continue;
             }
-            Some(1) => return root_of_piece(p, c, &b, (s0, s1), obs),
+            Some(1) => return root_of_piece(p, &b, (s0, s1), size, obs),
             _ => {}
         }
         if depth as usize + 1 >= MAX_DEPTH {
@@ -271,8 +314,7 @@ fn search<const D: usize, O: Observer>(p: &Prepared, obs: &mut O) -> Fast {
             return Fast::Undecided;
         }
         depth += 1;
-        stack[top] = (sm, s1, depth);
-        top += 1;
+        pending |= 1 << depth;
         s1 = sm;
     }
     Fast::Undecided
@@ -316,5 +358,23 @@ mod tests {
             Fast::NoRoot => panic!("expected a root"),
             Fast::Undecided => {}
         }
+    }
+
+    #[test]
+    fn comes_back_to_every_pending_half() {
+        // ((t − 0.3)² + 1e-6)·(t − 0.9): the complex pair near 0.3 shows as two sign
+        // variations on every piece around it until the pieces are far smaller than 0.3,
+        // so the search goes deep on the left and returns to many pending right halves
+        // before the root at 0.9 (and, without it, proves there is no root).
+        let pair = [0.09 + 1e-6, -0.6, 1.0];
+        let c = [-0.9 * pair[0], pair[0] - 0.9 * pair[1], pair[1] - 0.9, 1.0];
+        let mut trace = crate::roots::Trace::default();
+        let p = prepare(&c, 0.0, 1.0).expect("a polynomial");
+        match first_root(&p, &mut trace) {
+            Fast::Root(t) => assert!((t - 0.9).abs() <= 4.0 * f64::EPSILON, "{t}"),
+            _ => panic!("expected the root at 0.9"),
+        }
+        assert!(trace.splits >= 8, "{trace:?}");
+        assert!(matches!(fast(&pair, 0.0, 1.0), Fast::NoRoot));
     }
 }

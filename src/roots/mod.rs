@@ -63,21 +63,62 @@ pub fn sturm_roots(coeffs: &[f64], lo: f64, hi: f64) -> Vec<f64> {
 /// isolated and refined), after the Bernstein test (see the module documentation). No heap
 /// allocation.
 pub fn first_root(coeffs: &[f64], lo: f64, hi: f64) -> Option<f64> {
-    prep::prepare(coeffs, lo, hi).and_then(|p| sturm::first_root(&p, &mut ()))
+    observed(Solver::Sturm, coeffs, lo, hi, &mut ())
 }
 
 /// The smallest real root in `(lo, hi]` by the derivative-splitting method (Yuksel 2022):
 /// same contract as [`first_root`], including multiple roots reported at the root. The
 /// Bernstein test runs first, as for [`first_root`]. No heap allocation.
 pub fn first_root_yuksel(coeffs: &[f64], lo: f64, hi: f64) -> Option<f64> {
-    yuksel_observed(coeffs, lo, hi, &mut ())
+    observed(Solver::Yuksel, coeffs, lo, hi, &mut ())
 }
 
-/// [`first_root_yuksel`], telling `obs` what it does.
-#[inline]
-fn yuksel_observed(coeffs: &[f64], lo: f64, hi: f64, obs: &mut impl Observer) -> Option<f64> {
+/// The first root by `solver`, telling `obs` what it does: the Bernstein test, then the
+/// strategy's own isolation where the test declines. The usual polynomial (`D` coefficients,
+/// nothing to trim, a bounded interval) is prepared into a fixed-size copy for the test, and
+/// the full preparation is made only if the test declines.
+#[inline(always)]
+fn observed(
+    solver: Solver,
+    coeffs: &[f64],
+    lo: f64,
+    hi: f64,
+    obs: &mut impl Observer,
+) -> Option<f64> {
+    macro_rules! fixed {
+        ($($d:literal)*) => {
+            match coeffs.len() {
+                $($d => {
+                    let c: &[f64; $d] = coeffs.try_into().expect("length");
+                    match prep::prepare_fixed(c, lo, hi) {
+                        prep::Usual::Refused => return None,
+                        prep::Usual::Fixed(f) => {
+                            let fast = bernstein::search(&f, obs);
+                            return settle(solver, fast, || f.to_prepared(), obs);
+                        }
+                        prep::Usual::Other => {}
+                    }
+                })*
+                _ => {}
+            }
+        };
+    }
+    fixed!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17);
     let p = prep::prepare(coeffs, lo, hi)?;
-    match bernstein::first_root(&p, obs) {
+    let fast = bernstein::first_root(&p, obs);
+    settle(solver, fast, || p, obs)
+}
+
+/// The answer of the Bernstein test `fast` when it has one, else `solver`'s on the prepared
+/// polynomial.
+#[inline(always)]
+fn settle(
+    solver: Solver,
+    fast: bernstein::Fast,
+    prepared: impl FnOnce() -> prep::Prepared,
+    obs: &mut impl Observer,
+) -> Option<f64> {
+    match fast {
         bernstein::Fast::NoRoot => {
             obs.settled(Path::Bernstein);
             None
@@ -86,10 +127,13 @@ fn yuksel_observed(coeffs: &[f64], lo: f64, hi: f64, obs: &mut impl Observer) ->
             obs.settled(Path::Bernstein);
             Some(t)
         }
-        bernstein::Fast::Undecided => {
-            obs.settled(Path::Derivatives);
-            yuksel::first_root(&p, obs)
-        }
+        bernstein::Fast::Undecided => match solver {
+            Solver::Sturm => sturm::first_root(&prepared(), obs),
+            Solver::Yuksel => {
+                obs.settled(Path::Derivatives);
+                yuksel::first_root(&prepared(), obs)
+            }
+        },
     }
 }
 
@@ -143,12 +187,7 @@ impl Solver {
     ) -> Option<f64> {
         trace.queries = trace.queries.saturating_add(1);
         trace.path = Path::Refused;
-        match self {
-            Solver::Sturm => {
-                prep::prepare(coeffs, lo, hi).and_then(|p| sturm::first_root(&p, trace))
-            }
-            Solver::Yuksel => yuksel_observed(coeffs, lo, hi, trace),
-        }
+        observed(self, coeffs, lo, hi, trace)
     }
 }
 

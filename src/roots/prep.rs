@@ -24,6 +24,104 @@ pub(crate) struct Prepared {
     pub hi: f64,
 }
 
+/// [`Prepared`] with exactly `D` coefficients (degree `D − 1`, nothing trimmed): the usual
+/// case, made by [`prepare_fixed`] without the 17-entry array.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Fixed<const D: usize> {
+    /// Coefficients of `P`, ascending; `c[D − 1]`, the leading one, in `[1, 2)` in magnitude.
+    pub c: [f64; D],
+    /// `t = scale · T`; a power of two.
+    pub scale: f64,
+    /// Lower end of the interval in `T` (excluded), finite.
+    pub lo: f64,
+    /// Upper end of the interval in `T` (included), finite, `> lo`.
+    pub hi: f64,
+}
+
+impl<const D: usize> Fixed<D> {
+    /// The same polynomial and interval as a [`Prepared`].
+    pub(crate) fn to_prepared(self) -> Prepared {
+        let mut c = [0.0; MAX_COEFFS];
+        c[..D].copy_from_slice(&self.c);
+        Prepared {
+            c,
+            n: D - 1,
+            scale: self.scale,
+            lo: self.lo,
+            hi: self.hi,
+        }
+    }
+}
+
+/// What [`prepare_fixed`] found.
+pub(crate) enum Usual<const D: usize> {
+    /// [`prepare`] gives `None` for this input (invalid: a non-finite coefficient or bound,
+    /// or `lo ≥ hi`).
+    Refused,
+    /// The usual case: [`prepare`] gives exactly this (as [`Fixed::to_prepared`]).
+    Fixed(Fixed<D>),
+    /// Another case: ask [`prepare`].
+    Other,
+}
+
+/// [`prepare`] for `D` coefficients (`2 ≤ D ≤ 17`) in its usual case: a non-zero leading
+/// coefficient that the trimming rule keeps, on a bounded interval that sets the scale (the
+/// shortcut of `scale`), with every power of two of the rescaling a normal number. The same
+/// operations as [`prepare`]'s, so the same bits (tested).
+#[inline(always)]
+pub(crate) fn prepare_fixed<const D: usize>(coeffs: &[f64; D], lo: f64, hi: f64) -> Usual<D> {
+    let valid = lo < hi && coeffs.iter().fold(0.0, |acc, &c| acc + c * 0.0) == 0.0;
+    if !valid {
+        return Usual::Refused;
+    }
+    let n = D - 1;
+    let r = lo.abs().max(hi.abs());
+    let cn = coeffs[n];
+    if cn == 0.0 || !r.is_finite() {
+        return Usual::Other;
+    }
+    let er = exponent(r) + 1;
+    let en = exponent(cn);
+    let reaches = if r == 1.0 {
+        // `trimmed_degree`'s and `scale`'s shortcuts for an interval reaching 1 (then
+        // `e_R = 1`) test the same largest lower coefficient.
+        let big = max_abs(&coeffs[..n]);
+        if cn.abs() <= TRIM_EPS * big {
+            return Usual::Other;
+        }
+        big != 0.0 && exponent(big) - en + 1 > 0
+    } else {
+        if trimmed_degree(coeffs, n, r) != n || !(-1000..=999).contains(&er) {
+            return Usual::Other;
+        }
+        let mut reaches = false;
+        for k in 1..=n {
+            let ck = coeffs[n - k];
+            reaches |= ck != 0.0 && exponent(ck) - en + 1 > k as i32 * (er - 1);
+        }
+        reaches
+    };
+    // As in `rescale`, with both ends of the exponents normal.
+    let (first, last) = (-(n as i32) * er - en, -en);
+    if !reaches || !(-1022..=1023).contains(&first) || !(-1022..=1023).contains(&last) {
+        return Usual::Other;
+    }
+    let mut c = *coeffs;
+    for (j, cj) in c.iter_mut().enumerate() {
+        let k = j as i32 * er + first;
+        *cj *= f64::from_bits(((k + 1023) as u64) << 52);
+    }
+    // `1 / scale` is exact (a power of two of normal exponent), so multiplying by it rounds
+    // like dividing by `scale`.
+    let (scale, inv) = (mul_pow2(1.0, er), mul_pow2(1.0, -er));
+    Usual::Fixed(Fixed {
+        c,
+        scale,
+        lo: lo * inv,
+        hi: hi * inv,
+    })
+}
+
 /// The binary exponent of a finite non-zero `x` (`floor(log2 |x|)`, clamped for subnormals).
 #[inline]
 pub(crate) fn exponent(x: f64) -> i32 {
@@ -329,6 +427,66 @@ mod tests {
             answered += usize::from(fast.is_some());
         }
         assert!(answered > 1000);
+    }
+
+    /// `prepare_fixed::<D>` on `c` (of length `D`) against `prepare`.
+    fn check_fixed<const D: usize>(c: &[f64], lo: f64, hi: f64) -> bool {
+        let general = prepare(c, lo, hi);
+        match prepare_fixed::<D>(c.try_into().expect("D coefficients"), lo, hi) {
+            Usual::Refused => assert_eq!(general, None, "{c:?} on ({lo}, {hi}]"),
+            Usual::Fixed(f) => {
+                assert_eq!(Some(f.to_prepared()), general, "{c:?} on ({lo}, {hi}]");
+                return true;
+            }
+            Usual::Other => {}
+        }
+        false
+    }
+
+    #[test]
+    fn the_fixed_size_preparation_is_the_general_one() {
+        // As above, with exact powers of two, zeros, non-finite values and empty intervals
+        // mixed in; every length the fixed path takes.
+        let mut next = uniform(0x5851_f42d_4c95_7f2d);
+        let mut fixed = 0;
+        for i in 0..40_000 {
+            let n = 1 + i % 16;
+            let mut c = [0.0; MAX_COEFFS];
+            for cj in c.iter_mut().take(n + 1) {
+                let size = 2f64.powi((next() * 80.0) as i32 - 40);
+                *cj = match (next() * 20.0) as u32 {
+                    0 => 0.0,
+                    1 => size,
+                    2 if i % 7 == 0 => f64::NAN,
+                    3 if i % 11 == 0 => f64::INFINITY,
+                    _ => (next() - 0.5) * size,
+                };
+            }
+            if next() < 0.1 {
+                c[n] *= 1e-20;
+            }
+            let (lo, hi) = match (next() * 5.0) as u32 {
+                0 => (0.0, 1.0),
+                1 => (next() * 0.99, 1.0),
+                2 => (next(), next()),
+                3 => (0.0, f64::INFINITY),
+                _ => {
+                    let lo = (next() - 0.7) * 2f64.powi((next() * 60.0) as i32 - 30);
+                    (lo, lo + next() * 2f64.powi((next() * 60.0) as i32 - 30))
+                }
+            };
+            let c = &c[..=n];
+            macro_rules! lengths {
+                ($($d:literal)*) => {
+                    match n + 1 {
+                        $($d => check_fixed::<$d>(c, lo, hi),)*
+                        _ => unreachable!(),
+                    }
+                };
+            }
+            fixed += usize::from(lengths!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17));
+        }
+        assert!(fixed > 8_000 && fixed < 36_000, "{fixed}");
     }
 
     #[test]

@@ -29,7 +29,6 @@
 //! count `V(a) − V(b)` the number of distinct roots in the half-open `(a, b]`. Bisection
 //! splits slightly off the middle so as not to land exactly on dyadic roots.
 
-use super::bernstein::{self, Fast};
 use super::cluster::{abs_horner, bound};
 use super::prep::{horner, max_abs, Prepared, MAX_COEFFS};
 use super::trace::{Observer, Path};
@@ -352,19 +351,9 @@ fn isolate_in<const M: usize>(
     Some(found)
 }
 
-/// See [`super::first_root`].
+/// See [`super::first_root`]: the Sturm isolation of the first root, for a polynomial the
+/// Bernstein test left undecided (it is not tried again here).
 pub(crate) fn first_root(p: &Prepared, obs: &mut impl Observer) -> Option<f64> {
-    match bernstein::first_root(p, obs) {
-        Fast::NoRoot => {
-            obs.settled(Path::Bernstein);
-            return None;
-        }
-        Fast::Root(t) => {
-            obs.settled(Path::Bernstein);
-            return Some(t);
-        }
-        Fast::Undecided => {}
-    }
     let mut out = [0.0; MAX_COEFFS];
     if let Some(found) = isolate(p, true, &mut out, obs) {
         obs.settled(Path::Sturm);
