@@ -233,10 +233,14 @@ enum Step {
     Term(u8),
     /// `h ← h·Y(s)`, `h` of the given degree.
     TimesY(u8),
+    /// `h ← h·Y(s)·Y(s)` (two [`Step::TimesY`] in one), `h` of the given degree.
+    TimesY2(u8),
     /// `f ← f + h` over `h`'s degree (given), then `h ← 0`.
     Flush(u8),
     /// `f ← f·X(s)`, `f` of the given degree.
     TimesX(u8),
+    /// `f ← f·X(s)·X(s)` (two [`Step::TimesX`] in one), `f` of the given degree.
+    TimesX2(u8),
 }
 
 /// The powers `xᵏ, yᵏ, zᵏ` of a point's coordinates, each the previous one times the
@@ -498,17 +502,23 @@ impl Compiled {
             match step {
                 Step::Term(k) => {
                     let c = T::coef(terms.next().expect("one term per Term step"));
-                    let k = k as usize;
-                    let z = &zp[tri(k)..=tri(k) + k];
-                    with_degree!(k, D => add_scaled::<T, D>(&mut hy, c, z));
+                    with_degree!(k as usize, D => add_scaled::<T, D>(&mut hy, c, &zp[tri(D)..]));
                 }
                 Step::TimesY(d) => {
                     with_degree!(d as usize, D => times_linear::<T, D>(&mut hy, o[1], e[1]))
                 }
+                Step::TimesY2(d) => with_degree!(d as usize, D => {
+                    times_linear::<T, D>(&mut hy, o[1], e[1]);
+                    times_linear::<T, { D + 1 }>(&mut hy, o[1], e[1]);
+                }),
                 Step::Flush(d) => with_degree!(d as usize, D => flush::<T, D>(out, &mut hy)),
                 Step::TimesX(d) => {
                     with_degree!(d as usize, D => times_linear::<T, D>(out, o[0], e[0]))
                 }
+                Step::TimesX2(d) => with_degree!(d as usize, D => {
+                    times_linear::<T, D>(out, o[0], e[0]);
+                    times_linear::<T, { D + 1 }>(out, o[0], e[0]);
+                }),
             }
         }
     }
@@ -560,7 +570,20 @@ fn schedule(terms: &[Term]) -> Vec<Step> {
         steps.push(Step::TimesX(fx_deg as u8));
         fx_deg += 1;
     }
-    steps
+    // Two multiplications by the same factor in a row become one step.
+    let mut fused: Vec<Step> = Vec::with_capacity(steps.len());
+    for step in steps {
+        match (fused.last(), step) {
+            (Some(&Step::TimesY(d)), Step::TimesY(n)) if n == d + 1 => {
+                *fused.last_mut().unwrap() = Step::TimesY2(d)
+            }
+            (Some(&Step::TimesX(d)), Step::TimesX(n)) if n == d + 1 => {
+                *fused.last_mut().unwrap() = Step::TimesX2(d)
+            }
+            _ => fused.push(step),
+        }
+    }
+    fused
 }
 
 /// `p ← p · (a + b·s)` for `p` of degree `D` (the result has degree `D + 1`; `D < MAX_DEGREE`).
