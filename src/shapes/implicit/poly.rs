@@ -243,63 +243,6 @@ enum Step {
     TimesX2(u8),
 }
 
-/// The powers `xᵏ, yᵏ, zᵏ` of a point's coordinates, each the previous one times the
-/// coordinate (so every polynomial evaluated on the table sees the same values).
-#[derive(Clone, Copy, Debug)]
-pub struct Powers([[f64; MAX_DEGREE + 1]; 3]);
-
-impl Powers {
-    /// The powers of `p`'s coordinates up to `degree` (at most [`MAX_DEGREE`]).
-    #[inline]
-    pub fn new(p: [f64; 3], degree: usize) -> Powers {
-        let mut pw = [[1.0; MAX_DEGREE + 1]; 3];
-        for (v, row) in pw.iter_mut().enumerate() {
-            for k in 1..=degree {
-                row[k] = row[k - 1] * p[v];
-            }
-        }
-        Powers(pw)
-    }
-}
-
-/// Univariate coefficients (ascending) in fixed storage.
-pub type Uni = [f64; MAX_DEGREE + 1];
-
-/// The arithmetic a ray composition runs in: `f64`, or [`Dd`] where `f64` cannot resolve
-/// the polynomial.
-pub trait Scalar: Copy + Add<Output = Self> + Mul<Output = Self> {
-    /// Zero.
-    const ZERO: Self;
-    /// One.
-    const ONE: Self;
-    /// The coefficient of a term in this arithmetic.
-    fn coef(t: &Term) -> Self;
-}
-
-impl Scalar for f64 {
-    const ZERO: f64 = 0.0;
-    const ONE: f64 = 1.0;
-    #[inline]
-    fn coef(t: &Term) -> f64 {
-        t.c
-    }
-}
-
-impl Scalar for Dd {
-    const ZERO: Dd = Dd::ZERO;
-    const ONE: Dd = Dd::from_f64(1.0);
-    #[inline]
-    fn coef(t: &Term) -> Dd {
-        Dd { hi: t.c, lo: t.lo }
-    }
-}
-
-/// Offset of row `k` (the `k + 1` coefficients of `Z(s)ᵏ`) in the triangular table of powers.
-#[inline(always)]
-const fn tri(k: usize) -> usize {
-    k * (k + 1) / 2
-}
-
 /// Runs `$body` with `$d` bound to the value of `$v` (at most [`MAX_DEGREE`]) as a constant,
 /// so that kernels written for one degree get constant trip counts.
 macro_rules! with_degree {
@@ -375,6 +318,74 @@ macro_rules! with_degree {
             }
         }
     };
+}
+
+/// The powers `xᵏ, yᵏ, zᵏ` of a point's coordinates for `k` up to the degree it was made
+/// for, each the previous one times the coordinate (so every polynomial evaluated on the
+/// table sees the same values).
+#[derive(Clone, Copy, Debug)]
+pub struct Powers([[f64; MAX_DEGREE + 1]; 3]);
+
+impl Powers {
+    /// The powers of `p`'s coordinates up to `degree` (at most [`MAX_DEGREE`]).
+    #[inline]
+    pub fn new(p: [f64; 3], degree: usize) -> Powers {
+        // Entries above the degree are never read; zero is the cheapest fill.
+        let mut pw = [[0.0; MAX_DEGREE + 1]; 3];
+        with_degree!(degree, D => {
+            for (row, x) in pw.iter_mut().zip(p) {
+                powers_into::<D>(row, x);
+            }
+        });
+        Powers(pw)
+    }
+}
+
+/// `row[k] ← xᵏ` for `k ≤ D`, each the previous one times `x`.
+#[inline(always)]
+fn powers_into<const D: usize>(row: &mut [f64; MAX_DEGREE + 1], x: f64) {
+    row[0] = 1.0;
+    for k in 1..=D {
+        row[k] = row[k - 1] * x;
+    }
+}
+
+/// Univariate coefficients (ascending) in fixed storage.
+pub type Uni = [f64; MAX_DEGREE + 1];
+
+/// The arithmetic a ray composition runs in: `f64`, or [`Dd`] where `f64` cannot resolve
+/// the polynomial.
+pub trait Scalar: Copy + Add<Output = Self> + Mul<Output = Self> {
+    /// Zero.
+    const ZERO: Self;
+    /// One.
+    const ONE: Self;
+    /// The coefficient of a term in this arithmetic.
+    fn coef(t: &Term) -> Self;
+}
+
+impl Scalar for f64 {
+    const ZERO: f64 = 0.0;
+    const ONE: f64 = 1.0;
+    #[inline]
+    fn coef(t: &Term) -> f64 {
+        t.c
+    }
+}
+
+impl Scalar for Dd {
+    const ZERO: Dd = Dd::ZERO;
+    const ONE: Dd = Dd::from_f64(1.0);
+    #[inline]
+    fn coef(t: &Term) -> Dd {
+        Dd { hi: t.c, lo: t.lo }
+    }
+}
+
+/// Offset of row `k` (the `k + 1` coefficients of `Z(s)ᵏ`) in the triangular table of powers.
+#[inline(always)]
+const fn tri(k: usize) -> usize {
+    k * (k + 1) / 2
 }
 
 impl Compiled {
