@@ -36,6 +36,7 @@ use crate::camera::Camera;
 use crate::film::Image;
 use crate::geometry::{DVec3, Ray};
 use crate::scene::Scene;
+use crate::shapes::LANES;
 
 /// Side of the square image tiles, in pixels; each band of tiles one `TILE_SIZE` tall is one
 /// unit of parallel work, rendered straight into its rows of the image. Cancellation is
@@ -48,6 +49,18 @@ pub trait Shader: Sync {
     /// The colour arriving along `ray` (world space, starting at the eye, unit direction) for
     /// the pixel sample `sample` (its random numbers and ray counter).
     fn radiance(&self, ray: &Ray, sample: &mut Sample) -> DVec3;
+
+    /// [`Shader::radiance`] for [`LANES`] samples at once (the same sample of neighbouring
+    /// pixels, each with its own random numbers): lane `i` is always exactly
+    /// `self.radiance(&rays[i], &mut samples[i])`, with the same random numbers drawn from
+    /// `samples[i]` in the same order. A shader may answer it more cheaply, never differently.
+    fn radiance_lanes(&self, rays: &[Ray; LANES], samples: &mut [Sample; LANES]) -> [DVec3; LANES] {
+        let mut out = [DVec3::ZERO; LANES];
+        for ((colour, ray), sample) in out.iter_mut().zip(rays).zip(samples.iter_mut()) {
+            *colour = self.radiance(ray, sample);
+        }
+        out
+    }
 }
 
 /// What a shader is built from for one render.

@@ -10,7 +10,9 @@ use super::sampling::{mix, pixel_key, point_in_grid, strata, Sample};
 use super::{Shader, TILE_SIZE};
 use crate::camera::Camera;
 use crate::film::{self, Image, Region, Vec3};
+use crate::geometry::{DVec3, Ray};
 use crate::scene::Scene;
+use crate::shapes::LANES;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::Mutex;
 
@@ -225,47 +227,114 @@ impl PixelSampler<'_> {
     ) -> (u64, bool) {
         let mut rays = 0;
         let inv = 1.0 / self.spp as f64;
-        let (full_w, full_h) = self.full;
         for y in y0..y1 {
             if y > y0 && cancelled() {
                 return (rays, false);
             }
             let image_y = region.y + y;
-            for x in x0..x1 {
-                let image_x = region.x + x;
-                let mut state = Sample::new(pixel_key(self.seed, image_x, image_y), 0, self.spp);
-                let mut sum = crate::geometry::DVec3::ZERO;
-                let mut hits = 0u32;
-                for i in 0..self.spp {
-                    state.index = i;
-                    state.primary_hit = None;
-                    let (u, v) = (state.uniform(), state.uniform());
-                    let (dx, dy) = point_in_grid(i, self.pixel_grid, u, v);
-                    let ray =
-                        self.camera
-                            .ray(image_x as f64 + dx, image_y as f64 + dy, full_w, full_h);
-                    let colour = shader.radiance(&ray, &mut state);
-                    if !self.alpha {
-                        sum += colour;
-                    } else if self.primary_hit(&ray, &mut state) {
-                        sum += colour;
-                        hits += 1;
+            let mut x = x0;
+            while x < x1 {
+                // Whole groups of LANES neighbouring pixels go to the shader together.
+                let lanes = (x1 - x).min(LANES as u32);
+                let (sums, hits, group_rays) = if lanes == LANES as u32 {
+                    self.pixels_together(shader, region.x + x, image_y)
+                } else {
+                    let mut sums = [DVec3::ZERO; LANES];
+                    let mut hits = [0u32; LANES];
+                    let mut group_rays = 0;
+                    for lane in 0..lanes as usize {
+                        let (sum, hit, r) = self.pixel(shader, region.x + x + lane as u32, image_y);
+                        (sums[lane], hits[lane]) = (sum, hit);
+                        group_rays += r;
+                    }
+                    (sums, hits, group_rays)
+                };
+                rays += group_rays;
+                for lane in 0..lanes as usize {
+                    let index = ((y - y0) * width + x) as usize + lane;
+                    band.pixels[index] = film::to_stored(sums[lane] * inv);
+                    if let Some(alpha) = band.alpha.as_deref_mut() {
+                        alpha[index] = film::to_stored_alpha(hits[lane] as f64 * inv);
                     }
                 }
-                rays += state.rays;
-                let index = ((y - y0) * width + x) as usize;
-                band.pixels[index] = film::to_stored(sum * inv);
-                if let Some(alpha) = band.alpha.as_deref_mut() {
-                    alpha[index] = film::to_stored_alpha(hits as f64 * inv);
-                }
+                x += lanes;
             }
         }
         (rays, true)
     }
 
+    /// The sum of the colours of pixel `(image_x, image_y)`'s samples (of those that hit an
+    /// object, with alpha), how many of its samples hit, and the rays traced.
+    fn pixel<S: Shader>(&self, shader: &S, image_x: u32, image_y: u32) -> (DVec3, u32, u64) {
+        let mut state = Sample::new(pixel_key(self.seed, image_x, image_y), 0, self.spp);
+        let mut sum = DVec3::ZERO;
+        let mut hits = 0u32;
+        for i in 0..self.spp {
+            let ray = self.camera_ray(&mut state, i, image_x, image_y);
+            let colour = shader.radiance(&ray, &mut state);
+            if !self.alpha {
+                sum += colour;
+            } else if self.primary_hit(&ray, &mut state) {
+                sum += colour;
+                hits += 1;
+            }
+        }
+        (sum, hits, state.rays)
+    }
+
+    /// [`PixelSampler::pixel`] for the `LANES` pixels from `(image_x, image_y)` rightwards,
+    /// each sample index shaded for all of them at once ([`Shader::radiance_lanes`]); every
+    /// pixel's random numbers are drawn in the same order as by `pixel`, so the results are
+    /// the same.
+    fn pixels_together<S: Shader>(
+        &self,
+        shader: &S,
+        image_x: u32,
+        image_y: u32,
+    ) -> ([DVec3; LANES], [u32; LANES], u64) {
+        let mut states: [Sample; LANES] = std::array::from_fn(|lane| {
+            Sample::new(
+                pixel_key(self.seed, image_x + lane as u32, image_y),
+                0,
+                self.spp,
+            )
+        });
+        let mut sums = [DVec3::ZERO; LANES];
+        let mut hits = [0u32; LANES];
+        let mut rays = [Ray::new(DVec3::ZERO, DVec3::Z); LANES];
+        for i in 0..self.spp {
+            for (lane, (ray, state)) in rays.iter_mut().zip(states.iter_mut()).enumerate() {
+                *ray = self.camera_ray(state, i, image_x + lane as u32, image_y);
+            }
+            let colours = shader.radiance_lanes(&rays, &mut states);
+            for lane in 0..LANES {
+                if !self.alpha {
+                    sums[lane] += colours[lane];
+                } else if self.primary_hit(&rays[lane], &mut states[lane]) {
+                    sums[lane] += colours[lane];
+                    hits[lane] += 1;
+                }
+            }
+        }
+        (sums, hits, states.iter().map(|s| s.rays).sum())
+    }
+
+    /// The camera ray of sample `i` of pixel `(image_x, image_y)`, its jitter drawn from
+    /// `state` (made ready for that sample).
+    #[inline]
+    fn camera_ray(&self, state: &mut Sample, i: u32, image_x: u32, image_y: u32) -> Ray {
+        let (full_w, full_h) = self.full;
+        state.index = i;
+        state.primary_hit = None;
+        let (u, v) = (state.uniform(), state.uniform());
+        let (dx, dy) = point_in_grid(i, self.pixel_grid, u, v);
+        self.camera
+            .ray(image_x as f64 + dx, image_y as f64 + dy, full_w, full_h)
+    }
+
     /// Whether the sample's primary `ray` hit an object: as its shader reported, or else
     /// found here (one more ray traced).
-    fn primary_hit(&self, ray: &crate::geometry::Ray, state: &mut Sample) -> bool {
+    fn primary_hit(&self, ray: &Ray, state: &mut Sample) -> bool {
         state.primary_hit.unwrap_or_else(|| {
             state.count_ray();
             self.scene.intersect(ray, 0.0, f64::INFINITY).is_some()

@@ -40,7 +40,8 @@ use super::sampling::{basis, concentric_disc, strata, Sample};
 use super::{ShadeSetup, Shader};
 use crate::geometry::{DVec3, Ray};
 use crate::lights::Light;
-use crate::scene::Scene;
+use crate::scene::{Scene, SceneHit};
+use crate::shapes::LANES;
 
 /// Relative self-intersection guard for secondary and shadow rays (see the module docs).
 pub const SELF_HIT_EPS: f64 = 1e-9;
@@ -80,6 +81,18 @@ fn fresnel(cos_i: f64, cos_t: f64, eta: f64) -> f64 {
     (0.5 * (rs * rs + rp * rp)).clamp(0.0, 1.0)
 }
 
+/// `cosine^shininess` (`cosine ∈ [0, 1]`): by repeated squaring for the usual whole-number
+/// exponents (a few multiplications, within a few ulps of `powf`, which is a library call
+/// of about a hundred instructions), else `powf`.
+#[inline]
+fn highlight(cosine: f64, shininess: f64) -> f64 {
+    if (0.0..=1024.0).contains(&shininess) && shininess.fract() == 0.0 {
+        cosine.powi(shininess as i32)
+    } else {
+        cosine.powf(shininess)
+    }
+}
+
 /// `exp(−a·d)` per channel; exactly 1 when there is no absorption.
 #[inline]
 fn beer_lambert(attenuation: DVec3, distance: f64) -> DVec3 {
@@ -103,6 +116,18 @@ pub struct Whitted<'a> {
 impl Shader for Whitted<'_> {
     fn radiance(&self, ray: &Ray, sample: &mut Sample) -> DVec3 {
         self.trace(ray, 0.0, 0, sample)
+    }
+
+    fn radiance_lanes(&self, rays: &[Ray; LANES], samples: &mut [Sample; LANES]) -> [DVec3; LANES] {
+        // The camera rays' first hits together (the shapes may share work across lanes),
+        // then each lane shaded as `trace` shades it.
+        let hits = self.scene.intersect_lanes(rays, 0.0, f64::INFINITY);
+        let mut out = [DVec3::ZERO; LANES];
+        for (lane, sample) in samples.iter_mut().enumerate() {
+            sample.count_ray();
+            out[lane] = self.shade(&rays[lane], hits[lane], 0, sample);
+        }
+        out
     }
 }
 
@@ -142,8 +167,14 @@ impl<'a> Whitted<'a> {
     /// The colour arriving along `ray` from its first hit beyond `t_min`.
     fn trace(&self, ray: &Ray, t_min: f64, depth: u32, s: &mut Sample) -> DVec3 {
         s.count_ray();
+        let hit = self.scene.intersect(ray, t_min, f64::INFINITY);
+        self.shade(ray, hit, depth, s)
+    }
+
+    /// The colour `trace` returns for `ray`, given its first hit `hit` (already counted).
+    #[inline]
+    fn shade(&self, ray: &Ray, hit: Option<SceneHit>, depth: u32, s: &mut Sample) -> DVec3 {
         let scene = self.scene;
-        let hit = scene.intersect(ray, t_min, f64::INFINITY);
         if depth == 0 {
             s.report_primary_hit(hit.is_some());
         }
@@ -186,7 +217,7 @@ impl<'a> Whitted<'a> {
                 let mut f = base * n_dot_l;
                 if m.specular > 0.0 {
                     let h = (l - d).normalize_or_zero();
-                    f += DVec3::splat(m.specular * n.dot(h).max(0.0).powf(m.shininess));
+                    f += DVec3::splat(m.specular * highlight(n.dot(h).max(0.0), m.shininess));
                 }
                 lit += visibility * f;
             }

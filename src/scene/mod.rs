@@ -18,7 +18,7 @@ use crate::geometry::{Aabb, DVec3, Ray};
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::roots::Solver;
-use crate::shapes::Shape;
+use crate::shapes::{Shape, LANES};
 
 /// The text of the built-in default scene (identical to `scenes/heart.scene`).
 pub const DEFAULT_SCENE: &str = include_str!("../../scenes/heart.scene");
@@ -142,6 +142,41 @@ impl Scene {
         })
     }
 
+    /// [`Scene::intersect`] for [`LANES`] rays at once (camera rays of neighbouring pixels):
+    /// lane `i` is exactly `self.intersect(&rays[i], t_min, t_max)`. Each object is asked for
+    /// the lanes whose ray meets its box, all at once ([`Shape::intersect_lanes`]).
+    pub fn intersect_lanes(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+    ) -> [Option<SceneHit>; LANES] {
+        let mut best: [Option<(usize, f64)>; LANES] = [None; LANES];
+        let mut t_far = [t_max; LANES];
+        for (i, obj) in self.objects.iter().enumerate() {
+            // An idle lane (its ray misses the box) asks for nothing: `t_max = −∞`.
+            let mut ask = [f64::NEG_INFINITY; LANES];
+            let mut any = false;
+            for lane in 0..LANES {
+                if obj.bounds.clip(&rays[lane], t_min, t_far[lane]).is_some() {
+                    ask[lane] = t_far[lane];
+                    any = true;
+                }
+            }
+            if !any {
+                continue;
+            }
+            let hits = obj.shape.intersect_lanes(rays, t_min, ask);
+            for lane in 0..LANES {
+                if let Some(t) = hits[lane] {
+                    t_far[lane] = t;
+                    best[lane] = Some((i, t));
+                }
+            }
+        }
+        std::array::from_fn(|lane| best[lane].map(|(object, t)| self.hit(&rays[lane], object, t)))
+    }
+
     /// The nearest hit with `t_min < t < t_max`, if any.
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SceneHit> {
         let mut best: Option<(usize, f64)> = None;
@@ -155,14 +190,18 @@ impl Scene {
                 best = Some((i, t));
             }
         }
-        best.map(|(object, t)| {
-            let point = ray.at(t);
-            SceneHit {
-                object,
-                t,
-                point,
-                normal: self.objects[object].shape.normal(point),
-            }
-        })
+        best.map(|(object, t)| self.hit(ray, object, t))
+    }
+
+    /// The hit record of `ray` meeting object `object` at `t`.
+    #[inline]
+    fn hit(&self, ray: &Ray, object: usize, t: f64) -> SceneHit {
+        let point = ray.at(t);
+        SceneHit {
+            object,
+            t,
+            point,
+            normal: self.objects[object].shape.normal(point),
+        }
     }
 }

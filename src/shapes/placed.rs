@@ -5,7 +5,7 @@
 //! not renormalised, so `t` is the same in both spaces) and hands it to the object-space shape
 //! ([`ObjectShape`]) together with the placement, which also maps normals and boxes back.
 
-use super::{Shape, ShapeError, SolverReport};
+use super::{Shape, ShapeError, SolverReport, LANES};
 use crate::geometry::{Aabb, DVec3, Frame, FrameError, Ray};
 
 /// A validated object frame (`p_world = M·p_object + position`) and `‖M⁻¹‖∞`, which bounds how
@@ -140,6 +140,23 @@ pub trait ObjectShape: Send + Sync + std::fmt::Debug {
         t_min: f64,
         t_max: f64,
     ) -> Option<f64>;
+    /// [`Shape::intersect_lanes`]: lane `i` is exactly
+    /// `self.intersect(at, &world[i], &local[i], t_min, t_max[i])`, `None` when
+    /// `t_max[i] <= t_min`.
+    fn intersect_lanes(
+        &self,
+        at: &Placement,
+        world: &[Ray; LANES],
+        local: &[Ray; LANES],
+        t_min: f64,
+        t_max: [f64; LANES],
+    ) -> [Option<f64>; LANES] {
+        std::array::from_fn(|i| {
+            (t_max[i] > t_min)
+                .then(|| self.intersect(at, &world[i], &local[i], t_min, t_max[i]))
+                .flatten()
+        })
+    }
     /// Unit outward world normal at the object-space point `q` on the surface.
     fn normal(&self, at: &Placement, q: DVec3) -> DVec3;
     /// World-space box containing the surface.
@@ -201,6 +218,18 @@ impl<S: ObjectShape> Shape for Placed<S> {
     fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
         let local = self.at.ray_to_object(ray);
         self.shape.intersect(&self.at, ray, &local, t_min, t_max)
+    }
+
+    #[inline]
+    fn intersect_lanes(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: [f64; LANES],
+    ) -> [Option<f64>; LANES] {
+        let local = rays.map(|ray| self.at.ray_to_object(&ray));
+        self.shape
+            .intersect_lanes(&self.at, rays, &local, t_min, t_max)
     }
 
     fn normal(&self, p: DVec3) -> DVec3 {

@@ -31,6 +31,7 @@ mod roots_trace;
 mod scene_errors;
 mod scene_files;
 mod scene_fuzz;
+mod scene_lanes;
 mod scene_ranges;
 mod shapes_props;
 mod specks;

@@ -26,6 +26,7 @@
 //! two singular points, mapped to world space by `(M⁻¹)ᵀ`.
 
 mod corpus;
+mod lanes;
 mod polish;
 mod surface;
 
@@ -41,7 +42,7 @@ pub use surface::{
 
 use super::placed::{ObjectShape, Placed, Placement};
 use super::report::Recorder;
-use super::{ShapeError, SolverReport};
+use super::{ShapeError, SolverReport, LANES};
 use crate::geometry::{Aabb, DVec3, Frame, Ray};
 use crate::roots::Solver;
 
@@ -161,9 +162,18 @@ impl HeartShape {
         r: &Ray,
         t_min: f64,
         t_max: f64,
-        mut first_root: impl FnMut(&[f64; 7], f64, f64) -> Option<f64>,
+        first_root: impl FnMut(&[f64; 7], f64, f64) -> Option<f64>,
         polished: &mut bool,
     ) -> Option<f64> {
+        let chord = Self::chord(at, r, t_min, t_max)?;
+        Self::hit_on_chord(&chord, t_max, first_root, polished)
+    }
+
+    /// Steps 1–4 of the module doc up to the coefficients: the part of the object-space ray
+    /// `r` that can meet the heart, or `None` when none can ([`lanes::chords`] computes the
+    /// same for several rays at once, bit for bit).
+    #[inline(always)]
+    fn chord(at: &Placement, r: &Ray, t_min: f64, t_max: f64) -> Option<Chord> {
         // |d|, without the underflow or overflow of squaring tiny or huge components.
         let scale = r.dir.abs().max_element();
         let dir_len = scale * (r.dir / scale).length();
@@ -180,8 +190,35 @@ impl HeartShape {
         // s ∈ [0, 1] over the chord: origin at box entry (or at t_lo), direction the chord.
         let o = r.at(t0);
         let d = r.dir * len;
-        let coeffs = sextic_coefficients(o, d);
-        let window = POLISH_WINDOW / (dir_len * len);
+        Some(Chord {
+            t_lo,
+            t0,
+            len,
+            o,
+            d,
+            coeffs: sextic_coefficients(o, d),
+            window: POLISH_WINDOW / (dir_len * len),
+        })
+    }
+
+    /// Steps 4–6 of the module doc on a chord from [`HeartShape::chord`]: the first hit
+    /// before `t_max`, with `polished` as for [`HeartShape::intersect_with`].
+    #[inline(always)]
+    fn hit_on_chord(
+        chord: &Chord,
+        t_max: f64,
+        mut first_root: impl FnMut(&[f64; 7], f64, f64) -> Option<f64>,
+        polished: &mut bool,
+    ) -> Option<f64> {
+        let Chord {
+            t_lo,
+            t0,
+            len,
+            o,
+            d,
+            ref coeffs,
+            window,
+        } = *chord;
         // Which side of the surface the search starts on (f's sign is g's: use the free c0
         // when it is clear of rounding, else g, which is accurate there).
         let side = |s: f64, f_value: f64| -> Option<bool> {
@@ -195,7 +232,7 @@ impl HeartShape {
         let mut side_lo = 0.0; // where `outside` holds
         let mut lo = 0.0;
         for _ in 0..MAX_SKIPS {
-            let s_root = first_root(&coeffs, lo, 1.0)?;
+            let s_root = first_root(coeffs, lo, 1.0)?;
             let Some(mut root) = polish(o, d, s_root, window) else {
                 // Not on the surface (a near-tangency or rounding noise the solver took for a
                 // root), and g keeps its sign within the window around it: go on past it.
@@ -232,6 +269,26 @@ impl HeartShape {
         }
         None
     }
+}
+
+/// The part of an object-space ray that can meet the heart, re-parametrised as
+/// `o + s·d`, `s ∈ [0, 1]` (step 3 of the module doc), with the sextic on it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Chord {
+    /// The ray parameter below which a root is the ray's own origin.
+    t_lo: f64,
+    /// The ray parameter at `s = 0`.
+    t0: f64,
+    /// The ray parameter's length of the chord (`t = t0 + s·len`), positive and finite.
+    len: f64,
+    /// The object-space point at `s = 0`.
+    o: DVec3,
+    /// The object-space chord, `s = 0` to `s = 1`.
+    d: DVec3,
+    /// `f(o + s·d)`, ascending powers of `s`.
+    coeffs: [f64; 7],
+    /// [`POLISH_WINDOW`] in units of `s`.
+    window: f64,
 }
 
 /// The part of `[t0, t1]` (a chord of [`BOUNDS`]) that can meet the heart, given that its
@@ -306,6 +363,28 @@ impl ObjectShape for HeartShape {
             |c, lo, hi| solver.first_root(c, lo, hi),
             &mut false,
         )
+    }
+
+    fn intersect_lanes(
+        &self,
+        at: &Placement,
+        _: &[Ray; LANES],
+        local: &[Ray; LANES],
+        t_min: f64,
+        t_max: [f64; LANES],
+    ) -> [Option<f64>; LANES] {
+        let solver = self.solver;
+        let chords = lanes::chords(at, local, t_min, t_max);
+        std::array::from_fn(|i| {
+            chords[i].as_ref().and_then(|chord| {
+                Self::hit_on_chord(
+                    chord,
+                    t_max[i],
+                    |c, lo, hi| solver.first_root(c, lo, hi),
+                    &mut false,
+                )
+            })
+        })
     }
 
     fn solver_report(
