@@ -382,6 +382,39 @@ impl Scalar for Dd {
     }
 }
 
+/// How many rays [`Compiled::compose_lanes`] composes at once.
+pub const LANES: usize = crate::shapes::LANES;
+
+/// One `f64` per ray, with lane-wise `+` and `·`: each lane of a composition in this
+/// arithmetic gets exactly the bits the `f64` composition of its ray alone gets.
+#[derive(Clone, Copy, Debug)]
+struct Lanes([f64; LANES]);
+
+impl Add for Lanes {
+    type Output = Lanes;
+    #[inline(always)]
+    fn add(self, o: Lanes) -> Lanes {
+        Lanes(std::array::from_fn(|i| self.0[i] + o.0[i]))
+    }
+}
+
+impl Mul for Lanes {
+    type Output = Lanes;
+    #[inline(always)]
+    fn mul(self, o: Lanes) -> Lanes {
+        Lanes(std::array::from_fn(|i| self.0[i] * o.0[i]))
+    }
+}
+
+impl Scalar for Lanes {
+    const ZERO: Lanes = Lanes([0.0; LANES]);
+    const ONE: Lanes = Lanes([1.0; LANES]);
+    #[inline(always)]
+    fn coef(t: &Term) -> Lanes {
+        Lanes([t.c; LANES])
+    }
+}
+
 /// Offset of row `k` (the `k + 1` coefficients of `Z(s)ᵏ`) in the triangular table of powers.
 #[inline(always)]
 const fn tri(k: usize) -> usize {
@@ -476,11 +509,54 @@ impl Compiled {
         out
     }
 
+    /// [`Compiled::compose`] of [`LANES`] rays at once (ray `i` is `o[i] + s·e[i]`): lane `i`
+    /// of the answer is exactly `self.compose(o[i], e[i])`, bit for bit. Compiled for AVX2 as
+    /// well, chosen at run time.
+    pub fn compose_lanes(&self, o: [[f64; 3]; LANES], e: [[f64; 3]; LANES]) -> [Uni; LANES] {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2, checked just above.
+            return unsafe { self.compose_lanes_avx2(o, e) };
+        }
+        self.compose_lanes_in(o, e)
+    }
+
+    /// [`Compiled::compose_lanes`] compiled for AVX2.
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn compose_lanes_avx2(
+        &self,
+        o: [[f64; 3]; LANES],
+        e: [[f64; 3]; LANES],
+    ) -> [Uni; LANES] {
+        self.compose_lanes_in(o, e)
+    }
+
+    /// [`Compiled::compose_lanes`] for the baseline instruction set (and inlined into the
+    /// AVX2 version).
+    #[inline(always)]
+    fn compose_lanes_in(&self, o: [[f64; 3]; LANES], e: [[f64; 3]; LANES]) -> [Uni; LANES] {
+        let o = std::array::from_fn(|v| Lanes(std::array::from_fn(|i| o[i][v])));
+        let e = std::array::from_fn(|v| Lanes(std::array::from_fn(|i| e[i][v])));
+        let mut out = [Lanes::ZERO; MAX_DEGREE + 1];
+        self.compose_in(o, e, &mut out);
+        std::array::from_fn(|i| out.map(|c| c.0[i]))
+    }
+
     /// [`Compiled::compose`] into `out` (all `MAX_DEGREE + 1` entries are written; those
     /// above the degree are zero), in the arithmetic `T`: `f64`, or [`Dd`] with the exact
     /// coefficients for the few rays where `f64` cannot resolve the surface.
     #[inline]
     pub fn compose_into<T: Scalar>(&self, o: [T; 3], e: [T; 3], out: &mut [T; MAX_DEGREE + 1]) {
+        self.compose_in(o, e, out);
+    }
+
+    /// [`Compiled::compose_into`], always inlined.
+    #[inline(always)]
+    fn compose_in<T: Scalar>(&self, o: [T; 3], e: [T; 3], out: &mut [T; MAX_DEGREE + 1]) {
         // The table of powers of Z, no larger than the surface needs (it is zeroed per ray).
         match self.max_z {
             0..=4 => self.compose_with_table::<T, { tri(5) }>(o, e, out),
@@ -869,6 +945,32 @@ mod tests {
                 let want = compose_reference::<Dd>(&c, od, ed);
                 let bits = |v: [Dd; MAX_DEGREE + 1]| v.map(|d| (d.hi.to_bits(), d.lo.to_bits()));
                 assert_eq!(bits(got), bits(want), "{o:?} {e:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn four_rays_composed_together_get_the_bits_each_gets_alone() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut coordinate = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            match state % 6 {
+                0 => 0.0,
+                1 => -0.0,
+                _ => ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 4.0,
+            }
+        };
+        for c in composition_surfaces() {
+            for _ in 0..100 {
+                let o: [[f64; 3]; LANES] = std::array::from_fn(|_| [0; 3].map(|_| coordinate()));
+                let e: [[f64; 3]; LANES] = std::array::from_fn(|_| [0; 3].map(|_| coordinate()));
+                let alone: [Uni; LANES] = std::array::from_fn(|i| c.compose(o[i], e[i]));
+                let bits = |v: [Uni; LANES]| v.map(|u| u.map(f64::to_bits));
+                // The baseline code path, whatever the processor, and the one chosen at run time.
+                assert_eq!(bits(c.compose_lanes_in(o, e)), bits(alone));
+                assert_eq!(bits(c.compose_lanes(o, e)), bits(alone));
             }
         }
     }
