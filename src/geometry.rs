@@ -4,6 +4,11 @@
 
 pub use glam::{DMat3, DVec3};
 
+/// How many rays the lane-wise queries take at once
+/// ([`crate::shapes::Shape::intersect_lanes`]): four `f64` lanes fill one 256-bit vector
+/// register.
+pub const LANES: usize = 4;
+
 /// A half-line `origin + t·dir`, `t ≥ 0`. `dir` need not be unit length: every `t` in the
 /// library is measured in multiples of `dir`, so `t` is shared between world and object space.
 #[derive(Clone, Copy, Debug, PartialEq)]

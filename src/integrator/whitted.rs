@@ -60,6 +60,60 @@ fn guard(point: DVec3, origin: DVec3, travelled: f64) -> f64 {
     (SELF_HIT_EPS * scale).max(f64::MIN_POSITIVE)
 }
 
+/// What shading needs of a hit point (see [`Whitted::surface`]).
+#[derive(Debug, Clone, Copy)]
+struct SurfacePoint {
+    /// The object hit (its material).
+    object: usize,
+    /// The unit direction of the ray that arrived.
+    d: DVec3,
+    /// How far the ray travelled, in world units.
+    travelled: f64,
+    /// The hit point.
+    p: DVec3,
+    /// Whether the ray arrived on the outer side.
+    front: bool,
+    /// The unit normal on the side the ray arrived from.
+    n: DVec3,
+    /// The parameter below which a ray leaving `p` would re-hit it (see [`guard`]).
+    eps: f64,
+    /// The diffuse colour there.
+    base: DVec3,
+    /// The material's highlight strength and exponent.
+    specular: f64,
+    shininess: f64,
+}
+
+impl SurfacePoint {
+    /// The unit direction towards a light point `target` and its distance, or `None` when
+    /// the light cannot reach the side the ray arrived on (or sits at the point).
+    #[inline]
+    fn towards(&self, target: DVec3) -> Option<(DVec3, f64)> {
+        let to_light = target - self.p;
+        let dist = to_light.length();
+        if dist <= self.eps {
+            return None;
+        }
+        let l = to_light / dist;
+        if self.n.dot(l) <= 0.0 {
+            return None;
+        }
+        Some((l, dist))
+    }
+
+    /// The light a unit of light from the direction `l` leaves towards the eye (diffuse and
+    /// highlight).
+    #[inline]
+    fn reflected_light(&self, l: DVec3) -> DVec3 {
+        let mut f = self.base * self.n.dot(l);
+        if self.specular > 0.0 {
+            let h = (l - self.d).normalize_or_zero();
+            f += DVec3::splat(self.specular * highlight(self.n.dot(h).max(0.0), self.shininess));
+        }
+        f
+    }
+}
+
 /// Direction of the ray through an interface by Snell's law, `d` unit and `n` the unit
 /// normal on the incoming side (`d·n < 0`), `eta = n_incoming / n_outgoing`; `None` under
 /// total internal reflection.
@@ -122,9 +176,14 @@ impl Shader for Whitted<'_> {
         // The camera rays' first hits together (the shapes may share work across lanes),
         // then each lane shaded as `trace` shades it.
         let hits = self.scene.intersect_lanes(rays, 0.0, f64::INFINITY);
+        for sample in samples.iter_mut() {
+            sample.count_ray();
+        }
+        if self.opaque {
+            return self.shade_lanes(rays, hits, samples);
+        }
         let mut out = [DVec3::ZERO; LANES];
         for (lane, sample) in samples.iter_mut().enumerate() {
-            sample.count_ray();
             out[lane] = self.shade(&rays[lane], hits[lane], 0, sample);
         }
         out
@@ -181,49 +240,137 @@ impl<'a> Whitted<'a> {
         let Some(hit) = hit else {
             return scene.background;
         };
-        let m = &scene.objects[hit.object].material;
+        let at = self.surface(ray, &hit);
+        let mut colour = scene.ambient * at.base;
+        for (index, light) in scene.lights.iter().enumerate() {
+            let (rays, grid) = self.light_grids[index];
+            let mut lit = DVec3::ZERO;
+            for ray in 0..rays {
+                let target = self.light_sample(light, index, (ray, rays), grid, at.p, s);
+                let Some((l, dist)) = at.towards(target) else {
+                    continue;
+                };
+                let visibility = self.transmittance(at.p, l, at.eps, dist, s);
+                if visibility == DVec3::ZERO {
+                    continue;
+                }
+                lit += visibility * at.reflected_light(l);
+            }
+            colour += light.colour * lit / rays as f64;
+        }
+        self.finish(&at, colour, depth, s)
+    }
+
+    /// [`Whitted::shade`] at depth 0 for each lane, the shadow rays of the lanes' hits asked
+    /// together ([`Scene::occluded_lanes`]), for an opaque scene (where a shadow ray is an
+    /// any-hit query). Every lane draws its random numbers in the order `shade` draws them
+    /// (all lanes walk the same lights and light samples), so the colours are the same.
+    fn shade_lanes(
+        &self,
+        rays: &[Ray; LANES],
+        hits: [Option<SceneHit>; LANES],
+        samples: &mut [Sample; LANES],
+    ) -> [DVec3; LANES] {
+        let scene = self.scene;
+        let mut points: [Option<SurfacePoint>; LANES] = [None; LANES];
+        let mut colours = [scene.background; LANES];
+        for lane in 0..LANES {
+            samples[lane].report_primary_hit(hits[lane].is_some());
+            if let Some(hit) = &hits[lane] {
+                let at = self.surface(&rays[lane], hit);
+                colours[lane] = scene.ambient * at.base;
+                points[lane] = Some(at);
+            }
+        }
+        for (index, light) in scene.lights.iter().enumerate() {
+            let (count, grid) = self.light_grids[index];
+            let mut lit = [DVec3::ZERO; LANES];
+            for ray in 0..count {
+                let mut shadow = [Ray::new(DVec3::ZERO, DVec3::Z); LANES];
+                let (mut near, mut far) = ([0.0; LANES], [f64::NEG_INFINITY; LANES]);
+                let mut asked = [false; LANES];
+                for lane in 0..LANES {
+                    let Some(at) = &points[lane] else {
+                        continue;
+                    };
+                    let target = self.light_sample(
+                        light,
+                        index,
+                        (ray, count),
+                        grid,
+                        at.p,
+                        &mut samples[lane],
+                    );
+                    if let Some((l, dist)) = at.towards(target) {
+                        samples[lane].count_ray();
+                        shadow[lane] = Ray::new(at.p, l);
+                        (near[lane], far[lane]) = (at.eps, dist);
+                        asked[lane] = true;
+                    }
+                }
+                let blocked = scene.occluded_lanes(&shadow, near, far);
+                for lane in 0..LANES {
+                    if let (Some(at), true, false) = (&points[lane], asked[lane], blocked[lane]) {
+                        lit[lane] += DVec3::ONE * at.reflected_light(shadow[lane].dir);
+                    }
+                }
+            }
+            for lane in 0..LANES {
+                if points[lane].is_some() {
+                    colours[lane] += light.colour * lit[lane] / count as f64;
+                }
+            }
+        }
+        for lane in 0..LANES {
+            if let Some(at) = &points[lane] {
+                colours[lane] = self.finish(at, colours[lane], 0, &mut samples[lane]);
+            }
+        }
+        colours
+    }
+
+    /// What shading needs of the hit `hit` of `ray`.
+    #[inline]
+    fn surface(&self, ray: &Ray, hit: &SceneHit) -> SurfacePoint {
+        let m = &self.scene.objects[hit.object].material;
         let dir_len = ray.dir.length();
         let d = ray.dir / dir_len;
         let travelled = hit.t * dir_len;
         let p = hit.point;
         let front = hit.normal.dot(d) < 0.0;
         let n = if front { hit.normal } else { -hit.normal };
-        let eps = guard(p, ray.origin, travelled);
-
         let base = match (front, m.inside) {
             (false, Some(inside)) => inside,
             _ => m.diffuse_at(p),
         };
-        let mut colour = scene.ambient * base;
-        for (index, light) in scene.lights.iter().enumerate() {
-            let (rays, grid) = self.light_grids[index];
-            let mut lit = DVec3::ZERO;
-            for ray in 0..rays {
-                let target = self.light_sample(light, index, (ray, rays), grid, p, s);
-                let to_light = target - p;
-                let dist = to_light.length();
-                if dist <= eps {
-                    continue;
-                }
-                let l = to_light / dist;
-                let n_dot_l = n.dot(l);
-                if n_dot_l <= 0.0 {
-                    continue;
-                }
-                let visibility = self.transmittance(p, l, eps, dist, s);
-                if visibility == DVec3::ZERO {
-                    continue;
-                }
-                let mut f = base * n_dot_l;
-                if m.specular > 0.0 {
-                    let h = (l - d).normalize_or_zero();
-                    f += DVec3::splat(m.specular * highlight(n.dot(h).max(0.0), m.shininess));
-                }
-                lit += visibility * f;
-            }
-            colour += light.colour * lit / rays as f64;
+        SurfacePoint {
+            object: hit.object,
+            d,
+            travelled,
+            p,
+            front,
+            n,
+            eps: guard(p, ray.origin, travelled),
+            base,
+            specular: m.specular,
+            shininess: m.shininess,
         }
+    }
 
+    /// The colour of the surface point `at`, given `colour` from the lights: what its reflection and refraction add (below the maximum depth), attenuated
+    /// on a back side.
+    #[inline]
+    fn finish(&self, at: &SurfacePoint, mut colour: DVec3, depth: u32, s: &mut Sample) -> DVec3 {
+        let m = &self.scene.objects[at.object].material;
+        let SurfacePoint {
+            d,
+            travelled,
+            p,
+            front,
+            n,
+            eps,
+            ..
+        } = *at;
         if depth < self.max_depth {
             let mut kr = m.reflect;
             let mut kt = 0.0;

@@ -142,6 +142,43 @@ impl Scene {
         })
     }
 
+    /// [`Scene::occluded`] for [`LANES`] rays at once, each with its own range: lane `i` is
+    /// exactly `self.occluded(&rays[i], t_min[i], t_max[i])` (`false` when
+    /// `t_max[i] <= t_min[i]`). Each object is asked for the lanes not yet blocked whose ray
+    /// meets its box, all at once ([`Shape::occludes_lanes`]).
+    pub fn occluded_lanes(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [bool; LANES] {
+        let mut blocked = [false; LANES];
+        for obj in &self.objects {
+            let mut ask = [f64::NEG_INFINITY; LANES];
+            let mut any = false;
+            for lane in 0..LANES {
+                if !blocked[lane]
+                    && t_max[lane] > t_min[lane]
+                    && obj
+                        .bounds
+                        .clip(&rays[lane], t_min[lane], t_max[lane])
+                        .is_some()
+                {
+                    ask[lane] = t_max[lane];
+                    any = true;
+                }
+            }
+            if !any {
+                continue;
+            }
+            let hits = obj.shape.occludes_lanes(rays, t_min, ask);
+            for lane in 0..LANES {
+                blocked[lane] |= hits[lane];
+            }
+        }
+        blocked
+    }
+
     /// [`Scene::intersect`] for [`LANES`] rays at once (camera rays of neighbouring pixels):
     /// lane `i` is exactly `self.intersect(&rays[i], t_min, t_max)`. Each object is asked for
     /// the lanes whose ray meets its box, all at once ([`Shape::intersect_lanes`]).
@@ -166,7 +203,7 @@ impl Scene {
             if !any {
                 continue;
             }
-            let hits = obj.shape.intersect_lanes(rays, t_min, ask);
+            let hits = obj.shape.intersect_lanes(rays, [t_min; LANES], ask);
             for lane in 0..LANES {
                 if let Some(t) = hits[lane] {
                     t_far[lane] = t;

@@ -1,6 +1,7 @@
 //! Shapes: everything a ray can hit. Each shape implements the small [`Shape`] trait; a new
 //! primitive is one new file here plus one keyword in `scene::parser`.
 
+pub use crate::geometry::LANES;
 use crate::geometry::{Aabb, DVec3, Ray};
 
 mod boxes;
@@ -54,22 +55,32 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
     fn occludes(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
         self.intersect(ray, t_min, t_max).is_some()
     }
-    /// [`Shape::intersect`] for [`LANES`] rays at once, sharing `t_min`, each with its own
-    /// `t_max`: lane `i` of the answer is always exactly
-    /// `self.intersect(&rays[i], t_min, t_max[i])`, and `None` without any work when
-    /// `t_max[i] <= t_min` (an idle lane). Camera rays of neighbouring pixels ask this; a shape
-    /// may answer it more cheaply, never differently.
+    /// [`Shape::intersect`] for [`LANES`] rays at once, each with its own range: lane `i` of
+    /// the answer is always exactly `self.intersect(&rays[i], t_min[i], t_max[i])`, and
+    /// `None` without any work when `t_max[i] <= t_min[i]` (an idle lane). Camera rays of
+    /// neighbouring pixels ask this; a shape may answer it more cheaply, never differently.
     fn intersect_lanes(
         &self,
         rays: &[Ray; LANES],
-        t_min: f64,
+        t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [Option<f64>; LANES] {
         std::array::from_fn(|i| {
-            (t_max[i] > t_min)
-                .then(|| self.intersect(&rays[i], t_min, t_max[i]))
+            (t_max[i] > t_min[i])
+                .then(|| self.intersect(&rays[i], t_min[i], t_max[i]))
                 .flatten()
         })
+    }
+    /// [`Shape::occludes`] for [`LANES`] rays at once: lane `i` is always exactly
+    /// `self.occludes(&rays[i], t_min[i], t_max[i])`, and `false` without any work when
+    /// `t_max[i] <= t_min[i]`. The shadow rays of neighbouring pixels ask this.
+    fn occludes_lanes(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [bool; LANES] {
+        std::array::from_fn(|i| t_max[i] > t_min[i] && self.occludes(&rays[i], t_min[i], t_max[i]))
     }
     /// Unit outward normal at the world point `p` on the surface.
     fn normal(&self, p: DVec3) -> DVec3;
@@ -83,10 +94,6 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
         None
     }
 }
-
-/// How many rays [`Shape::intersect_lanes`] takes at once (primary rays of neighbouring
-/// pixels): four `f64` lanes fill one 256-bit vector register.
-pub const LANES: usize = 4;
 
 /// Parses a finite-check helper used by constructors: true when all vectors are finite.
 pub(crate) fn all_finite(vs: &[DVec3]) -> bool {

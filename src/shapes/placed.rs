@@ -141,19 +141,19 @@ pub trait ObjectShape: Send + Sync + std::fmt::Debug {
         t_max: f64,
     ) -> Option<f64>;
     /// [`Shape::intersect_lanes`]: lane `i` is exactly
-    /// `self.intersect(at, &world[i], &local[i], t_min, t_max[i])`, `None` when
-    /// `t_max[i] <= t_min`.
+    /// `self.intersect(at, &world[i], &local[i], t_min[i], t_max[i])`, `None` when
+    /// `t_max[i] <= t_min[i]`.
     fn intersect_lanes(
         &self,
         at: &Placement,
         world: &[Ray; LANES],
         local: &[Ray; LANES],
-        t_min: f64,
+        t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [Option<f64>; LANES] {
         std::array::from_fn(|i| {
-            (t_max[i] > t_min)
-                .then(|| self.intersect(at, &world[i], &local[i], t_min, t_max[i]))
+            (t_max[i] > t_min[i])
+                .then(|| self.intersect(at, &world[i], &local[i], t_min[i], t_max[i]))
                 .flatten()
         })
     }
@@ -224,12 +224,27 @@ impl<S: ObjectShape> Shape for Placed<S> {
     fn intersect_lanes(
         &self,
         rays: &[Ray; LANES],
-        t_min: f64,
+        t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [Option<f64>; LANES] {
-        let local = rays.map(|ray| self.at.ray_to_object(&ray));
+        let mut local = *rays;
+        for ray in &mut local {
+            *ray = self.at.ray_to_object(ray);
+        }
         self.shape
             .intersect_lanes(&self.at, rays, &local, t_min, t_max)
+    }
+
+    #[inline]
+    fn occludes_lanes(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [bool; LANES] {
+        // `occludes` is `intersect(…).is_some()` for every placed shape.
+        self.intersect_lanes(rays, t_min, t_max)
+            .map(|hit| hit.is_some())
     }
 
     fn normal(&self, p: DVec3) -> DVec3 {

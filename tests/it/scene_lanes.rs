@@ -1,6 +1,7 @@
 //! Rays asked [`LANES`] at a time (`Scene::intersect_lanes`, as the camera rays of
 //! neighbouring pixels are) get exactly the hits they get one at a time, on every shipped
-//! scene and on the heart's hard rays: the same object, the same `t` and normal to the bit.
+//! scene and on the heart's hard rays: the same object, the same `t` and normal to the bit;
+//! and shadow rays asked together (`Scene::occluded_lanes`) the same answers as alone.
 
 use kardia::geometry::{DVec3, Ray};
 use kardia::scene::{parse_file, LoadOptions, Scene, SceneHit};
@@ -33,6 +34,30 @@ fn check(scene: &Scene, rays: &[Ray], t_min: f64, t_max: f64, what: &str) -> usi
     hits
 }
 
+/// Checks `Scene::occluded_lanes` against `Scene::occluded` on `rays` in groups of `LANES`,
+/// each lane with its own range (some empty, some short, some to infinity), as the shadow
+/// rays of neighbouring pixels are; returns how many are blocked.
+fn check_occluded(scene: &Scene, rays: &[Ray], what: &str) -> usize {
+    let mut blocked = 0;
+    for (k, group) in rays.chunks_exact(LANES).enumerate() {
+        let lanes: [Ray; LANES] = std::array::from_fn(|i| group[i]);
+        let t_min: [f64; LANES] = std::array::from_fn(|i| [1e-9, 1e-6, 0.5, 2.0][(k + i) % 4]);
+        let t_max: [f64; LANES] =
+            std::array::from_fn(|i| [f64::INFINITY, 3.0, 0.25, 1e-7, 20.0][(k + 2 * i) % 5]);
+        let together = scene.occluded_lanes(&lanes, t_min, t_max);
+        for i in 0..LANES {
+            let alone = scene.occluded(&lanes[i], t_min[i], t_max[i]);
+            assert_eq!(
+                together[i], alone,
+                "{what}: {:?} ({}, {})",
+                lanes[i], t_min[i], t_max[i]
+            );
+            blocked += usize::from(alone);
+        }
+    }
+    blocked
+}
+
 /// Camera rays through a jittered grid of the scene's image, in raster order.
 fn camera_rays(scene: &Scene, side: u32) -> Vec<Ray> {
     let mut state = 0x2545_f491_4f6c_dd1du64;
@@ -63,6 +88,7 @@ fn every_shipped_scene_gives_the_same_hits_in_lanes() {
         .collect();
     files.sort();
     assert!(files.len() >= 10, "{files:?}");
+    let mut blocked = 0;
     for file in files {
         let scene = parse_file(&file, &LoadOptions::default()).unwrap();
         let what = file.display().to_string();
@@ -79,7 +105,9 @@ fn every_shipped_scene_gives_the_same_hits_in_lanes() {
             }
         }
         check(&scene, &secondary, 1e-9, 20.0, &what);
+        blocked += check_occluded(&scene, &secondary, &what);
     }
+    assert!(blocked > 1000, "{blocked} shadow-style rays blocked");
 }
 
 #[test]
@@ -99,7 +127,7 @@ fn the_hearts_corpus_and_hard_rays_give_the_same_hits_in_lanes() {
             1 => 2.0,
             _ => f64::INFINITY,
         });
-        let together = heart.intersect_lanes(&lanes, 0.0, t_max);
+        let together = heart.intersect_lanes(&lanes, [0.0; LANES], t_max);
         for i in 0..LANES {
             let alone = heart.intersect(&lanes[i], 0.0, t_max[i]);
             assert_eq!(

@@ -17,20 +17,23 @@ use crate::shapes::LANES;
 /// One `f64` per lane.
 type Lanes = [f64; LANES];
 
-/// [`HeartShape::chord`] of each lane's object-space ray `local[i]` with its `t_max[i]`.
+/// [`HeartShape::chord`] of each lane's object-space ray `local[i]` with its range
+/// `(t_min[i], t_max[i])`: lane `i` is `Some(out[i])` where `chord` gives `Some`, written to
+/// `out[i]`, and `false` where it gives `None` (`out[i]` is then meaningless).
 #[inline]
 pub(super) fn chords(
     at: &Placement,
     local: &[Ray; LANES],
-    t_min: f64,
+    t_min: Lanes,
     t_max: Lanes,
-) -> [Option<Chord>; LANES] {
+    out: &mut [Chord; LANES],
+) -> [bool; LANES] {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the processor has AVX2, checked just above.
-        return unsafe { chords_avx2(at, local, t_min, t_max) };
+        return unsafe { chords_avx2(at, local, t_min, t_max, out) };
     }
-    chords_baseline(at, local, t_min, t_max)
+    chords_baseline(at, local, t_min, t_max, out)
 }
 
 /// [`chords`] compiled for AVX2.
@@ -42,20 +45,22 @@ pub(super) fn chords(
 unsafe fn chords_avx2(
     at: &Placement,
     local: &[Ray; LANES],
-    t_min: f64,
+    t_min: Lanes,
     t_max: Lanes,
-) -> [Option<Chord>; LANES] {
-    chords_in(at, local, t_min, t_max)
+    out: &mut [Chord; LANES],
+) -> [bool; LANES] {
+    chords_in(at, local, t_min, t_max, out)
 }
 
 /// [`chords`] compiled for any processor of the target.
 pub(super) fn chords_baseline(
     at: &Placement,
     local: &[Ray; LANES],
-    t_min: f64,
+    t_min: Lanes,
     t_max: Lanes,
-) -> [Option<Chord>; LANES] {
-    chords_in(at, local, t_min, t_max)
+    out: &mut [Chord; LANES],
+) -> [bool; LANES] {
+    chords_in(at, local, t_min, t_max, out)
 }
 
 /// `a` if `a > b`, else `b`: glam's `max_element` rule, which the scalar code uses.
@@ -74,9 +79,10 @@ fn larger(a: f64, b: f64) -> f64 {
 fn chords_in(
     at: &Placement,
     local: &[Ray; LANES],
-    t_min: f64,
+    t_min: Lanes,
     t_max: Lanes,
-) -> [Option<Chord>; LANES] {
+    chords: &mut [Chord; LANES],
+) -> [bool; LANES] {
     let (mut ox, mut oy, mut oz) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
     let (mut dx, mut dy, mut dz) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
     for (i, r) in local.iter().enumerate() {
@@ -102,7 +108,7 @@ fn chords_in(
             & oz[i].is_finite();
         let reach = larger(ox[i].abs(), larger(oy[i].abs(), oz[i].abs())) + reach_of_position;
         let guard = SELF_HIT_GUARD.max(1024.0 * f64::EPSILON * reach);
-        t_lo[i] = t_min.max(guard / len);
+        t_lo[i] = t_min[i].max(guard / len);
         t0[i] = t_lo[i];
         t1[i] = t_max[i];
     }
@@ -179,15 +185,6 @@ fn chords_in(
         t1[i] = c1;
     }
     // The chord and its sextic, every lane (a dead lane's values are never read).
-    let mut chords = [Chord {
-        t_lo: 0.0,
-        t0: 0.0,
-        len: 0.0,
-        o: DVec3::ZERO,
-        d: DVec3::ZERO,
-        coeffs: [0.0; 7],
-        window: 0.0,
-    }; LANES];
     for (i, chord) in chords.iter_mut().enumerate() {
         let len = t1[i] - t0[i];
         alive[i] &= (len > 0.0) & len.is_finite();
@@ -203,8 +200,19 @@ fn chords_in(
             window: POLISH_WINDOW / (dir_len[i] * len),
         };
     }
-    std::array::from_fn(|i| alive[i].then_some(chords[i]))
+    alive
 }
+
+/// A chord to be overwritten by [`chords`].
+pub(super) const NO_CHORD: Chord = Chord {
+    t_lo: 0.0,
+    t0: 0.0,
+    len: 0.0,
+    o: DVec3::ZERO,
+    d: DVec3::ZERO,
+    coeffs: [0.0; 7],
+    window: 0.0,
+};
 
 impl HeartShape {
     /// [`HeartShape::chord`] of each lane, one at a time (the reference the lanes must match).
@@ -212,10 +220,10 @@ impl HeartShape {
     fn chords_one_by_one(
         at: &Placement,
         local: &[Ray; LANES],
-        t_min: f64,
+        t_min: Lanes,
         t_max: Lanes,
     ) -> [Option<Chord>; LANES] {
-        std::array::from_fn(|i| Self::chord(at, &local[i], t_min, t_max[i]))
+        std::array::from_fn(|i| Self::chord(at, &local[i], t_min[i], t_max[i]))
     }
 }
 
@@ -302,9 +310,17 @@ mod tests {
                     let local: [Ray; LANES] =
                         std::array::from_fn(|i| at.ray_to_object(&group[i].0));
                     let t_max: Lanes = std::array::from_fn(|i| group[i].1);
+                    let t_min = [t_min; LANES];
                     let want = HeartShape::chords_one_by_one(&at, &local, t_min, t_max);
-                    let baseline = chords_baseline(&at, &local, t_min, t_max);
-                    let chosen = chords(&at, &local, t_min, t_max);
+                    let lanes_of =
+                        |alive: [bool; LANES], out: [Chord; LANES]| -> [Option<Chord>; LANES] {
+                            std::array::from_fn(|i| alive[i].then_some(out[i]))
+                        };
+                    let mut out = [NO_CHORD; LANES];
+                    let baseline =
+                        lanes_of(chords_baseline(&at, &local, t_min, t_max, &mut out), out);
+                    let mut out = [NO_CHORD; LANES];
+                    let chosen = lanes_of(chords(&at, &local, t_min, t_max, &mut out), out);
                     for i in 0..LANES {
                         assert!(same(&want[i], &baseline[i]), "{:?}", group[i]);
                         assert!(same(&want[i], &chosen[i]), "{:?}", group[i]);

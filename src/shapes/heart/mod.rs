@@ -370,21 +370,24 @@ impl ObjectShape for HeartShape {
         at: &Placement,
         _: &[Ray; LANES],
         local: &[Ray; LANES],
-        t_min: f64,
+        t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [Option<f64>; LANES] {
         let solver = self.solver;
-        let chords = lanes::chords(at, local, t_min, t_max);
-        std::array::from_fn(|i| {
-            chords[i].as_ref().and_then(|chord| {
-                Self::hit_on_chord(
-                    chord,
+        let mut chords = [lanes::NO_CHORD; LANES];
+        let alive = lanes::chords(at, local, t_min, t_max, &mut chords);
+        let mut hits = [None; LANES];
+        for (i, hit) in hits.iter_mut().enumerate() {
+            if alive[i] {
+                *hit = Self::hit_on_chord(
+                    &chords[i],
                     t_max[i],
                     |c, lo, hi| solver.first_root(c, lo, hi),
                     &mut false,
-                )
-            })
-        })
+                );
+            }
+        }
+        hits
     }
 
     fn solver_report(
