@@ -1,8 +1,9 @@
-//! Typed surfaces asked for [`LANES`] rays at a time (`Shape::intersect_lanes`, as camera rays
-//! of neighbouring pixels are, their ray polynomials composed together) give exactly the hits
-//! they give one ray at a time: every preset, a degree-16 sphere, a surface of double roots,
-//! camera and secondary rays, idle and short lanes, with both solvers; the double-double
-//! re-solve is among the cases checked.
+//! Typed surfaces asked for [`LANES`] rays at a time (`Shape::intersect_lanes` and
+//! `occludes_lanes`, as camera and shadow rays of neighbouring pixels are, their ray
+//! polynomials composed together) give exactly the hits they give one ray at a time: every
+//! preset, a degree-16 sphere, a surface of double roots, camera and secondary rays, idle and
+//! short lanes and lanes of their own `t_min`, with both solvers; the double-double re-solve
+//! is among the cases checked.
 
 use kardia::geometry::{DVec3, Frame, Ray};
 use kardia::roots::Solver;
@@ -84,9 +85,17 @@ fn check(shape: &Implicit, rays: &[Ray], t_min: f64, what: &str) -> (usize, usiz
             1 => 0.5 * shape.bound(),
             _ => f64::INFINITY,
         });
+        // One lane starts a little later (lanes have their own t_min, as shadow rays do).
+        let t_min: [f64; LANES] = std::array::from_fn(|i| match (k + i) % 8 {
+            2 => t_min + 0.25 * shape.bound(),
+            _ => t_min,
+        });
         let together = shape.intersect_lanes(&lanes, t_min, t_max);
+        let occluded = shape.occludes_lanes(&lanes, t_min, t_max);
         for i in 0..LANES {
+            let t_min = t_min[i];
             let alone = shape.intersect(&lanes[i], t_min, t_max[i]);
+            assert_eq!(occluded[i], alone.is_some(), "{what}: {:?}", lanes[i]);
             assert_eq!(
                 together[i].map(f64::to_bits),
                 alone.map(f64::to_bits),

@@ -569,19 +569,20 @@ impl ImplicitShape {
         })
     }
 
-    /// [`Shape::intersect_lanes`](crate::shapes::Shape::intersect_lanes) on the generic path:
-    /// the rays that reach the composition are composed together, then each is solved as
+    /// [`Shape::intersect_lanes`](crate::shapes::Shape::intersect_lanes) on the generic path
+    /// (camera rays, and through `occludes_lanes` shadow rays): the rays that reach the
+    /// composition are composed together, then each is solved as
     /// [`ImplicitShape::intersect_generic`] solves it alone (the same bits at every step).
     fn intersect_lanes_generic(
         &self,
         s: &Surface,
         local: &[Ray; LANES],
-        t_min: f64,
+        t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [Option<f64>; LANES] {
         let spans: [Option<Span>; LANES] = std::array::from_fn(|i| {
-            (t_max[i] > t_min)
-                .then(|| self.span(s, &local[i], t_min, t_max[i]))
+            (t_max[i] > t_min[i])
+                .then(|| self.span(s, &local[i], t_min[i], t_max[i]))
                 .flatten()
         });
         let solver = self.solver;
@@ -883,14 +884,14 @@ impl ObjectShape for ImplicitShape {
         at: &Placement,
         world: &[Ray; LANES],
         local: &[Ray; LANES],
-        t_min: f64,
+        t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [Option<f64>; LANES] {
         match &self.kind {
             Kind::Generic(s) => self.intersect_lanes_generic(s, local, t_min, t_max),
             Kind::Heart(_) => std::array::from_fn(|i| {
-                (t_max[i] > t_min)
-                    .then(|| self.intersect(at, &world[i], &local[i], t_min, t_max[i]))
+                (t_max[i] > t_min[i])
+                    .then(|| self.intersect(at, &world[i], &local[i], t_min[i], t_max[i]))
                     .flatten()
             }),
         }
