@@ -133,6 +133,38 @@ impl Aabb {
         }
         Some((t0, t1))
     }
+
+    /// [`Aabb::clip`] for [`LANES`] rays at once, given as lanes of their origins' and
+    /// directions' coordinates (`o[axis][lane]`): where `clip(ray, t0[i], t1[i])` is
+    /// `Some((a, b))`, `(t0[i], t1[i])` becomes `(a, b)`; where it is `None`, `alive[i]` is
+    /// cleared (and `t0[i]`, `t1[i]` are meaningless). The same operations as `clip`, without
+    /// branches, so that the lanes stay in vector registers.
+    #[inline(always)]
+    pub fn clip_lanes(
+        &self,
+        o: &[[f64; LANES]; 3],
+        d: &[[f64; LANES]; 3],
+        t0: &mut [f64; LANES],
+        t1: &mut [f64; LANES],
+        alive: &mut [bool; LANES],
+    ) {
+        for axis in 0..3 {
+            let (lo, hi) = (self.min[axis], self.max[axis]);
+            let (o, d) = (&o[axis], &d[axis]);
+            for i in 0..LANES {
+                let moving = d[i] != 0.0;
+                let inv = 1.0 / d[i];
+                let (a, b) = ((lo - o[i]) * inv, (hi - o[i]) * inv);
+                let (a, b) = if a > b { (b, a) } else { (a, b) };
+                let outside = (o[i] < lo) | (o[i] > hi);
+                t0[i] = if moving & (a > t0[i]) { a } else { t0[i] };
+                t1[i] = if moving & (b < t1[i]) { b } else { t1[i] };
+                // `t0 > t1` is `clip`'s test for an empty interval (a NaN bound passes it).
+                let empty = t0[i] > t1[i];
+                alive[i] &= if moving { !empty } else { !outside };
+            }
+        }
+    }
 }
 
 /// Why an object frame could not be built.

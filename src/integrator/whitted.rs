@@ -136,8 +136,8 @@ fn fresnel(cos_i: f64, cos_t: f64, eta: f64) -> f64 {
 }
 
 /// `cosine^shininess` (`cosine ∈ [0, 1]`): by repeated squaring for the usual whole-number
-/// exponents (a few multiplications, within a few ulps of `powf`, which is a library call
-/// of about a hundred instructions), else `powf`.
+/// exponents (a few multiplications, relatively within `shininess` ulps of `powf`, a library
+/// call of about a hundred instructions), else `powf`.
 #[inline]
 fn highlight(cosine: f64, shininess: f64) -> f64 {
     if (0.0..=1024.0).contains(&shininess) && shininess.fract() == 0.0 {
@@ -559,6 +559,24 @@ mod tests {
             }
         }
         assert!(shadowed > 50, "{shadowed}");
+    }
+
+    #[test]
+    fn the_highlight_is_powf_to_within_shininess_ulps() {
+        // Repeated squaring's relative error grows with the exponent: measured below a third
+        // of an ulp per unit of the exponent, far below the f32 film's resolution.
+        for k in 0..=1024 {
+            let shininess = f64::from(k);
+            for i in 0..=1000 {
+                let cosine = f64::from(i) / 1000.0;
+                let (fast, exact) = (highlight(cosine, shininess), cosine.powf(shininess));
+                let tolerance = (shininess + 1.0) * f64::EPSILON * exact + f64::MIN_POSITIVE;
+                assert!((fast - exact).abs() <= tolerance, "{cosine}^{shininess}");
+            }
+        }
+        // A fractional exponent is powf's own.
+        assert_eq!(highlight(0.7, 12.5), 0.7f64.powf(12.5));
+        assert_eq!(highlight(0.0, 0.0), 1.0);
     }
 
     #[test]

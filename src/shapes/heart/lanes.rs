@@ -112,22 +112,7 @@ fn chords_in(
         t0[i] = t_lo[i];
         t1[i] = t_max[i];
     }
-    // The box clip, one axis after another.
-    for (axis, (o, d)) in [(ox, dx), (oy, dy), (oz, dz)].into_iter().enumerate() {
-        let (lo, hi) = (BOUNDS.min[axis], BOUNDS.max[axis]);
-        for i in 0..LANES {
-            let moving = d[i] != 0.0;
-            let inv = 1.0 / d[i];
-            let (a, b) = ((lo - o[i]) * inv, (hi - o[i]) * inv);
-            let (a, b) = if a > b { (b, a) } else { (a, b) };
-            let outside = (o[i] < lo) | (o[i] > hi);
-            t0[i] = if moving & (a > t0[i]) { a } else { t0[i] };
-            t1[i] = if moving & (b < t1[i]) { b } else { t1[i] };
-            // `t0 > t1` is the scalar code's test for an empty interval (a NaN bound passes it).
-            let empty = t0[i] > t1[i];
-            alive[i] &= if moving { !empty } else { !outside };
-        }
-    }
+    BOUNDS.clip_lanes(&[ox, oy, oz], &[dx, dy, dz], &mut t0, &mut t1, &mut alive);
     // The lower half's ellipsoid and the half-space above it, from the box entry.
     let z_floor = -BOUNDS_MARGIN;
     let rr = (1.0 + BOUNDS_MARGIN) * (1.0 + BOUNDS_MARGIN);
