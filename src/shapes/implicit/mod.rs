@@ -31,7 +31,7 @@ pub mod presets;
 use super::heart::HeartShape;
 use super::placed::{ObjectShape, Placed, Placement};
 use super::report::Recorder;
-use super::SolverReport;
+use super::{SolverReport, LANES};
 use crate::geometry::{Aabb, DVec3, Frame, Ray};
 use crate::roots::Solver;
 use dd::Dd;
@@ -532,6 +532,16 @@ impl ImplicitShape {
     /// there.
     #[inline]
     fn first_query(&self, s: &Surface, ray: &Ray, t_min: f64, t_max: f64) -> Option<Query> {
+        let span = self.span(s, ray, t_min, t_max)?;
+        let mut c: Uni = [0.0; MAX_DEGREE + 1];
+        s.f.compose_into(span.mid, span.e, &mut c);
+        span.query(s, c)
+    }
+
+    /// The part of [`ImplicitShape::first_query`] before the composition: the chord and the
+    /// span to search, or `None` when there is nothing to search.
+    #[inline(always)]
+    fn span(&self, s: &Surface, ray: &Ray, t_min: f64, t_max: f64) -> Option<Span> {
         let (t_mid, t_half, mid, e) = self.chord(ray)?;
         let guard = if t_min >= 0.0 {
             t_min.max(SELF_HIT_GUARD * t_half)
@@ -548,21 +558,50 @@ impl ImplicitShape {
         if lo_t >= hi_t {
             return None;
         }
-        let (mid, e) = (mid.to_array(), e.to_array());
-        let mut c: Uni = [0.0; MAX_DEGREE + 1];
-        s.f.compose_into(mid, e, &mut c);
-        let (deg, inv) = normalise(&mut c, s.f.degree)?;
-        Some(Query {
+        Some(Span {
             t_mid,
             t_half,
             guard,
-            mid,
-            e,
-            c,
-            deg,
-            inv,
-            s_lo: (lo_t - t_mid) / t_half,
-            s_hi: ((hi_t - t_mid) / t_half).min(1.0),
+            mid: mid.to_array(),
+            e: e.to_array(),
+            lo_t,
+            hi_t,
+        })
+    }
+
+    /// [`Shape::intersect_lanes`](crate::shapes::Shape::intersect_lanes) on the generic path
+    /// (camera rays, and through `occludes_lanes` shadow rays): the rays that reach the
+    /// composition are composed together, then each is solved as
+    /// [`ImplicitShape::intersect_generic`] solves it alone (the same bits at every step).
+    fn intersect_lanes_generic(
+        &self,
+        s: &Surface,
+        local: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [Option<f64>; LANES] {
+        let spans: [Option<Span>; LANES] = std::array::from_fn(|i| {
+            (t_max[i] > t_min[i])
+                .then(|| self.span(s, &local[i], t_min[i], t_max[i]))
+                .flatten()
+        });
+        let solver = self.solver;
+        let mut first_root = |c: &[f64], lo: f64, hi: f64| solver.first_root(c, lo, hi);
+        if spans.iter().filter(|sp| sp.is_some()).count() < 2 {
+            return std::array::from_fn(|i| {
+                let span = spans[i].as_ref()?;
+                let mut c: Uni = [0.0; MAX_DEGREE + 1];
+                s.f.compose_into(span.mid, span.e, &mut c);
+                let q = span.query(s, c)?;
+                self.solve(s, q, t_max[i], &mut first_root, &mut false)
+            });
+        }
+        let mids = spans.map(|sp| sp.map_or([0.0; 3], |sp| sp.mid));
+        let es = spans.map(|sp| sp.map_or([0.0; 3], |sp| sp.e));
+        let cs = s.f.compose_lanes(mids, es);
+        std::array::from_fn(|i| {
+            let q = spans[i].as_ref()?.query(s, cs[i])?;
+            self.solve(s, q, t_max[i], &mut first_root, &mut false)
         })
     }
 
@@ -579,6 +618,20 @@ impl ImplicitShape {
         first_root: &mut impl FnMut(&[f64], f64, f64) -> Option<f64>,
         recentred: &mut bool,
     ) -> Option<f64> {
+        let q = self.first_query(s, ray, t_min, t_max)?;
+        self.solve(s, q, t_max, first_root, recentred)
+    }
+
+    /// The root-finding part of [`ImplicitShape::intersect_generic`], from its first query.
+    #[inline(always)]
+    fn solve(
+        &self,
+        s: &Surface,
+        q: Query,
+        t_max: f64,
+        first_root: &mut impl FnMut(&[f64], f64, f64) -> Option<f64>,
+        recentred: &mut bool,
+    ) -> Option<f64> {
         let Query {
             t_mid,
             t_half,
@@ -590,7 +643,7 @@ impl ImplicitShape {
             inv,
             mut s_lo,
             s_hi,
-        } = self.first_query(s, ray, t_min, t_max)?;
+        } = q;
         for _ in 0..8 {
             let root = first_root(&c[..=deg], s_lo, s_hi)?;
             let radius = ill_conditioned(s, &c[..=deg], inv, mid, e, root);
@@ -628,6 +681,41 @@ impl ImplicitShape {
             s_lo = w_hi;
         }
         None
+    }
+}
+
+/// The chord of one ray through the clip sphere (`t = t_mid + s·t_half`, object-space
+/// points `mid + s·e`) and the span `(lo_t, hi_t)` of it to search, before the composition.
+#[derive(Clone, Copy)]
+struct Span {
+    t_mid: f64,
+    t_half: f64,
+    /// Roots at or below this `t` are the ray's own origin.
+    guard: f64,
+    mid: [f64; 3],
+    e: [f64; 3],
+    lo_t: f64,
+    hi_t: f64,
+}
+
+impl Span {
+    /// The query for the ray polynomial `c` composed on this chord (normalised here), or
+    /// `None` for a zero or non-finite polynomial.
+    #[inline(always)]
+    fn query(&self, s: &Surface, mut c: Uni) -> Option<Query> {
+        let (deg, inv) = normalise(&mut c, s.f.degree)?;
+        Some(Query {
+            t_mid: self.t_mid,
+            t_half: self.t_half,
+            guard: self.guard,
+            mid: self.mid,
+            e: self.e,
+            c,
+            deg,
+            inv,
+            s_lo: (self.lo_t - self.t_mid) / self.t_half,
+            s_hi: ((self.hi_t - self.t_mid) / self.t_half).min(1.0),
+        })
     }
 }
 
@@ -788,6 +876,24 @@ impl ObjectShape for ImplicitShape {
                 let (lo, hi) = self.heart_span(local, t_min, t_max)?;
                 h.intersect(at, world, local, lo, hi)
             }
+        }
+    }
+
+    fn intersect_lanes(
+        &self,
+        at: &Placement,
+        world: &[Ray; LANES],
+        local: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [Option<f64>; LANES] {
+        match &self.kind {
+            Kind::Generic(s) => self.intersect_lanes_generic(s, local, t_min, t_max),
+            Kind::Heart(_) => std::array::from_fn(|i| {
+                (t_max[i] > t_min[i])
+                    .then(|| self.intersect(at, &world[i], &local[i], t_min[i], t_max[i]))
+                    .flatten()
+            }),
         }
     }
 

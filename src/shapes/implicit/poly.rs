@@ -218,10 +218,111 @@ pub struct Compiled {
     pub degree: usize,
     /// Highest exponent of z in any term.
     max_z: usize,
+    /// The steps of a ray composition (see [`Compiled::compose_into`]), fixed by the terms'
+    /// exponents alone.
+    steps: Vec<Step>,
 }
 
-/// The powers `xᵏ, yᵏ, zᵏ` of a point's coordinates, each the previous one times the
-/// coordinate (so every polynomial evaluated on the table sees the same values).
+/// One step of a ray composition, in the order the nested Horner scheme takes them. Which
+/// steps a polynomial needs, and the degree of every partial result, depend only on its
+/// terms' exponents, so they are worked out once; a ray then runs straight through them with
+/// kernels of constant trip count.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Step {
+    /// `h ← h + c·Z(s)ᵏ` for the next term in order (`c` its coefficient, `k` its z-exponent).
+    Term(u8),
+    /// `h ← h·Y(s)`, `h` of the given degree.
+    TimesY(u8),
+    /// `h ← h·Y(s)·Y(s)` (two [`Step::TimesY`] in one), `h` of the given degree.
+    TimesY2(u8),
+    /// `f ← f + h` over `h`'s degree (given), then `h ← 0`.
+    Flush(u8),
+    /// `f ← f·X(s)`, `f` of the given degree.
+    TimesX(u8),
+    /// `f ← f·X(s)·X(s)` (two [`Step::TimesX`] in one), `f` of the given degree.
+    TimesX2(u8),
+}
+
+/// Runs `$body` with `$d` bound to the value of `$v` (at most [`MAX_DEGREE`]) as a constant,
+/// so that kernels written for one degree get constant trip counts.
+macro_rules! with_degree {
+    ($v:expr, $d:ident => $body:expr) => {
+        match $v {
+            0 => {
+                const $d: usize = 0;
+                $body
+            }
+            1 => {
+                const $d: usize = 1;
+                $body
+            }
+            2 => {
+                const $d: usize = 2;
+                $body
+            }
+            3 => {
+                const $d: usize = 3;
+                $body
+            }
+            4 => {
+                const $d: usize = 4;
+                $body
+            }
+            5 => {
+                const $d: usize = 5;
+                $body
+            }
+            6 => {
+                const $d: usize = 6;
+                $body
+            }
+            7 => {
+                const $d: usize = 7;
+                $body
+            }
+            8 => {
+                const $d: usize = 8;
+                $body
+            }
+            9 => {
+                const $d: usize = 9;
+                $body
+            }
+            10 => {
+                const $d: usize = 10;
+                $body
+            }
+            11 => {
+                const $d: usize = 11;
+                $body
+            }
+            12 => {
+                const $d: usize = 12;
+                $body
+            }
+            13 => {
+                const $d: usize = 13;
+                $body
+            }
+            14 => {
+                const $d: usize = 14;
+                $body
+            }
+            15 => {
+                const $d: usize = 15;
+                $body
+            }
+            _ => {
+                const $d: usize = 16;
+                $body
+            }
+        }
+    };
+}
+
+/// The powers `xᵏ, yᵏ, zᵏ` of a point's coordinates for `k` up to the degree it was made
+/// for, each the previous one times the coordinate (so every polynomial evaluated on the
+/// table sees the same values).
 #[derive(Clone, Copy, Debug)]
 pub struct Powers([[f64; MAX_DEGREE + 1]; 3]);
 
@@ -229,13 +330,23 @@ impl Powers {
     /// The powers of `p`'s coordinates up to `degree` (at most [`MAX_DEGREE`]).
     #[inline]
     pub fn new(p: [f64; 3], degree: usize) -> Powers {
-        let mut pw = [[1.0; MAX_DEGREE + 1]; 3];
-        for (v, row) in pw.iter_mut().enumerate() {
-            for k in 1..=degree {
-                row[k] = row[k - 1] * p[v];
+        // Entries above the degree are never read; zero is the cheapest fill.
+        let mut pw = [[0.0; MAX_DEGREE + 1]; 3];
+        with_degree!(degree, D => {
+            for (row, x) in pw.iter_mut().zip(p) {
+                powers_into::<D>(row, x);
             }
-        }
+        });
         Powers(pw)
+    }
+}
+
+/// `row[k] ← xᵏ` for `k ≤ D`, each the previous one times `x`.
+#[inline(always)]
+fn powers_into<const D: usize>(row: &mut [f64; MAX_DEGREE + 1], x: f64) {
+    row[0] = 1.0;
+    for k in 1..=D {
+        row[k] = row[k - 1] * x;
     }
 }
 
@@ -271,17 +382,37 @@ impl Scalar for Dd {
     }
 }
 
-/// `p ← p · (a + b·s)` for a polynomial of degree `deg` stored in `p[..=deg]`; the result
-/// has degree `deg + 1` (the caller keeps `deg + 1` within `p`).
-#[inline(always)]
-fn mul_linear<T: Scalar>(p: &mut [T], deg: usize, a: T, b: T) {
-    p[deg + 1] = b * p[deg];
-    let mut k = deg;
-    while k > 0 {
-        p[k] = a * p[k] + b * p[k - 1];
-        k -= 1;
+/// How many rays [`Compiled::compose_lanes`] composes at once.
+pub const LANES: usize = crate::shapes::LANES;
+
+/// One `f64` per ray, with lane-wise `+` and `·`: each lane of a composition in this
+/// arithmetic gets exactly the bits the `f64` composition of its ray alone gets.
+#[derive(Clone, Copy, Debug)]
+struct Lanes([f64; LANES]);
+
+impl Add for Lanes {
+    type Output = Lanes;
+    #[inline(always)]
+    fn add(self, o: Lanes) -> Lanes {
+        Lanes(std::array::from_fn(|i| self.0[i] + o.0[i]))
     }
-    p[0] = a * p[0];
+}
+
+impl Mul for Lanes {
+    type Output = Lanes;
+    #[inline(always)]
+    fn mul(self, o: Lanes) -> Lanes {
+        Lanes(std::array::from_fn(|i| self.0[i] * o.0[i]))
+    }
+}
+
+impl Scalar for Lanes {
+    const ZERO: Lanes = Lanes([0.0; LANES]);
+    const ONE: Lanes = Lanes([1.0; LANES]);
+    #[inline(always)]
+    fn coef(t: &Term) -> Lanes {
+        Lanes([t.c; LANES])
+    }
 }
 
 /// Offset of row `k` (the `k + 1` coefficients of `Z(s)ᵏ`) in the triangular table of powers.
@@ -294,7 +425,7 @@ impl Compiled {
     /// Rounds the exact coefficients once (keeping the remainders for [`Dd`] work) and sorts
     /// the terms.
     pub fn new(p: &Poly) -> Compiled {
-        let mut terms: Vec<Term> = p
+        let terms: Vec<Term> = p
             .terms
             .iter()
             .map(|(&e, &c)| {
@@ -307,13 +438,7 @@ impl Compiled {
             })
             .filter(|t| t.c != 0.0)
             .collect();
-        terms.sort_by(|a, b| (b.e[0], b.e[1], a.e[2]).cmp(&(a.e[0], a.e[1], b.e[2])));
-        let max_z = terms.iter().map(|t| t.e[2] as usize).max().unwrap_or(0);
-        Compiled {
-            terms,
-            degree: p.degree(),
-            max_z,
-        }
+        Compiled::from_terms(terms, p.degree())
     }
 
     /// A compiled polynomial from terms given directly (any order), of the given total
@@ -321,10 +446,12 @@ impl Compiled {
     pub fn from_terms(mut terms: Vec<Term>, degree: usize) -> Compiled {
         terms.sort_by(|a, b| (b.e[0], b.e[1], a.e[2]).cmp(&(a.e[0], a.e[1], b.e[2])));
         let max_z = terms.iter().map(|t| t.e[2] as usize).max().unwrap_or(0);
+        let steps = schedule(&terms);
         Compiled {
             terms,
             degree,
             max_z,
+            steps,
         }
     }
 
@@ -382,72 +509,217 @@ impl Compiled {
         out
     }
 
+    /// [`Compiled::compose`] of [`LANES`] rays at once (ray `i` is `o[i] + s·e[i]`): lane `i`
+    /// of the answer is exactly `self.compose(o[i], e[i])`, bit for bit. Compiled for AVX2 as
+    /// well, chosen at run time.
+    pub fn compose_lanes(&self, o: [[f64; 3]; LANES], e: [[f64; 3]; LANES]) -> [Uni; LANES] {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2, checked just above.
+            return unsafe { self.compose_lanes_avx2(o, e) };
+        }
+        self.compose_lanes_in(o, e)
+    }
+
+    /// [`Compiled::compose_lanes`] compiled for AVX2.
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn compose_lanes_avx2(
+        &self,
+        o: [[f64; 3]; LANES],
+        e: [[f64; 3]; LANES],
+    ) -> [Uni; LANES] {
+        self.compose_lanes_in(o, e)
+    }
+
+    /// [`Compiled::compose_lanes`] for the baseline instruction set (and inlined into the
+    /// AVX2 version).
+    #[inline(always)]
+    fn compose_lanes_in(&self, o: [[f64; 3]; LANES], e: [[f64; 3]; LANES]) -> [Uni; LANES] {
+        let o = std::array::from_fn(|v| Lanes(std::array::from_fn(|i| o[i][v])));
+        let e = std::array::from_fn(|v| Lanes(std::array::from_fn(|i| e[i][v])));
+        let mut out = [Lanes::ZERO; MAX_DEGREE + 1];
+        self.compose_in(o, e, &mut out);
+        std::array::from_fn(|i| out.map(|c| c.0[i]))
+    }
+
     /// [`Compiled::compose`] into `out` (all `MAX_DEGREE + 1` entries are written; those
     /// above the degree are zero), in the arithmetic `T`: `f64`, or [`Dd`] with the exact
     /// coefficients for the few rays where `f64` cannot resolve the surface.
     #[inline]
     pub fn compose_into<T: Scalar>(&self, o: [T; 3], e: [T; 3], out: &mut [T; MAX_DEGREE + 1]) {
+        self.compose_in(o, e, out);
+    }
+
+    /// [`Compiled::compose_into`], always inlined.
+    #[inline(always)]
+    fn compose_in<T: Scalar>(&self, o: [T; 3], e: [T; 3], out: &mut [T; MAX_DEGREE + 1]) {
+        // The table of powers of Z, no larger than the surface needs (it is zeroed per ray).
+        match self.max_z {
+            0..=4 => self.compose_with_table::<T, { tri(5) }>(o, e, out),
+            5..=8 => self.compose_with_table::<T, { tri(9) }>(o, e, out),
+            _ => self.compose_with_table::<T, { tri(MAX_DEGREE + 1) }>(o, e, out),
+        }
+    }
+
+    /// [`Compiled::compose_into`] with a table of `ZN ≥ tri(max_z + 1)` entries for the
+    /// powers of `Z(s)`.
+    #[inline(always)]
+    fn compose_with_table<T: Scalar, const ZN: usize>(
+        &self,
+        o: [T; 3],
+        e: [T; 3],
+        out: &mut [T; MAX_DEGREE + 1],
+    ) {
         // Z(s)^k for k ≤ max_z, row k at tri(k).
-        let kz = self.max_z;
-        let mut zp = [T::ZERO; tri(MAX_DEGREE + 1)];
+        let mut zp = [T::ZERO; ZN];
         zp[0] = T::ONE;
-        for k in 1..=kz {
+        for k in 1..=self.max_z {
             let (prev, cur) = zp.split_at_mut(tri(k));
-            let row = &mut cur[..=k];
-            row[..k].copy_from_slice(&prev[tri(k - 1)..tri(k - 1) + k]);
-            mul_linear(row, k - 1, o[2], e[2]);
+            let prev = &prev[tri(k - 1)..];
+            with_degree!(k - 1, D => times_linear_from::<T, D>(prev, cur, o[2], e[2]));
         }
         out.fill(T::ZERO);
-        let mut fx_deg = 0usize;
         let mut hy = [T::ZERO; MAX_DEGREE + 1];
-        let mut cur_i: Option<u8> = None;
-        let terms = &self.terms;
-        let mut t = 0;
-        while t < terms.len() {
-            let i = terms[t].e[0];
-            if let Some(ci) = cur_i {
-                for _ in i..ci {
-                    mul_linear(out, fx_deg, o[0], e[0]);
-                    fx_deg += 1;
+        let mut terms = self.terms.iter();
+        for &step in &self.steps {
+            match step {
+                Step::Term(k) => {
+                    let c = T::coef(terms.next().expect("one term per Term step"));
+                    with_degree!(k as usize, D => add_scaled::<T, D>(&mut hy, c, &zp[tri(D)..]));
                 }
-            }
-            cur_i = Some(i);
-            // h_i(s) = Σ_j Y^j Σ_k c_ijk Z^k by Horner in Y.
-            let mut hy_deg = 0usize;
-            hy.fill(T::ZERO);
-            let mut cur_j: Option<u8> = None;
-            while t < terms.len() && terms[t].e[0] == i {
-                let j = terms[t].e[1];
-                if let Some(cj) = cur_j {
-                    for _ in j..cj {
-                        mul_linear(&mut hy, hy_deg, o[1], e[1]);
-                        hy_deg += 1;
-                    }
+                Step::TimesY(d) => {
+                    with_degree!(d as usize, D => times_linear::<T, D>(&mut hy, o[1], e[1]))
                 }
-                cur_j = Some(j);
-                while t < terms.len() && terms[t].e[0] == i && terms[t].e[1] == j {
-                    let k = terms[t].e[2] as usize;
-                    let c = T::coef(&terms[t]);
-                    for (h, &z) in hy[..=k].iter_mut().zip(&zp[tri(k)..=tri(k) + k]) {
-                        *h = *h + c * z;
-                    }
-                    hy_deg = hy_deg.max(k);
-                    t += 1;
+                Step::TimesY2(d) => with_degree!(d as usize, D => {
+                    times_linear::<T, D>(&mut hy, o[1], e[1]);
+                    times_linear::<T, { D + 1 }>(&mut hy, o[1], e[1]);
+                }),
+                Step::Flush(d) => with_degree!(d as usize, D => flush::<T, D>(out, &mut hy)),
+                Step::TimesX(d) => {
+                    with_degree!(d as usize, D => times_linear::<T, D>(out, o[0], e[0]))
                 }
+                Step::TimesX2(d) => with_degree!(d as usize, D => {
+                    times_linear::<T, D>(out, o[0], e[0]);
+                    times_linear::<T, { D + 1 }>(out, o[0], e[0]);
+                }),
             }
-            for _ in 0..cur_j.unwrap_or(0) {
-                mul_linear(&mut hy, hy_deg, o[1], e[1]);
-                hy_deg += 1;
-            }
-            for (f, &h) in out[..=hy_deg].iter_mut().zip(&hy[..=hy_deg]) {
-                *f = *f + h;
-            }
-            fx_deg = fx_deg.max(hy_deg);
         }
-        for _ in 0..cur_i.unwrap_or(0) {
-            mul_linear(out, fx_deg, o[0], e[0]);
-            fx_deg += 1;
+    }
+}
+
+/// The steps [`Compiled::compose_into`] takes for `terms` (sorted by descending x-exponent,
+/// then descending y-exponent, then ascending z-exponent): `h_i(s) = Σ_j Y^j Σ_k c_ijk Z^k`
+/// by Horner in `Y` for each x-exponent `i`, summed into `f` by Horner in `X`.
+fn schedule(terms: &[Term]) -> Vec<Step> {
+    let mut steps = Vec::new();
+    let mut fx_deg = 0usize;
+    let mut cur_i: Option<u8> = None;
+    let mut t = 0;
+    while t < terms.len() {
+        let i = terms[t].e[0];
+        if let Some(ci) = cur_i {
+            for _ in i..ci {
+                steps.push(Step::TimesX(fx_deg as u8));
+                fx_deg += 1;
+            }
         }
+        cur_i = Some(i);
+        let mut hy_deg = 0usize;
+        let mut cur_j: Option<u8> = None;
+        while t < terms.len() && terms[t].e[0] == i {
+            let j = terms[t].e[1];
+            if let Some(cj) = cur_j {
+                for _ in j..cj {
+                    steps.push(Step::TimesY(hy_deg as u8));
+                    hy_deg += 1;
+                }
+            }
+            cur_j = Some(j);
+            while t < terms.len() && terms[t].e[0] == i && terms[t].e[1] == j {
+                let k = terms[t].e[2];
+                steps.push(Step::Term(k));
+                hy_deg = hy_deg.max(k as usize);
+                t += 1;
+            }
+        }
+        for _ in 0..cur_j.unwrap_or(0) {
+            steps.push(Step::TimesY(hy_deg as u8));
+            hy_deg += 1;
+        }
+        steps.push(Step::Flush(hy_deg as u8));
+        fx_deg = fx_deg.max(hy_deg);
+    }
+    for _ in 0..cur_i.unwrap_or(0) {
+        steps.push(Step::TimesX(fx_deg as u8));
+        fx_deg += 1;
+    }
+    // Two multiplications by the same factor in a row become one step.
+    let mut fused: Vec<Step> = Vec::with_capacity(steps.len());
+    for step in steps {
+        match (fused.last(), step) {
+            (Some(&Step::TimesY(d)), Step::TimesY(n)) if n == d + 1 => {
+                *fused.last_mut().unwrap() = Step::TimesY2(d)
+            }
+            (Some(&Step::TimesX(d)), Step::TimesX(n)) if n == d + 1 => {
+                *fused.last_mut().unwrap() = Step::TimesX2(d)
+            }
+            _ => fused.push(step),
+        }
+    }
+    fused
+}
+
+/// `p ← p · (a + b·s)` for `p` of degree `D` (the result has degree `D + 1`; `D < MAX_DEGREE`).
+#[inline(always)]
+fn times_linear<T: Scalar, const D: usize>(p: &mut [T; MAX_DEGREE + 1], a: T, b: T) {
+    times_linear_row::<T, D>(&mut p[..], a, b);
+}
+
+/// [`times_linear`] on a slice of at least `D + 2` entries.
+#[inline(always)]
+fn times_linear_row<T: Scalar, const D: usize>(p: &mut [T], a: T, b: T) {
+    let p = &mut p[..D + 2];
+    p[D + 1] = b * p[D];
+    let mut k = D;
+    while k > 0 {
+        p[k] = a * p[k] + b * p[k - 1];
+        k -= 1;
+    }
+    p[0] = a * p[0];
+}
+
+/// `to[..D + 2] ← from[..=D] · (a + b·s)`: [`times_linear`] of a copy, without the copy.
+#[inline(always)]
+fn times_linear_from<T: Scalar, const D: usize>(from: &[T], to: &mut [T], a: T, b: T) {
+    let (p, to) = (&from[..=D], &mut to[..D + 2]);
+    to[D + 1] = b * p[D];
+    let mut k = D;
+    while k > 0 {
+        to[k] = a * p[k] + b * p[k - 1];
+        k -= 1;
+    }
+    to[0] = a * p[0];
+}
+
+/// `h[..=D] ← h[..=D] + c·z[..=D]`.
+#[inline(always)]
+fn add_scaled<T: Scalar, const D: usize>(h: &mut [T; MAX_DEGREE + 1], c: T, z: &[T]) {
+    let z = &z[..=D];
+    for m in 0..=D {
+        h[m] = h[m] + c * z[m];
+    }
+}
+
+/// `f[..=D] ← f[..=D] + h[..=D]`, then `h[..=D] ← 0` (the rest of `h` is zero already).
+#[inline(always)]
+fn flush<T: Scalar, const D: usize>(f: &mut [T; MAX_DEGREE + 1], h: &mut [T; MAX_DEGREE + 1]) {
+    for m in 0..=D {
+        f[m] = f[m] + h[m];
+        h[m] = T::ZERO;
     }
 }
 
@@ -533,6 +805,175 @@ pub fn derive_bound(c: &Compiled) -> Option<f64> {
 mod tests {
     use super::*;
     use crate::shapes::implicit::expand;
+
+    // The composition as first written (runtime loop bounds, no schedule): the scheduled one
+    // must give the same bits, signed zeros included, in both arithmetics.
+    /// `p ← p · (a + b·s)` for a polynomial of degree `deg` stored in `p[..=deg]`; the result
+    /// has degree `deg + 1` (the caller keeps `deg + 1` within `p`).
+    #[inline(always)]
+    fn mul_linear<T: Scalar>(p: &mut [T], deg: usize, a: T, b: T) {
+        p[deg + 1] = b * p[deg];
+        let mut k = deg;
+        while k > 0 {
+            p[k] = a * p[k] + b * p[k - 1];
+            k -= 1;
+        }
+        p[0] = a * p[0];
+    }
+
+    fn compose_reference<T: Scalar>(c: &Compiled, o: [T; 3], e: [T; 3]) -> [T; MAX_DEGREE + 1] {
+        let mut out = [T::ZERO; MAX_DEGREE + 1];
+        let mut zp = [T::ZERO; tri(MAX_DEGREE + 1)];
+        zp[0] = T::ONE;
+        for k in 1..=c.max_z {
+            let (prev, cur) = zp.split_at_mut(tri(k));
+            let row = &mut cur[..=k];
+            row[..k].copy_from_slice(&prev[tri(k - 1)..tri(k - 1) + k]);
+            mul_linear(row, k - 1, o[2], e[2]);
+        }
+        let mut fx_deg = 0usize;
+        let mut hy = [T::ZERO; MAX_DEGREE + 1];
+        let mut cur_i: Option<u8> = None;
+        let terms = &c.terms;
+        let mut t = 0;
+        while t < terms.len() {
+            let i = terms[t].e[0];
+            if let Some(ci) = cur_i {
+                for _ in i..ci {
+                    mul_linear(&mut out, fx_deg, o[0], e[0]);
+                    fx_deg += 1;
+                }
+            }
+            cur_i = Some(i);
+            let mut hy_deg = 0usize;
+            hy.fill(T::ZERO);
+            let mut cur_j: Option<u8> = None;
+            while t < terms.len() && terms[t].e[0] == i {
+                let j = terms[t].e[1];
+                if let Some(cj) = cur_j {
+                    for _ in j..cj {
+                        mul_linear(&mut hy, hy_deg, o[1], e[1]);
+                        hy_deg += 1;
+                    }
+                }
+                cur_j = Some(j);
+                while t < terms.len() && terms[t].e[0] == i && terms[t].e[1] == j {
+                    let k = terms[t].e[2] as usize;
+                    let c = T::coef(&terms[t]);
+                    for (h, &z) in hy[..=k].iter_mut().zip(&zp[tri(k)..=tri(k) + k]) {
+                        *h = *h + c * z;
+                    }
+                    hy_deg = hy_deg.max(k);
+                    t += 1;
+                }
+            }
+            for _ in 0..cur_j.unwrap_or(0) {
+                mul_linear(&mut hy, hy_deg, o[1], e[1]);
+                hy_deg += 1;
+            }
+            for (f, &h) in out[..=hy_deg].iter_mut().zip(&hy[..=hy_deg]) {
+                *f = *f + h;
+            }
+            fx_deg = fx_deg.max(hy_deg);
+        }
+        for _ in 0..cur_i.unwrap_or(0) {
+            mul_linear(&mut out, fx_deg, o[0], e[0]);
+            fx_deg += 1;
+        }
+        out
+    }
+
+    /// Surfaces of every degree from 1 to 16 with gaps in every exponent, and the presets.
+    fn composition_surfaces() -> Vec<Compiled> {
+        let mut eqs: Vec<String> = [
+            "x - 2*y + 0.5*z + 3",
+            "x^2 + y^2 + z^2 - 1",
+            "x*y*z - 0.3",
+            "(x^2 + y^2 + z^2)^8 - 1",
+            "(x + y + z + 1)^16",
+            "(x - 0.25*y)^5 + z^7 - x^3*y*z^2 + 1e-3",
+            "x^9*z^2 - y^11 + z^4*y - 2",
+            "-(x^2 + 9/4*y^2 + z^2 - 1)^3 + x^2*z^3 + 9/80*y^2*z^3",
+            "z^13 - 3*x*z^6 + y^2",
+        ]
+        .map(String::from)
+        .to_vec();
+        for (name, params) in [
+            ("torus", vec![1.0, 0.3]),
+            ("barth_sextic", vec![]),
+            ("chmutov", vec![8.0]),
+            ("chmutov", vec![16.0]),
+            ("taubin_heart", vec![]),
+            ("kummer", vec![0.5]),
+            ("clebsch", vec![]),
+        ] {
+            eqs.push(crate::shapes::implicit::preset_equation(name, &params).unwrap());
+        }
+        eqs.iter()
+            .map(|eq| Compiled::new(&expand(eq).unwrap()))
+            .collect()
+    }
+
+    #[test]
+    fn the_scheduled_composition_gives_the_bits_of_the_first_one() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        // Coordinates with exact zeros of both signs (axis-aligned rays, rays through the
+        // origin), tiny and large values, besides ordinary ones.
+        let coordinate = |r: u64| match r % 8 {
+            0 => 0.0,
+            1 => -0.0,
+            2 => (r >> 8) as f64 * 1e-300 * if r & 256 == 0 { 1.0 } else { -1.0 },
+            3 => 1.0,
+            _ => ((r >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 4.0,
+        };
+        for c in composition_surfaces() {
+            for _ in 0..400 {
+                let o = [0; 3].map(|_| coordinate(next()));
+                let e = [0; 3].map(|_| coordinate(next()));
+                let got = c.compose(o, e);
+                let want = compose_reference::<f64>(&c, o, e);
+                assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "{o:?} {e:?}");
+                let (od, ed) = (o.map(Dd::from_f64), e.map(|v| Dd::from_f64(v * 0.5)));
+                let mut got = [Dd::ZERO; MAX_DEGREE + 1];
+                c.compose_into(od, ed, &mut got);
+                let want = compose_reference::<Dd>(&c, od, ed);
+                let bits = |v: [Dd; MAX_DEGREE + 1]| v.map(|d| (d.hi.to_bits(), d.lo.to_bits()));
+                assert_eq!(bits(got), bits(want), "{o:?} {e:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn four_rays_composed_together_get_the_bits_each_gets_alone() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut coordinate = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            match state % 6 {
+                0 => 0.0,
+                1 => -0.0,
+                _ => ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 4.0,
+            }
+        };
+        for c in composition_surfaces() {
+            for _ in 0..100 {
+                let o: [[f64; 3]; LANES] = std::array::from_fn(|_| [0; 3].map(|_| coordinate()));
+                let e: [[f64; 3]; LANES] = std::array::from_fn(|_| [0; 3].map(|_| coordinate()));
+                let alone: [Uni; LANES] = std::array::from_fn(|i| c.compose(o[i], e[i]));
+                let bits = |v: [Uni; LANES]| v.map(|u| u.map(f64::to_bits));
+                // The baseline code path, whatever the processor, and the one chosen at run time.
+                assert_eq!(bits(c.compose_lanes_in(o, e)), bits(alone));
+                assert_eq!(bits(c.compose_lanes(o, e)), bits(alone));
+            }
+        }
+    }
 
     #[test]
     fn a_shared_table_of_powers_gives_each_value_exactly() {
