@@ -33,7 +33,7 @@ pub(super) fn chords(
         // SAFETY: the processor has AVX2, checked just above.
         return unsafe { chords_avx2(at, local, t_min, t_max, out) };
     }
-    chords_baseline(at, local, t_min, t_max, out)
+    chords_in(at, local, t_min, t_max, out)
 }
 
 /// [`chords`] compiled for AVX2.
@@ -43,17 +43,6 @@ pub(super) fn chords(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn chords_avx2(
-    at: &Placement,
-    local: &[Ray; LANES],
-    t_min: Lanes,
-    t_max: Lanes,
-    out: &mut [Chord; LANES],
-) -> [bool; LANES] {
-    chords_in(at, local, t_min, t_max, out)
-}
-
-/// [`chords`] compiled for any processor of the target.
-pub(super) fn chords_baseline(
     at: &Placement,
     local: &[Ray; LANES],
     t_min: Lanes,
@@ -73,7 +62,7 @@ fn larger(a: f64, b: f64) -> f64 {
     }
 }
 
-/// The body of [`chords`], in the scalar code's order (see [`HeartShape::chord`],
+/// The body of [`chords`] (and, called directly, its baseline copy), in the scalar code's order (see [`HeartShape::chord`],
 /// [`Aabb::clip`](crate::geometry::Aabb::clip) and `clip_lower_half`).
 #[inline(always)]
 fn chords_in(
@@ -302,8 +291,7 @@ mod tests {
                             std::array::from_fn(|i| alive[i].then_some(out[i]))
                         };
                     let mut out = [NO_CHORD; LANES];
-                    let baseline =
-                        lanes_of(chords_baseline(&at, &local, t_min, t_max, &mut out), out);
+                    let baseline = lanes_of(chords_in(&at, &local, t_min, t_max, &mut out), out);
                     let mut out = [NO_CHORD; LANES];
                     let chosen = lanes_of(chords(&at, &local, t_min, t_max, &mut out), out);
                     for i in 0..LANES {
