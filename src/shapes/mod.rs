@@ -65,10 +65,8 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
         t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [Option<f64>; LANES] {
-        std::array::from_fn(|i| {
-            (t_max[i] > t_min[i])
-                .then(|| self.intersect(&rays[i], t_min[i], t_max[i]))
-                .flatten()
+        each_lane(t_min, t_max, |i| {
+            self.intersect(&rays[i], t_min[i], t_max[i])
         })
     }
     /// [`Shape::occludes`] for [`LANES`] rays at once: lane `i` is always exactly
@@ -93,6 +91,17 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
         let _ = (ray, t_min, t_max);
         None
     }
+}
+
+/// `query(i)` for every lane `i` with `t_max[i] > t_min[i]`, `None` without asking for the
+/// others: the one-at-a-time answer of a lane query (see [`Shape::intersect_lanes`]).
+#[inline]
+pub(crate) fn each_lane(
+    t_min: [f64; LANES],
+    t_max: [f64; LANES],
+    mut query: impl FnMut(usize) -> Option<f64>,
+) -> [Option<f64>; LANES] {
+    std::array::from_fn(|i| if t_max[i] > t_min[i] { query(i) } else { None })
 }
 
 /// Parses a finite-check helper used by constructors: true when all vectors are finite.

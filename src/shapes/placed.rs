@@ -151,10 +151,8 @@ pub trait ObjectShape: Send + Sync + std::fmt::Debug {
         t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [Option<f64>; LANES] {
-        std::array::from_fn(|i| {
-            (t_max[i] > t_min[i])
-                .then(|| self.intersect(at, &world[i], &local[i], t_min[i], t_max[i]))
-                .flatten()
+        super::each_lane(t_min, t_max, |i| {
+            self.intersect(at, &world[i], &local[i], t_min[i], t_max[i])
         })
     }
     /// Unit outward world normal at the object-space point `q` on the surface.

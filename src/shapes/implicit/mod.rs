@@ -633,11 +633,15 @@ impl ImplicitShape {
         recentred: &mut bool,
     ) -> Option<f64> {
         let Query {
-            t_mid,
-            t_half,
-            guard,
-            mid,
-            e,
+            span:
+                Span {
+                    t_mid,
+                    t_half,
+                    guard,
+                    mid,
+                    e,
+                    ..
+                },
             c,
             deg,
             inv,
@@ -705,11 +709,7 @@ impl Span {
     fn query(&self, s: &Surface, mut c: Uni) -> Option<Query> {
         let (deg, inv) = normalise(&mut c, s.f.degree)?;
         Some(Query {
-            t_mid: self.t_mid,
-            t_half: self.t_half,
-            guard: self.guard,
-            mid: self.mid,
-            e: self.e,
+            span: *self,
             c,
             deg,
             inv,
@@ -722,12 +722,8 @@ impl Span {
 /// What the generic path hands the solver for one ray: the normalised ray polynomial in
 /// `s` over the clip chord (`t = t_mid + s·t_half`) and the interval `(s_lo, s_hi]` to search.
 struct Query {
-    t_mid: f64,
-    t_half: f64,
-    /// Roots at or below this `t` are the ray's own origin.
-    guard: f64,
-    mid: [f64; 3],
-    e: [f64; 3],
+    /// The chord the polynomial is composed on.
+    span: Span,
     /// Coefficients, ascending, `deg + 1` of them used; scaled by `inv`.
     c: Uni,
     deg: usize,
@@ -889,10 +885,8 @@ impl ObjectShape for ImplicitShape {
     ) -> [Option<f64>; LANES] {
         match &self.kind {
             Kind::Generic(s) => self.intersect_lanes_generic(s, local, t_min, t_max),
-            Kind::Heart(_) => std::array::from_fn(|i| {
-                (t_max[i] > t_min[i])
-                    .then(|| self.intersect(at, &world[i], &local[i], t_min[i], t_max[i]))
-                    .flatten()
+            Kind::Heart(_) => super::each_lane(t_min, t_max, |i| {
+                self.intersect(at, &world[i], &local[i], t_min[i], t_max[i])
             }),
         }
     }
