@@ -40,6 +40,7 @@ use super::sampling::{basis, concentric_disc, strata, Sample};
 use super::{ShadeSetup, Shader};
 use crate::geometry::{DVec3, Ray};
 use crate::lights::Light;
+use crate::materials::Material;
 use crate::scene::{Scene, SceneHit};
 use crate::shapes::LANES;
 
@@ -62,9 +63,9 @@ fn guard(point: DVec3, origin: DVec3, travelled: f64) -> f64 {
 
 /// What shading needs of a hit point (see [`Whitted::surface`]).
 #[derive(Debug, Clone, Copy)]
-struct SurfacePoint {
-    /// The object hit (its material).
-    object: usize,
+struct SurfacePoint<'a> {
+    /// The material of the object hit.
+    m: &'a Material,
     /// The unit direction of the ray that arrived.
     d: DVec3,
     /// How far the ray travelled, in world units.
@@ -79,12 +80,9 @@ struct SurfacePoint {
     eps: f64,
     /// The diffuse colour there.
     base: DVec3,
-    /// The material's highlight strength and exponent.
-    specular: f64,
-    shininess: f64,
 }
 
-impl SurfacePoint {
+impl SurfacePoint<'_> {
     /// The unit direction towards a light point `target` and its distance, or `None` when
     /// the light cannot reach the side the ray arrived on (or sits at the point).
     #[inline]
@@ -106,9 +104,10 @@ impl SurfacePoint {
     #[inline]
     fn reflected_light(&self, l: DVec3) -> DVec3 {
         let mut f = self.base * self.n.dot(l);
-        if self.specular > 0.0 {
+        if self.m.specular > 0.0 {
             let h = (l - self.d).normalize_or_zero();
-            f += DVec3::splat(self.specular * highlight(self.n.dot(h).max(0.0), self.shininess));
+            f +=
+                DVec3::splat(self.m.specular * highlight(self.n.dot(h).max(0.0), self.m.shininess));
         }
         f
     }
@@ -331,8 +330,9 @@ impl<'a> Whitted<'a> {
 
     /// What shading needs of the hit `hit` of `ray`.
     #[inline]
-    fn surface(&self, ray: &Ray, hit: &SceneHit) -> SurfacePoint {
-        let m = &self.scene.objects[hit.object].material;
+    fn surface(&self, ray: &Ray, hit: &SceneHit) -> SurfacePoint<'a> {
+        let scene: &'a Scene = self.scene;
+        let m = &scene.objects[hit.object].material;
         let dir_len = ray.dir.length();
         let d = ray.dir / dir_len;
         let travelled = hit.t * dir_len;
@@ -344,7 +344,7 @@ impl<'a> Whitted<'a> {
             _ => m.diffuse_at(p),
         };
         SurfacePoint {
-            object: hit.object,
+            m,
             d,
             travelled,
             p,
@@ -352,8 +352,6 @@ impl<'a> Whitted<'a> {
             n,
             eps: guard(p, ray.origin, travelled),
             base,
-            specular: m.specular,
-            shininess: m.shininess,
         }
     }
 
@@ -361,8 +359,8 @@ impl<'a> Whitted<'a> {
     /// on a back side.
     #[inline]
     fn finish(&self, at: &SurfacePoint, mut colour: DVec3, depth: u32, s: &mut Sample) -> DVec3 {
-        let m = &self.scene.objects[at.object].material;
         let SurfacePoint {
+            m,
             d,
             travelled,
             p,
