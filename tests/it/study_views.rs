@@ -129,11 +129,13 @@ fn the_solver_views_show_each_surface_s_own_hard_cases() {
     assert!(pixels(heart, View::Roots, "2 roots") > 2000);
     assert!(pixels(heart, View::Roots, "4 roots") > 0);
     assert!(pixels(heart, View::Path, "Bernstein test") > 2000);
-    assert!(pixels(heart, View::Path, "Bernstein test (miss)") > 500);
+    // Rays that pass beside the heart but through its bounding ellipsoids are proved to miss
+    // (those beside the ellipsoids never reach the solver: black).
+    assert!(pixels(heart, View::Path, "Bernstein test (miss)") > 300);
     assert!(pixels(heart, View::Path, "multiple-root subdivision") > 0);
     assert!(pixels(heart, View::Conditioning, "below 1e-6") > 0);
     assert!(
-        pixels(heart, View::Iterations, "0") > 500,
+        pixels(heart, View::Iterations, "0") > 300,
         "proved misses refine nothing"
     );
     // Taubin's heart has the same kind of curve, which the typed path re-solves in

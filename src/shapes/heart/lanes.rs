@@ -9,7 +9,7 @@
 //! other processor runs and the tests also run.
 
 use super::surface::{sextic_coefficients, BOUNDS, BOUNDS_MARGIN};
-use super::{Chord, HeartShape, CBRT_B_MAX, POLISH_WINDOW, SELF_HIT_GUARD};
+use super::{upper_ellipsoid, Chord, HeartShape, POLISH_WINDOW, SELF_HIT_GUARD};
 use crate::geometry::{DVec3, Ray};
 use crate::shapes::placed::Placement;
 use crate::shapes::LANES;
@@ -105,8 +105,7 @@ fn chords_in(
     // The lower half's ellipsoid and the half-space above it, from the box entry.
     let z_floor = -BOUNDS_MARGIN;
     let rr = (1.0 + BOUNDS_MARGIN) * (1.0 + BOUNDS_MARGIN);
-    let upper_c = 0.5 * CBRT_B_MAX;
-    let upper_r = (1.0 + upper_c * upper_c).sqrt() + BOUNDS_MARGIN;
+    let (upper_c, upper_r) = upper_ellipsoid();
     for i in 0..LANES {
         let (px, py, pz) = (
             ox[i] + t0[i] * dx[i],
@@ -140,6 +139,22 @@ fn chords_in(
         };
         let (u0, u1) = (u0.max(0.0), u1.min(len));
         let inside_ok = (disc >= 0.0) & (u0 <= u1);
+        // The upper ellipsoid's span, cut to the part above the floor (`upper_span`).
+        let oz = pz - upper_c;
+        let hb_up = 2.0 * px * ex + py * ey + oz * ez;
+        let k_up = 2.0 * px * px + py * py + oz * oz - upper_r * upper_r;
+        let disc_up = hb_up * hb_up - a * k_up;
+        let q_up = -(hb_up + hb_up.signum() * disc_up.sqrt());
+        let (w0, w1) = (q_up / a, k_up / q_up);
+        let (w0, w1) = if w0 > w1 { (w1, w0) } else { (w0, w1) };
+        let (w0, w1) = if w0.is_finite() & w1.is_finite() {
+            (w0, w1)
+        } else {
+            (0.0, len)
+        };
+        let (w0, w1) = (w0.max(above0), w1.min(above1));
+        let above_ok = above_ok & (disc_up >= 0.0) & (w0 <= w1);
+        let (above0, above1) = (w0, w1);
         let both = above_ok & inside_ok;
         let v0 = if both {
             above0.min(u0)
@@ -155,15 +170,7 @@ fn chords_in(
         } else {
             u1
         };
-        // A ray missing the lower ellipsoid must meet the upper one above the floor (as
-        // `meets_upper_ellipsoid`, operation for operation).
-        let oz = pz - upper_c;
-        let hb_up = 2.0 * px * ex + py * ey + oz * ez;
-        let k_up = 2.0 * px * px + py * py + oz * oz - upper_r * upper_r;
-        let u = (-hb_up / a).max(above0).min(above1);
-        let q_up = (a * u + 2.0 * hb_up) * u + k_up;
-        let upper_ok = (q_up <= 0.0) | q_up.is_nan();
-        alive[i] &= inside_ok | (above_ok & upper_ok);
+        alive[i] &= inside_ok | above_ok;
         let (c0, c1) = (t0[i] + v0, t0[i] + v1);
         t0[i] = c0;
         t1[i] = c1;

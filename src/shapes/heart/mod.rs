@@ -294,10 +294,10 @@ struct Chord {
 /// The part of `[t0, t1]` (a chord of [`BOUNDS`]) that can meet the heart, given that its
 /// lower half lies in the ellipsoid `2X² + Y² + Z² ≤ 1` (below `Z = 0`, `g ≤ 0` gives
 /// `A ≤ ∛B·Z ≤ 0`): the hull of the ray's spans inside that ellipsoid and above `Z = 0`, each
-/// widened by [`BOUNDS_MARGIN`]. Rejects the rays that pass beside the tip in the box's lower
-/// corners, and shortens the chord the solver sees; a ray that misses that ellipsoid is also
-/// rejected when it misses the one holding the upper half ([`meets_upper_ellipsoid`]), which
-/// cuts the box's upper corners.
+/// widened by [`BOUNDS_MARGIN`], the span above `Z = 0` further cut to an ellipsoid that holds
+/// the upper half ([`upper_span`]). Rejects the rays that pass beside the tip in the box's
+/// lower corners or beside the lobes in its upper corners, and shortens the chord the solver
+/// sees.
 #[inline]
 fn clip_lower_half(r: &Ray, t0: f64, t1: f64) -> Option<(f64, f64)> {
     // Parametrise from the box entry so that every quantity is of the heart's size.
@@ -336,11 +336,11 @@ fn clip_lower_half(r: &Ray, t0: f64, t1: f64) -> Option<(f64, f64)> {
     } else {
         None
     };
-    let (u0, u1) = match (above, inside) {
+    let upper = above.and_then(|p| upper_span(o, d, len, p));
+    let (u0, u1) = match (upper, inside) {
         (Some(p), Some(q)) => (p.0.min(q.0), p.1.max(q.1)),
-        (Some(p), None) if meets_upper_ellipsoid(o, d, p) => p,
-        (None, Some(p)) => p,
-        _ => return None,
+        (Some(p), None) | (None, Some(p)) => p,
+        (None, None) => return None,
     };
     Some((t0 + u0, t0 + u1))
 }
@@ -349,23 +349,38 @@ fn clip_lower_half(r: &Ray, t0: f64, t1: f64) -> Option<(f64, f64)> {
 /// whose cube root is below 1.1050.
 const CBRT_B_MAX: f64 = 1.106;
 
-/// Whether the ray `o + u·d` meets, for some `u` in `[u0, u1]`, the ellipsoid
-/// `2X² + Y² + (Z − c)² ≤ R²` with `c = CBRT_B_MAX/2` and `R = √(1 + c²) + BOUNDS_MARGIN`,
-/// which holds the heart's upper half: above `Z = 0` the surface has `A = ∛B·Z ≤ 2c·Z`.
-/// The minimum of the quadratic over the interval, against zero (a margin far above its
-/// rounding). The lanes ([`lanes::chords`]) compute it with the same operations.
+/// The centre height `c` and radius `R` of the ellipsoid `2X² + Y² + (Z − c)² ≤ R²` that holds
+/// the heart's upper half: above `Z = 0` the surface has `A = ∛B·Z ≤ 2c·Z` with
+/// `c = CBRT_B_MAX/2`, i.e. `2X² + Y² + (Z − c)² ≤ 1 + c²`; `R` is widened by
+/// [`BOUNDS_MARGIN`].
 #[inline(always)]
-fn meets_upper_ellipsoid(o: DVec3, d: DVec3, (u0, u1): (f64, f64)) -> bool {
+fn upper_ellipsoid() -> (f64, f64) {
     let c = 0.5 * CBRT_B_MAX;
-    let r = (1.0 + c * c).sqrt() + BOUNDS_MARGIN;
+    (c, (1.0 + c * c).sqrt() + BOUNDS_MARGIN)
+}
+
+/// The part of `above` (an interval of `u`, within `[0, len]`) where the ray `o + u·d` is
+/// inside the upper half's ellipsoid ([`upper_ellipsoid`]), or `None` when it is nowhere
+/// inside there. The lanes ([`lanes::chords`]) compute it with the same operations.
+#[inline(always)]
+fn upper_span(o: DVec3, d: DVec3, len: f64, (above0, above1): (f64, f64)) -> Option<(f64, f64)> {
+    let (c, r) = upper_ellipsoid();
     let oz = o.z - c;
     let a = 2.0 * d.x * d.x + d.y * d.y + d.z * d.z;
     let hb = 2.0 * o.x * d.x + o.y * d.y + oz * d.z;
     let k = 2.0 * o.x * o.x + o.y * o.y + oz * oz - r * r;
-    let u = (-hb / a).max(u0).min(u1);
-    // A NaN (a = 0: no direction) keeps the ray.
-    let q = (a * u + 2.0 * hb) * u + k;
-    q <= 0.0 || q.is_nan()
+    let disc = hb * hb - a * k;
+    let q = -(hb + hb.signum() * disc.sqrt());
+    let (w0, w1) = (q / a, k / q);
+    let (w0, w1) = if w0 > w1 { (w1, w0) } else { (w0, w1) };
+    // q = 0 (a degenerate ray at the centre plane): keep everything.
+    let (w0, w1) = if w0.is_finite() && w1.is_finite() {
+        (w0, w1)
+    } else {
+        (0.0, len)
+    };
+    let (w0, w1) = (w0.max(above0), w1.min(above1));
+    (disc >= 0.0 && w0 <= w1).then_some((w0, w1))
 }
 
 impl ObjectShape for HeartShape {
@@ -464,8 +479,8 @@ mod tests {
         }
         // Surface points above Z = 0 (sign changes of g along vertical lines, bisected): each
         // in the ellipsoid, and tight enough that the test means something.
-        let c = 0.5 * CBRT_B_MAX;
-        let r = (1.0 + c * c).sqrt();
+        let (c, r) = upper_ellipsoid();
+        let r = r - BOUNDS_MARGIN;
         let mut worst = f64::NEG_INFINITY;
         let mut points = 0;
         for i in 0..=60 {
