@@ -108,8 +108,16 @@ pub(crate) fn prepare_fixed<const D: usize>(coeffs: &[f64; D], lo: f64, hi: f64)
             (ck != 0.0) & (exponent(ck) - en + 1 > k as i32 * (er - 1))
         };
         if D > 5 {
-            // Usually the first lower coefficient already reaches: stop there.
-            (1..D).any(reaches_at)
+            // Usually the first lower coefficient already reaches: stop there (a plain loop:
+            // `Iterator::any` was left out of line).
+            let mut reaches = false;
+            for k in 1..D {
+                if reaches_at(k) {
+                    reaches = true;
+                    break;
+                }
+            }
+            reaches
         } else {
             // A few terms: all of them, without branches.
             let mut reaches = false;
