@@ -69,18 +69,51 @@ pub(crate) const INV_BINOMIAL: [[f64; 17]; 17] = {
     t
 };
 
-/// Bit `i` set when `b[i] < 0`.
+/// Bit `i` of the first mask set when `b[i] < 0`, of the second when `|b[i]| ≤ margin`
+/// (both false for a NaN, as the comparisons are).
 #[inline(always)]
-fn negative_bits<const D: usize>(b: &[f64; D]) -> u32 {
-    b.iter()
-        .enumerate()
-        .fold(0, |bits, (i, &x)| bits | u32::from(x < 0.0) << i)
+fn sign_masks<const D: usize>(b: &[f64; D], margin: f64) -> (u32, u32) {
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+    // SAFETY: SSE2 is enabled for this build (the cfg above), and these intrinsics only
+    // compute on registers.
+    unsafe {
+        // Two coefficients a comparison: the same IEEE comparisons as the scalar ones, a mask
+        // of two bits each.
+        use std::arch::x86_64::{
+            _mm_and_pd, _mm_castsi128_pd, _mm_cmple_pd, _mm_cmplt_pd, _mm_movemask_pd,
+            _mm_set1_epi64x, _mm_set1_pd, _mm_set_pd, _mm_setzero_pd,
+        };
+        let zero = _mm_setzero_pd();
+        let m = _mm_set1_pd(margin);
+        let magnitude = _mm_castsi128_pd(_mm_set1_epi64x(i64::MAX));
+        let (mut neg, mut small) = (0u32, 0u32);
+        let mut i = 0;
+        while i + 1 < D {
+            let v = _mm_set_pd(b[i + 1], b[i]);
+            neg |= (_mm_movemask_pd(_mm_cmplt_pd(v, zero)) as u32) << i;
+            let abs = _mm_and_pd(v, magnitude);
+            small |= (_mm_movemask_pd(_mm_cmple_pd(abs, m)) as u32) << i;
+            i += 2;
+        }
+        if i < D {
+            neg |= u32::from(b[i] < 0.0) << i;
+            small |= u32::from(b[i].abs() <= margin) << i;
+        }
+        (neg, small)
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
+    b.iter().enumerate().fold((0, 0), |(neg, small), (i, &x)| {
+        (
+            neg | u32::from(x < 0.0) << i,
+            small | u32::from(x.abs() <= margin) << i,
+        )
+    })
 }
 
-/// Bit `i` set when `b[i]` and `b[i + 1]` differ in sign (`< 0` or not), for `i < D − 1`.
+/// Bit `i` set when `b[i]` and `b[i + 1]` differ in sign (`< 0` or not), for `i < D − 1`,
+/// from the first mask of [`sign_masks`].
 #[inline(always)]
-fn sign_changes<const D: usize>(b: &[f64; D]) -> u32 {
-    let neg = negative_bits(b);
+fn sign_changes<const D: usize>(neg: u32) -> u32 {
     (neg ^ (neg >> 1)) & ((1 << (D - 1)) - 1)
 }
 
@@ -89,10 +122,11 @@ fn sign_changes<const D: usize>(b: &[f64; D]) -> u32 {
 /// (its sign uncertain).
 #[inline(always)]
 fn variations<const D: usize>(b: &[f64; D], margin: f64) -> Option<u32> {
-    // Branch-free over the whole array (the loops unroll and pair up); the same answer as
-    // stopping at the first uncertain coefficient.
-    let uncertain = b[1..].iter().fold(false, |u, &x| u | (x.abs() <= margin));
-    let changes = sign_changes(b);
+    // Branch-free over the whole array; the same answer as stopping at the first uncertain
+    // coefficient.
+    let (neg, small) = sign_masks(b, margin);
+    let uncertain = small & !1 != 0;
+    let changes = sign_changes::<D>(neg);
     // No bit, one bit (clearing the lowest leaves none), or more.
     let count = if changes == 0 {
         0
@@ -176,10 +210,8 @@ pub(super) fn bernstein_fixed<const D: usize>(c: &[f64; D], a: f64, b: f64) -> (
         hk *= h;
     }
     for i in 1..D {
-        for j in (1..D).rev() {
-            if j >= i {
-                d[j] += d[j - 1];
-            }
+        for j in (i..D).rev() {
+            d[j] += d[j - 1];
         }
     }
     if reversed {
@@ -219,7 +251,7 @@ fn root_of_piece<const D: usize, O: Observer>(
     }
     // Start where the piece's control polygon crosses zero: on a piece with one sign
     // variation it is close to the root, closer than false position on the end values.
-    let changes = sign_changes(b);
+    let changes = sign_changes::<D>(sign_masks(b, 0.0).0);
     let i = if changes == 0 {
         0
     } else {

@@ -41,6 +41,7 @@ use super::bernstein::bernstein_fixed;
 use super::prep::{horner, Prepared, MAX_COEFFS};
 use super::refine::refine;
 use super::trace::Observer;
+use std::mem::MaybeUninit;
 
 /// Halvings after which a piece counts as a zero piece.
 const MAX_DEPTH: usize = 100;
@@ -99,6 +100,7 @@ fn bernstein(c: &[f64], a: f64, b: f64) -> (Coeffs, f64) {
 /// Most sign variations of `b` over every choice of sign for its coefficients within `m` of
 /// zero (those are uncertain): a run of `f` uncertain coefficients between two certain ones
 /// allows up to `f + 1` variations of the right parity, at either end up to `f`.
+#[inline(always)]
 fn max_variations(b: &[f64], m: f64) -> u32 {
     let mut v = 0;
     let mut last: Option<bool> = None;
@@ -127,6 +129,7 @@ fn max_variations(b: &[f64], m: f64) -> u32 {
 /// A zero piece needs each `|bᵢ|` below `2δ` at its own abscissa `a + (b − a)·i/n` (where
 /// the control polygon approximates `P`), not only below `2m`: on a long piece `m` is `δ` at
 /// its far end, larger than `δ` inside.
+#[inline(always)]
 fn classify(c: &[f64], a: f64, b: f64, bz: &[f64], m: f64) -> Kind {
     let n = bz.len() - 1;
     if bz.iter().all(|x| x.abs() <= 2.0 * m) {
@@ -140,7 +143,18 @@ fn classify(c: &[f64], a: f64, b: f64, bz: &[f64], m: f64) -> Kind {
         }
     }
     let b = bz;
-    match max_variations(b, m) {
+    // With every sign certain (the usual piece) the count is that of the sign changes.
+    let uncertain = b.iter().fold(false, |u, x| u | (x.abs() <= m));
+    let variations = if uncertain {
+        max_variations(b, m)
+    } else {
+        let negative = b
+            .iter()
+            .enumerate()
+            .fold(0u32, |bits, (i, &x)| bits | u32::from(x < 0.0) << i);
+        ((negative ^ (negative >> 1)) & ((1 << n) - 1)).count_ones()
+    };
+    match variations {
         0 => Kind::Empty,
         1 if b[0].abs() > 3.0 * m && b[n].abs() > 3.0 * m => Kind::Simple,
         _ => Kind::Split,
@@ -197,8 +211,29 @@ fn locate(c: &[f64], a: f64, b: f64, obs: &mut impl Observer) -> f64 {
 /// Every distinct root of `P` in `(lo, hi]`, ascending, in `T` (unscaled), passed to `emit`
 /// until it returns `false`.
 pub(crate) fn roots<O: Observer>(p: &Prepared, emit: &mut dyn FnMut(f64) -> bool, obs: &mut O) {
-    let c = &p.c[..=p.n];
-    let (lo, hi) = (p.lo, p.hi);
+    macro_rules! fixed {
+        ($($d:literal)*) => {
+            match p.n + 1 {
+                $($d => {
+                    let c: &[f64; $d] = p.c[..$d].try_into().expect("degree D - 1");
+                    roots_fixed(c, p.lo, p.hi, emit, obs)
+                })*
+                _ => {}
+            }
+        };
+    }
+    fixed!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17)
+}
+
+/// [`roots`] for a polynomial of degree `D − 1` (a fixed size, so that every piece's
+/// Bernstein coefficients are made and classified with unrolled loops, without copies).
+fn roots_fixed<const D: usize, O: Observer>(
+    c: &[f64; D],
+    lo: f64,
+    hi: f64,
+    emit: &mut dyn FnMut(f64) -> bool,
+    obs: &mut O,
+) {
     let p_lo_zero = horner(c, lo) == 0.0;
     let p_hi_zero = horner(c, hi) == 0.0;
     // An open cluster: its span.
@@ -223,14 +258,16 @@ pub(crate) fn roots<O: Observer>(p: &Prepared, emit: &mut dyn FnMut(f64) -> bool
             true
         }
     };
-    let mut stack = [(0.0f64, 0.0f64, 0usize); MAX_DEPTH + 1];
+    // The pending right halves (range and depth), below `top`; not zeroed (2.4 kB for a
+    // query that usually pushes a few entries).
+    let mut stack = [MaybeUninit::<(f64, f64, usize)>::uninit(); MAX_DEPTH + 1];
     let mut top = 0;
     let (mut a, mut b, mut depth) = (lo, hi, 0usize);
     let mut nodes = 0usize;
     loop {
         nodes += 1;
-        let (bz, m) = bernstein(c, a, b);
-        let mut kind = classify(c, a, b, &bz[..=p.n], m);
+        let (bz, m) = bernstein_fixed(c, a, b);
+        let mut kind = classify(c, a, b, &bz, m);
         let mid = a + SPLIT * (b - a);
         if kind == Kind::Split
             && (depth >= MAX_DEPTH
@@ -243,7 +280,7 @@ pub(crate) fn roots<O: Observer>(p: &Prepared, emit: &mut dyn FnMut(f64) -> bool
         match kind {
             Kind::Split => {
                 obs.split();
-                stack[top] = (mid, b, depth + 1);
+                stack[top].write((mid, b, depth + 1));
                 top += 1;
                 b = mid;
                 depth += 1;
@@ -270,7 +307,9 @@ pub(crate) fn roots<O: Observer>(p: &Prepared, emit: &mut dyn FnMut(f64) -> bool
             break;
         }
         top -= 1;
-        (a, b, depth) = stack[top];
+        // SAFETY: every entry below the old `top` was written by a push (above) and not
+        // popped since.
+        (a, b, depth) = unsafe { stack[top].assume_init() };
     }
     if let Some(span) = open {
         close(span, emit, obs);

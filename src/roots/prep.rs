@@ -70,7 +70,9 @@ pub(crate) enum Usual<const D: usize> {
 /// operations as [`prepare`]'s, so the same bits (tested).
 #[inline(always)]
 pub(crate) fn prepare_fixed<const D: usize>(coeffs: &[f64; D], lo: f64, hi: f64) -> Usual<D> {
-    let valid = lo < hi && coeffs.iter().fold(0.0, |acc, &c| acc + c * 0.0) == 0.0;
+    // Every coefficient finite, as `prepare`'s sum of `c·0` tests, without its chain of
+    // dependent additions.
+    let valid = lo < hi && coeffs.iter().fold(true, |ok, &c| ok & c.is_finite());
     if !valid {
         return Usual::Refused;
     }
@@ -91,15 +93,39 @@ pub(crate) fn prepare_fixed<const D: usize>(coeffs: &[f64; D], lo: f64, hi: f64)
         }
         big != 0.0 && exponent(big) - en + 1 > 0
     } else {
-        if trimmed_degree(coeffs, n, r) != n || !(-1000..=999).contains(&er) {
+        // `trimmed_degree(coeffs, n, r) != n`: the rule finds the leading term negligible
+        // against some lower one (the same products, every term tested, no early exit).
+        let (an, mut pow, mut negligible) = (cn.abs(), 1.0, false);
+        for i in (0..n).rev() {
+            pow *= r;
+            negligible |= (coeffs[i] != 0.0) & (an * pow <= TRIM_EPS * coeffs[i].abs());
+        }
+        if negligible || !(-1000..=999).contains(&er) {
             return Usual::Other;
         }
-        let mut reaches = false;
-        for k in 1..=n {
+        let reaches_at = |k: usize| {
             let ck = coeffs[n - k];
-            reaches |= ck != 0.0 && exponent(ck) - en + 1 > k as i32 * (er - 1);
+            (ck != 0.0) & (exponent(ck) - en + 1 > k as i32 * (er - 1))
+        };
+        if D > 5 {
+            // Usually the first lower coefficient already reaches: stop there (a plain loop:
+            // `Iterator::any` was left out of line).
+            let mut reaches = false;
+            for k in 1..D {
+                if reaches_at(k) {
+                    reaches = true;
+                    break;
+                }
+            }
+            reaches
+        } else {
+            // A few terms: all of them, without branches.
+            let mut reaches = false;
+            for k in 1..D {
+                reaches |= reaches_at(k);
+            }
+            reaches
         }
-        reaches
     };
     // As in `rescale`, with both ends of the exponents normal.
     let (first, last) = (-(n as i32) * er - en, -en);

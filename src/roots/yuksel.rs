@@ -23,7 +23,7 @@ const CRIT_PRECISION: f64 = 0.0;
 const MAX_ITER: usize = 2200;
 
 /// `(p(x), Σ|cⱼ||x|ʲ)` for ascending `c`.
-#[inline]
+#[inline(always)]
 fn eval_with_bound(c: &[f64], x: f64) -> (f64, f64) {
     let ax = x.abs();
     let (mut v, mut s) = (0.0, 0.0);
@@ -35,7 +35,7 @@ fn eval_with_bound(c: &[f64], x: f64) -> (f64, f64) {
 }
 
 /// `(p(x), p'(x))` for ascending `c`.
-#[inline]
+#[inline(always)]
 fn eval_with_derivative(c: &[f64], x: f64) -> (f64, f64) {
     let mut v = 0.0;
     let mut d = 0.0;
@@ -50,6 +50,33 @@ fn eval_with_derivative(c: &[f64], x: f64) -> (f64, f64) {
 /// signs, by Newton steps that fall back to bisection whenever they leave the bracket, until
 /// a step is below an ulp of the root plus `floor`.
 fn newton_in_bracket(
+    c: &[f64],
+    a: f64,
+    b: f64,
+    fa: f64,
+    fb: f64,
+    floor: f64,
+    obs: &mut impl Observer,
+) -> f64 {
+    // One copy of the iteration for each length of `c`, so that its evaluations unroll.
+    macro_rules! fixed {
+        ($($d:literal)*) => {
+            match c.len() {
+                $($d => {
+                    let c: &[f64; $d] = c.try_into().expect("length");
+                    newton_in(c, a, b, fa, fb, floor, obs)
+                })*
+                _ => newton_in(c, a, b, fa, fb, floor, obs),
+            }
+        };
+    }
+    fixed!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17)
+}
+
+/// [`newton_in_bracket`]'s body, inlined into each caller so that a fixed-size `c` fixes
+/// its loops.
+#[inline(always)]
+fn newton_in(
     c: &[f64],
     mut a: f64,
     mut b: f64,
