@@ -509,16 +509,21 @@ impl Compiled {
         out
     }
 
-    /// [`Compiled::compose`] of [`LANES`] rays at once (ray `i` is `o[i] + s·e[i]`): lane `i`
-    /// of the answer is exactly `self.compose(o[i], e[i])`, bit for bit. Compiled for AVX2 as
-    /// well, chosen at run time.
-    pub fn compose_lanes(&self, o: [[f64; 3]; LANES], e: [[f64; 3]; LANES]) -> [Uni; LANES] {
+    /// [`Compiled::compose`] of [`LANES`] rays at once (ray `i` is `o[i] + s·e[i]`) into `out`:
+    /// `out[i]` becomes exactly `self.compose(o[i], e[i])`, bit for bit (all entries written).
+    /// Compiled for AVX2 as well, chosen at run time.
+    pub fn compose_lanes(
+        &self,
+        o: [[f64; 3]; LANES],
+        e: [[f64; 3]; LANES],
+        out: &mut [Uni; LANES],
+    ) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2, checked just above.
-            return unsafe { self.compose_lanes_avx2(o, e) };
+            return unsafe { self.compose_lanes_avx2(o, e, out) };
         }
-        self.compose_lanes_in(o, e)
+        self.compose_lanes_in(o, e, out)
     }
 
     /// [`Compiled::compose_lanes`] compiled for AVX2.
@@ -531,19 +536,24 @@ impl Compiled {
         &self,
         o: [[f64; 3]; LANES],
         e: [[f64; 3]; LANES],
-    ) -> [Uni; LANES] {
-        self.compose_lanes_in(o, e)
+        out: &mut [Uni; LANES],
+    ) {
+        self.compose_lanes_in(o, e, out)
     }
 
     /// [`Compiled::compose_lanes`] for the baseline instruction set (and inlined into the
     /// AVX2 version).
     #[inline(always)]
-    fn compose_lanes_in(&self, o: [[f64; 3]; LANES], e: [[f64; 3]; LANES]) -> [Uni; LANES] {
+    fn compose_lanes_in(&self, o: [[f64; 3]; LANES], e: [[f64; 3]; LANES], out: &mut [Uni; LANES]) {
         let o = std::array::from_fn(|v| Lanes(std::array::from_fn(|i| o[i][v])));
         let e = std::array::from_fn(|v| Lanes(std::array::from_fn(|i| e[i][v])));
-        let mut out = [Lanes::ZERO; MAX_DEGREE + 1];
-        self.compose_in(o, e, &mut out);
-        std::array::from_fn(|i| out.map(|c| c.0[i]))
+        let mut lanes = [Lanes::ZERO; MAX_DEGREE + 1];
+        self.compose_in(o, e, &mut lanes);
+        for (k, c) in lanes.iter().enumerate() {
+            for (ray, v) in out.iter_mut().zip(c.0) {
+                ray[k] = v;
+            }
+        }
     }
 
     /// [`Compiled::compose`] into `out` (all `MAX_DEGREE + 1` entries are written; those
@@ -968,9 +978,14 @@ mod tests {
                 let e: [[f64; 3]; LANES] = std::array::from_fn(|_| [0; 3].map(|_| coordinate()));
                 let alone: [Uni; LANES] = std::array::from_fn(|i| c.compose(o[i], e[i]));
                 let bits = |v: [Uni; LANES]| v.map(|u| u.map(f64::to_bits));
-                // The baseline code path, whatever the processor, and the one chosen at run time.
-                assert_eq!(bits(c.compose_lanes_in(o, e)), bits(alone));
-                assert_eq!(bits(c.compose_lanes(o, e)), bits(alone));
+                // The baseline code path, whatever the processor, and the one chosen at run
+                // time, into a buffer that holds something else before.
+                let mut out = [[f64::NAN; MAX_DEGREE + 1]; LANES];
+                c.compose_lanes_in(o, e, &mut out);
+                assert_eq!(bits(out), bits(alone));
+                let mut out = [[f64::NAN; MAX_DEGREE + 1]; LANES];
+                c.compose_lanes(o, e, &mut out);
+                assert_eq!(bits(out), bits(alone));
             }
         }
     }
