@@ -800,8 +800,14 @@ fn ill_conditioned(s: &Surface, c: &[f64], inv: f64, mid: [f64; 3], e: [f64; 3],
         p = p * root + k;
     }
     let point = [0, 1, 2].map(|i| mid[i] + root * e[i]);
+    let threshold = SIMPLE_ROOT_RADIUS * dp.abs();
+    // The noise below grows with the magnitude sum; its cheap upper bound settles most roots
+    // (with the same answer: rounding keeps the order of the products).
+    if ROUNDING * (c.len() as f64) * inv * s.f.magnitude_bound(point) <= threshold {
+        return 0.0;
+    }
     let noise = ROUNDING * (c.len() as f64) * inv * s.f.eval_with_bound(point).1;
-    if noise <= SIMPLE_ROOT_RADIUS * dp.abs() {
+    if noise <= threshold {
         return 0.0;
     }
     // The radius within which |p − p(root)| may stay below the noise: the smallest
