@@ -852,7 +852,7 @@ fn local_root(
     // radius is a power of two: E is exact.
     let big_e = [0, 1, 2].map(|i| Dd::from_f64(e[i] * radius));
     let mut q = [Dd::ZERO; MAX_DEGREE + 1];
-    s.f.compose_into(p, big_e, &mut q);
+    s.f.compose_dd(p, big_e, &mut q);
     let mut c: Uni = q.map(Dd::to_f64);
     let (deg, _) = normalise(&mut c, s.f.degree)?;
     let u_lo = ((lo - root) / radius).max(-1.0);

@@ -507,20 +507,47 @@ impl Compiled {
     }
 
     /// The value at `p` (exact `f64` coordinates) in double-double arithmetic, with the
-    /// exact coefficients: accurate to about `1e-31` of `Σ |terms|`.
+    /// exact coefficients: accurate to about `1e-31` of `Σ |terms|`. Compiled with fused
+    /// multiply-adds in hardware as well, chosen at run time (the same bits either way).
     pub fn eval_dd(&self, p: [f64; 3]) -> Dd {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("fma") {
+            // SAFETY: the processor has FMA, checked just above.
+            return unsafe { self.eval_dd_fma(p) };
+        }
+        self.eval_dd_in(p)
+    }
+
+    /// [`Compiled::eval_dd`] compiled for FMA.
+    ///
+    /// # Safety
+    /// The processor must have FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "fma")]
+    unsafe fn eval_dd_fma(&self, p: [f64; 3]) -> Dd {
+        self.eval_dd_in(p)
+    }
+
+    /// [`Compiled::eval_dd`] for the baseline instruction set (and inlined into the FMA
+    /// version).
+    #[inline(always)]
+    fn eval_dd_in(&self, p: [f64; 3]) -> Dd {
         let mut pw = [[Dd::from_f64(1.0); MAX_DEGREE + 1]; 3];
         for (v, row) in pw.iter_mut().enumerate() {
             for k in 1..=self.degree {
                 row[k] = row[k - 1] * Dd::from_f64(p[v]);
             }
         }
-        self.terms.iter().fold(Dd::ZERO, |acc, t| {
-            acc + Dd::coef(t)
-                * pw[0][t.e[0] as usize]
-                * pw[1][t.e[1] as usize]
-                * pw[2][t.e[2] as usize]
-        })
+        // A plain loop (not a closure), so that it is compiled with the caller's FMA.
+        let mut acc = Dd::ZERO;
+        for t in &self.terms {
+            acc = acc
+                + Dd::coef(t)
+                    * pw[0][t.e[0] as usize]
+                    * pw[1][t.e[1] as usize]
+                    * pw[2][t.e[2] as usize];
+        }
+        acc
     }
 
     /// The coefficients (ascending in `s`) of `f(o + s·e)`, computed without expanding any
@@ -578,6 +605,27 @@ impl Compiled {
                 ray[k] = v;
             }
         }
+    }
+
+    /// [`Compiled::compose_into`] in double-double arithmetic, compiled with fused
+    /// multiply-adds in hardware as well, chosen at run time (the same bits either way).
+    pub fn compose_dd(&self, o: [Dd; 3], e: [Dd; 3], out: &mut [Dd; MAX_DEGREE + 1]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("fma") {
+            // SAFETY: the processor has FMA, checked just above.
+            return unsafe { self.compose_dd_fma(o, e, out) };
+        }
+        self.compose_in(o, e, out)
+    }
+
+    /// [`Compiled::compose_dd`] compiled for FMA.
+    ///
+    /// # Safety
+    /// The processor must have FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "fma")]
+    unsafe fn compose_dd_fma(&self, o: [Dd; 3], e: [Dd; 3], out: &mut [Dd; MAX_DEGREE + 1]) {
+        self.compose_in(o, e, out)
     }
 
     /// [`Compiled::compose`] into `out` (all `MAX_DEGREE + 1` entries are written; those
@@ -979,6 +1027,16 @@ mod tests {
                 let want = compose_reference::<Dd>(&c, od, ed);
                 let bits = |v: [Dd; MAX_DEGREE + 1]| v.map(|d| (d.hi.to_bits(), d.lo.to_bits()));
                 assert_eq!(bits(got), bits(want), "{o:?} {e:?}");
+                // The version chosen at run time (with hardware FMA where there is one).
+                let mut got = [Dd::ZERO; MAX_DEGREE + 1];
+                c.compose_dd(od, ed, &mut got);
+                assert_eq!(bits(got), bits(want), "{o:?} {e:?}");
+                // Its value in double-double at the ray's origin, on both code paths.
+                let (a, b) = (c.eval_dd(o), c.eval_dd_in(o));
+                assert_eq!(
+                    (a.hi.to_bits(), a.lo.to_bits()),
+                    (b.hi.to_bits(), b.lo.to_bits())
+                );
             }
         }
     }
