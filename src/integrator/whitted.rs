@@ -281,6 +281,10 @@ impl<'a> Whitted<'a> {
                 points[lane] = Some(at);
             }
         }
+        if points.iter().all(Option::is_none) {
+            // Every lane saw the background: no light to walk, no random number drawn.
+            return colours;
+        }
         for (index, light) in scene.lights.iter().enumerate() {
             let (count, grid) = self.light_grids[index];
             let mut lit = [DVec3::ZERO; LANES];

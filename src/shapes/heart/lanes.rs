@@ -9,7 +9,7 @@
 //! other processor runs and the tests also run.
 
 use super::surface::{sextic_coefficients, BOUNDS, BOUNDS_MARGIN};
-use super::{Chord, HeartShape, POLISH_WINDOW, SELF_HIT_GUARD};
+use super::{Chord, HeartShape, CBRT_B_MAX, POLISH_WINDOW, SELF_HIT_GUARD};
 use crate::geometry::{DVec3, Ray};
 use crate::shapes::placed::Placement;
 use crate::shapes::LANES;
@@ -105,6 +105,8 @@ fn chords_in(
     // The lower half's ellipsoid and the half-space above it, from the box entry.
     let z_floor = -BOUNDS_MARGIN;
     let rr = (1.0 + BOUNDS_MARGIN) * (1.0 + BOUNDS_MARGIN);
+    let upper_c = 0.5 * CBRT_B_MAX;
+    let upper_r = (1.0 + upper_c * upper_c).sqrt() + BOUNDS_MARGIN;
     for i in 0..LANES {
         let (px, py, pz) = (
             ox[i] + t0[i] * dx[i],
@@ -153,7 +155,14 @@ fn chords_in(
         } else {
             u1
         };
-        alive[i] &= above_ok | inside_ok;
+        // A ray missing the lower ellipsoid must meet the upper one above the floor (as
+        // `meets_upper_ellipsoid`, operation for operation).
+        let oz = pz - upper_c;
+        let hb_up = 2.0 * px * ex + py * ey + oz * ez;
+        let k_up = 2.0 * px * px + py * py + oz * oz - upper_r * upper_r;
+        let u = (-hb_up / a).max(above0).min(above1);
+        let upper_ok = !((a * u + 2.0 * hb_up) * u + k_up > 0.0);
+        alive[i] &= inside_ok | (above_ok & upper_ok);
         let (c0, c1) = (t0[i] + v0, t0[i] + v1);
         t0[i] = c0;
         t1[i] = c1;

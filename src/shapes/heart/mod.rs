@@ -295,7 +295,9 @@ struct Chord {
 /// lower half lies in the ellipsoid `2X² + Y² + Z² ≤ 1` (below `Z = 0`, `g ≤ 0` gives
 /// `A ≤ ∛B·Z ≤ 0`): the hull of the ray's spans inside that ellipsoid and above `Z = 0`, each
 /// widened by [`BOUNDS_MARGIN`]. Rejects the rays that pass beside the tip in the box's lower
-/// corners, and shortens the chord the solver sees.
+/// corners, and shortens the chord the solver sees; a ray that misses that ellipsoid is also
+/// rejected when it misses the one holding the upper half ([`meets_upper_ellipsoid`]), which
+/// cuts the box's upper corners.
 #[inline]
 fn clip_lower_half(r: &Ray, t0: f64, t1: f64) -> Option<(f64, f64)> {
     // Parametrise from the box entry so that every quantity is of the heart's size.
@@ -336,10 +338,33 @@ fn clip_lower_half(r: &Ray, t0: f64, t1: f64) -> Option<(f64, f64)> {
     };
     let (u0, u1) = match (above, inside) {
         (Some(p), Some(q)) => (p.0.min(q.0), p.1.max(q.1)),
-        (Some(p), None) | (None, Some(p)) => p,
-        (None, None) => return None,
+        (Some(p), None) if meets_upper_ellipsoid(o, d, p) => p,
+        (None, Some(p)) => p,
+        _ => return None,
     };
     Some((t0 + u0, t0 + u1))
+}
+
+/// `∛B` at most, anywhere in [`BOUNDS`]: `B = 0.1X² + Y² ≤ 0.1·0.7194² + 1.1392² < 1.3494`,
+/// whose cube root is below 1.1050.
+const CBRT_B_MAX: f64 = 1.106;
+
+/// Whether the ray `o + u·d` meets, for some `u` in `[u0, u1]`, the ellipsoid
+/// `2X² + Y² + (Z − c)² ≤ R²` with `c = CBRT_B_MAX/2` and `R = √(1 + c²) + BOUNDS_MARGIN`,
+/// which holds the heart's upper half: above `Z = 0` the surface has `A = ∛B·Z ≤ 2c·Z`.
+/// The minimum of the quadratic over the interval, against zero (a margin far above its
+/// rounding). The lanes ([`lanes::chords`]) compute it with the same operations.
+#[inline(always)]
+fn meets_upper_ellipsoid(o: DVec3, d: DVec3, (u0, u1): (f64, f64)) -> bool {
+    let c = 0.5 * CBRT_B_MAX;
+    let r = (1.0 + c * c).sqrt() + BOUNDS_MARGIN;
+    let oz = o.z - c;
+    let a = 2.0 * d.x * d.x + d.y * d.y + d.z * d.z;
+    let hb = 2.0 * o.x * d.x + o.y * d.y + oz * d.z;
+    let k = 2.0 * o.x * o.x + o.y * o.y + oz * oz - r * r;
+    let u = (-hb / a).max(u0).min(u1);
+    // A NaN (a = 0: no direction) keeps the ray.
+    !((a * u + 2.0 * hb) * u + k > 0.0)
 }
 
 impl ObjectShape for HeartShape {
@@ -421,5 +446,61 @@ impl ObjectShape for HeartShape {
 
     fn bounds(&self, at: &Placement) -> Aabb {
         at.bounds_to_world(&BOUNDS)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_upper_ellipsoid_holds_the_upper_half_of_the_surface() {
+        // ∛B's bound covers the whole box (B is largest at its corners).
+        let corner = |x: f64, y: f64| (0.1 * x * x + y * y).cbrt();
+        let (lo, hi) = (BOUNDS.min, BOUNDS.max);
+        for (x, y) in [(lo.x, lo.y), (lo.x, hi.y), (hi.x, lo.y), (hi.x, hi.y)] {
+            assert!(corner(x, y) < CBRT_B_MAX, "{x} {y}");
+        }
+        // Surface points above Z = 0 (sign changes of g along vertical lines, bisected): each
+        // in the ellipsoid, and tight enough that the test means something.
+        let c = 0.5 * CBRT_B_MAX;
+        let r = (1.0 + c * c).sqrt();
+        let mut worst = f64::NEG_INFINITY;
+        let mut points = 0;
+        for i in 0..=60 {
+            for j in 0..=60 {
+                let x = lo.x + (hi.x - lo.x) * f64::from(i) / 60.0;
+                let y = lo.y + (hi.y - lo.y) * f64::from(j) / 60.0;
+                let g = |z: f64| factor_g(DVec3::new(x, y, z));
+                let steps = 400;
+                for k in 0..steps {
+                    let (mut a, mut b) = (
+                        hi.z * f64::from(k) / f64::from(steps),
+                        hi.z * f64::from(k + 1) / f64::from(steps),
+                    );
+                    if (g(a) < 0.0) == (g(b) < 0.0) {
+                        continue;
+                    }
+                    for _ in 0..60 {
+                        let m = 0.5 * (a + b);
+                        if (g(m) < 0.0) == (g(a) < 0.0) {
+                            a = m;
+                        } else {
+                            b = m;
+                        }
+                    }
+                    let z = 0.5 * (a + b) - c;
+                    let q = (2.0 * x * x + y * y + z * z).sqrt() - r;
+                    worst = worst.max(q);
+                    points += 1;
+                }
+            }
+        }
+        assert!(points > 2000, "{points}");
+        assert!(
+            worst <= 0.0,
+            "a surface point {worst} outside the ellipsoid"
+        );
+        assert!(worst > -0.05, "the ellipsoid is loose: {worst}");
     }
 }
