@@ -161,7 +161,8 @@ fn chords_in(
         let hb_up = 2.0 * px * ex + py * ey + oz * ez;
         let k_up = 2.0 * px * px + py * py + oz * oz - upper_r * upper_r;
         let u = (-hb_up / a).max(above0).min(above1);
-        let upper_ok = !((a * u + 2.0 * hb_up) * u + k_up > 0.0);
+        let q_up = (a * u + 2.0 * hb_up) * u + k_up;
+        let upper_ok = (q_up <= 0.0) | q_up.is_nan();
         alive[i] &= inside_ok | (above_ok & upper_ok);
         let (c0, c1) = (t0[i] + v0, t0[i] + v1);
         t0[i] = c0;

@@ -364,7 +364,8 @@ fn meets_upper_ellipsoid(o: DVec3, d: DVec3, (u0, u1): (f64, f64)) -> bool {
     let k = 2.0 * o.x * o.x + o.y * o.y + oz * oz - r * r;
     let u = (-hb / a).max(u0).min(u1);
     // A NaN (a = 0: no direction) keeps the ray.
-    !((a * u + 2.0 * hb) * u + k > 0.0)
+    let q = (a * u + 2.0 * hb) * u + k;
+    q <= 0.0 || q.is_nan()
 }
 
 impl ObjectShape for HeartShape {
