@@ -188,6 +188,15 @@ fn subdivide<const M: usize>(root: Vec<f64>, margin: f64, depth: u32) -> Hull {
             }
             continue;
         }
+        if level + 1 == depth && (0..3).all(|ax| bmin[ax] <= lo[ax] && lo[ax] + size <= bmax[ax]) {
+            // Its eight cells at the finest level would each be examined, and could only add
+            // to the hull what it holds already: count them, skip their coefficients.
+            examined += 8;
+            if examined > MAX_CELLS {
+                return Hull::GaveUp;
+            }
+            continue;
+        }
         parent.copy_from_slice(b);
         let (h0, h1) = halves.split_at_mut(len);
         split_into::<M>(&parent, 0, h0, h1);
@@ -348,11 +357,19 @@ mod tests {
             ("(x^2 + y^2 + z^2)^7 = 1", 1.5),
             ("x^15 + y*z = 0.2", 1.0),
             ("(x^2 + y^2 + z^2)^8 = 1", 1.5),
+            // Large zero sets, about as many cells as the subdivision examines at most.
+            ("(x^2 - 0.01)*(x^2 - 0.64) = 0", 1.0),
+            ("(x^2 - 0.01)*(x^2 - 0.36)*y = 0.001", 1.0),
+            ("(x^2 - 0.01)*(y^2 - 0.25)*(z^2 - 0.64) = 0", 1.0),
         ];
         for (eq, r) in cases {
             let f = Compiled::new(&expand(eq).unwrap());
             assert_eq!(zero_set_box(&f, r), reference_box(&f, r), "{eq}");
         }
+        // Six planes |x| ≤ 0.8: more cells than the limit, so the box is the whole cube.
+        let f = Compiled::new(&expand("(x^2 - 0.01)*(x^2 - 0.25)*(x^2 - 0.64) = 0").unwrap());
+        assert_eq!(zero_set_box(&f, 1.0), Some(([-1.0; 3], [1.0; 3])));
+        assert_eq!(reference_box(&f, 1.0), Some(([-1.0; 3], [1.0; 3])));
         let presets: [(&str, &[f64]); 8] = [
             ("torus", &[1.0, 0.3]),
             ("barth_sextic", &[]),

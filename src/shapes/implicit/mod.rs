@@ -506,8 +506,8 @@ impl ImplicitShape {
     fn solver_query(&self, ray: &Ray) -> Option<(Vec<f64>, f64, f64)> {
         match &self.kind {
             Kind::Generic(s) => {
-                let q = self.first_query(s, ray, 0.0, f64::INFINITY)?;
-                Some((q.c[..=q.deg].to_vec(), q.s_lo, q.s_hi))
+                let (_, c, q) = self.first_query(s, ray, 0.0, f64::INFINITY)?;
+                Some((c[..=q.deg].to_vec(), q.s_lo, q.s_hi))
             }
             Kind::Heart(_) => None,
         }
@@ -528,14 +528,21 @@ impl ImplicitShape {
     }
 
     /// The first query the generic path puts to the solver for the ray (object space) in
-    /// `(t_min, t_max)`, or `None` when the ray misses the clip sphere or the surface's box
-    /// there.
+    /// `(t_min, t_max)`: the chord, the normalised ray polynomial and the query, or `None`
+    /// when the ray misses the clip sphere or the surface's box there.
     #[inline]
-    fn first_query(&self, s: &Surface, ray: &Ray, t_min: f64, t_max: f64) -> Option<Query> {
+    fn first_query(
+        &self,
+        s: &Surface,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<(Span, Uni, Query)> {
         let span = self.span(s, ray, t_min, t_max)?;
         let mut c: Uni = [0.0; MAX_DEGREE + 1];
         s.f.compose_into(span.mid, span.e, &mut c);
-        span.query(s, c)
+        let q = span.query(s, &mut c)?;
+        Some((span, c, q))
     }
 
     /// The part of [`ImplicitShape::first_query`] before the composition: the chord and the
@@ -592,16 +599,18 @@ impl ImplicitShape {
                 let span = spans[i].as_ref()?;
                 let mut c: Uni = [0.0; MAX_DEGREE + 1];
                 s.f.compose_into(span.mid, span.e, &mut c);
-                let q = span.query(s, c)?;
-                self.solve(s, q, t_max[i], &mut first_root, &mut false)
+                let q = span.query(s, &mut c)?;
+                self.solve(s, span, &c, q, t_max[i], &mut first_root, &mut false)
             });
         }
         let mids = spans.map(|sp| sp.map_or([0.0; 3], |sp| sp.mid));
         let es = spans.map(|sp| sp.map_or([0.0; 3], |sp| sp.e));
-        let cs = s.f.compose_lanes(mids, es);
+        let mut cs = [[0.0; MAX_DEGREE + 1]; LANES];
+        s.f.compose_lanes(mids, es, &mut cs);
         std::array::from_fn(|i| {
-            let q = spans[i].as_ref()?.query(s, cs[i])?;
-            self.solve(s, q, t_max[i], &mut first_root, &mut false)
+            let span = spans[i].as_ref()?;
+            let q = span.query(s, &mut cs[i])?;
+            self.solve(s, span, &cs[i], q, t_max[i], &mut first_root, &mut false)
         })
     }
 
@@ -618,31 +627,33 @@ impl ImplicitShape {
         first_root: &mut impl FnMut(&[f64], f64, f64) -> Option<f64>,
         recentred: &mut bool,
     ) -> Option<f64> {
-        let q = self.first_query(s, ray, t_min, t_max)?;
-        self.solve(s, q, t_max, first_root, recentred)
+        let (span, c, q) = self.first_query(s, ray, t_min, t_max)?;
+        self.solve(s, &span, &c, q, t_max, first_root, recentred)
     }
 
-    /// The root-finding part of [`ImplicitShape::intersect_generic`], from its first query.
+    /// The root-finding part of [`ImplicitShape::intersect_generic`], from its first query
+    /// `q` for the ray polynomial `c` (normalised by [`Span::query`]) on the chord `span`.
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn solve(
         &self,
         s: &Surface,
+        span: &Span,
+        c: &Uni,
         q: Query,
         t_max: f64,
         first_root: &mut impl FnMut(&[f64], f64, f64) -> Option<f64>,
         recentred: &mut bool,
     ) -> Option<f64> {
+        let Span {
+            t_mid,
+            t_half,
+            guard,
+            mid,
+            e,
+            ..
+        } = *span;
         let Query {
-            span:
-                Span {
-                    t_mid,
-                    t_half,
-                    guard,
-                    mid,
-                    e,
-                    ..
-                },
-            c,
             deg,
             inv,
             mut s_lo,
@@ -703,14 +714,12 @@ struct Span {
 }
 
 impl Span {
-    /// The query for the ray polynomial `c` composed on this chord (normalised here), or
-    /// `None` for a zero or non-finite polynomial.
+    /// The query for the ray polynomial `c` composed on this chord (normalised here, in
+    /// place), or `None` for a zero or non-finite polynomial.
     #[inline(always)]
-    fn query(&self, s: &Surface, mut c: Uni) -> Option<Query> {
-        let (deg, inv) = normalise(&mut c, s.f.degree)?;
+    fn query(&self, s: &Surface, c: &mut Uni) -> Option<Query> {
+        let (deg, inv) = normalise(c, s.f.degree)?;
         Some(Query {
-            span: *self,
-            c,
             deg,
             inv,
             s_lo: (self.lo_t - self.t_mid) / self.t_half,
@@ -719,13 +728,12 @@ impl Span {
     }
 }
 
-/// What the generic path hands the solver for one ray: the normalised ray polynomial in
-/// `s` over the clip chord (`t = t_mid + s·t_half`) and the interval `(s_lo, s_hi]` to search.
+/// What the generic path hands the solver for one ray beside the normalised ray polynomial
+/// in `s` over the clip chord (`t = t_mid + s·t_half`): its degree, its scale and the
+/// interval `(s_lo, s_hi]` to search.
+#[derive(Clone, Copy)]
 struct Query {
-    /// The chord the polynomial is composed on.
-    span: Span,
-    /// Coefficients, ascending, `deg + 1` of them used; scaled by `inv`.
-    c: Uni,
+    /// Degree: `deg + 1` coefficients (ascending) are used, scaled by `inv`.
     deg: usize,
     inv: f64,
     s_lo: f64,
@@ -792,8 +800,14 @@ fn ill_conditioned(s: &Surface, c: &[f64], inv: f64, mid: [f64; 3], e: [f64; 3],
         p = p * root + k;
     }
     let point = [0, 1, 2].map(|i| mid[i] + root * e[i]);
+    let threshold = SIMPLE_ROOT_RADIUS * dp.abs();
+    // The noise below grows with the magnitude sum; its cheap upper bound settles most roots
+    // (with the same answer: rounding keeps the order of the products).
+    if ROUNDING * (c.len() as f64) * inv * s.f.magnitude_bound(point) <= threshold {
+        return 0.0;
+    }
     let noise = ROUNDING * (c.len() as f64) * inv * s.f.eval_with_bound(point).1;
-    if noise <= SIMPLE_ROOT_RADIUS * dp.abs() {
+    if noise <= threshold {
         return 0.0;
     }
     // The radius within which |p − p(root)| may stay below the noise: the smallest
@@ -838,7 +852,7 @@ fn local_root(
     // radius is a power of two: E is exact.
     let big_e = [0, 1, 2].map(|i| Dd::from_f64(e[i] * radius));
     let mut q = [Dd::ZERO; MAX_DEGREE + 1];
-    s.f.compose_into(p, big_e, &mut q);
+    s.f.compose_dd(p, big_e, &mut q);
     let mut c: Uni = q.map(Dd::to_f64);
     let (deg, _) = normalise(&mut c, s.f.degree)?;
     let u_lo = ((lo - root) / radius).max(-1.0);

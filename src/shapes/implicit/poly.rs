@@ -218,6 +218,9 @@ pub struct Compiled {
     pub degree: usize,
     /// Highest exponent of z in any term.
     max_z: usize,
+    /// `Σ |c|` over the terms of each total degree (index the degree), for
+    /// [`Compiled::magnitude_bound`].
+    magnitude_by_degree: [f64; MAX_DEGREE + 1],
     /// The steps of a ray composition (see [`Compiled::compose_into`]), fixed by the terms'
     /// exponents alone.
     steps: Vec<Step>,
@@ -447,10 +450,15 @@ impl Compiled {
         terms.sort_by(|a, b| (b.e[0], b.e[1], a.e[2]).cmp(&(a.e[0], a.e[1], b.e[2])));
         let max_z = terms.iter().map(|t| t.e[2] as usize).max().unwrap_or(0);
         let steps = schedule(&terms);
+        let mut magnitude_by_degree = [0.0; MAX_DEGREE + 1];
+        for t in &terms {
+            magnitude_by_degree[degree_of(&t.e)] += t.c.abs();
+        }
         Compiled {
             terms,
             degree,
             max_z,
+            magnitude_by_degree,
             steps,
         }
     }
@@ -468,6 +476,22 @@ impl Compiled {
         self.eval_with_bound_on(&Powers::new(p, self.degree))
     }
 
+    /// An upper bound of the second part of [`Compiled::eval_with_bound`] at `p` (the
+    /// computed `Σ |c|·|xⁱ yʲ zᵏ|`, its rounding included), from the terms' magnitudes per
+    /// degree and the largest coordinate alone: cheaper, and at most a few times larger
+    /// (`+∞` or NaN where it overflows).
+    #[inline]
+    pub fn magnitude_bound(&self, p: [f64; 3]) -> f64 {
+        let r = p[0].abs().max(p[1].abs()).max(p[2].abs());
+        let b = self.magnitude_by_degree[..=self.degree]
+            .iter()
+            .rev()
+            .fold(0.0f64, |b, &a| b * r + a);
+        // Every rounding of both sums is a factor within (1 ± ε); a thousand terms and
+        // degree 16 stay far below this margin.
+        b * (1.0 + 1e-9)
+    }
+
     /// [`Compiled::eval_with_bound`] from a table of the point's coordinate powers (at least
     /// up to this polynomial's degree), so that several polynomials at one point share it.
     #[inline]
@@ -483,20 +507,47 @@ impl Compiled {
     }
 
     /// The value at `p` (exact `f64` coordinates) in double-double arithmetic, with the
-    /// exact coefficients: accurate to about `1e-31` of `Σ |terms|`.
+    /// exact coefficients: accurate to about `1e-31` of `Σ |terms|`. Compiled with fused
+    /// multiply-adds in hardware as well, chosen at run time (the same bits either way).
     pub fn eval_dd(&self, p: [f64; 3]) -> Dd {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("fma") {
+            // SAFETY: the processor has FMA, checked just above.
+            return unsafe { self.eval_dd_fma(p) };
+        }
+        self.eval_dd_in(p)
+    }
+
+    /// [`Compiled::eval_dd`] compiled for FMA.
+    ///
+    /// # Safety
+    /// The processor must have FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "fma")]
+    unsafe fn eval_dd_fma(&self, p: [f64; 3]) -> Dd {
+        self.eval_dd_in(p)
+    }
+
+    /// [`Compiled::eval_dd`] for the baseline instruction set (and inlined into the FMA
+    /// version).
+    #[inline(always)]
+    fn eval_dd_in(&self, p: [f64; 3]) -> Dd {
         let mut pw = [[Dd::from_f64(1.0); MAX_DEGREE + 1]; 3];
         for (v, row) in pw.iter_mut().enumerate() {
             for k in 1..=self.degree {
                 row[k] = row[k - 1] * Dd::from_f64(p[v]);
             }
         }
-        self.terms.iter().fold(Dd::ZERO, |acc, t| {
-            acc + Dd::coef(t)
-                * pw[0][t.e[0] as usize]
-                * pw[1][t.e[1] as usize]
-                * pw[2][t.e[2] as usize]
-        })
+        // A plain loop (not a closure), so that it is compiled with the caller's FMA.
+        let mut acc = Dd::ZERO;
+        for t in &self.terms {
+            acc = acc
+                + Dd::coef(t)
+                    * pw[0][t.e[0] as usize]
+                    * pw[1][t.e[1] as usize]
+                    * pw[2][t.e[2] as usize];
+        }
+        acc
     }
 
     /// The coefficients (ascending in `s`) of `f(o + s·e)`, computed without expanding any
@@ -509,16 +560,21 @@ impl Compiled {
         out
     }
 
-    /// [`Compiled::compose`] of [`LANES`] rays at once (ray `i` is `o[i] + s·e[i]`): lane `i`
-    /// of the answer is exactly `self.compose(o[i], e[i])`, bit for bit. Compiled for AVX2 as
-    /// well, chosen at run time.
-    pub fn compose_lanes(&self, o: [[f64; 3]; LANES], e: [[f64; 3]; LANES]) -> [Uni; LANES] {
+    /// [`Compiled::compose`] of [`LANES`] rays at once (ray `i` is `o[i] + s·e[i]`) into `out`:
+    /// `out[i]` becomes exactly `self.compose(o[i], e[i])`, bit for bit (all entries written).
+    /// Compiled for AVX2 as well, chosen at run time.
+    pub fn compose_lanes(
+        &self,
+        o: [[f64; 3]; LANES],
+        e: [[f64; 3]; LANES],
+        out: &mut [Uni; LANES],
+    ) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2, checked just above.
-            return unsafe { self.compose_lanes_avx2(o, e) };
+            return unsafe { self.compose_lanes_avx2(o, e, out) };
         }
-        self.compose_lanes_in(o, e)
+        self.compose_lanes_in(o, e, out)
     }
 
     /// [`Compiled::compose_lanes`] compiled for AVX2.
@@ -531,19 +587,45 @@ impl Compiled {
         &self,
         o: [[f64; 3]; LANES],
         e: [[f64; 3]; LANES],
-    ) -> [Uni; LANES] {
-        self.compose_lanes_in(o, e)
+        out: &mut [Uni; LANES],
+    ) {
+        self.compose_lanes_in(o, e, out)
     }
 
     /// [`Compiled::compose_lanes`] for the baseline instruction set (and inlined into the
     /// AVX2 version).
     #[inline(always)]
-    fn compose_lanes_in(&self, o: [[f64; 3]; LANES], e: [[f64; 3]; LANES]) -> [Uni; LANES] {
+    fn compose_lanes_in(&self, o: [[f64; 3]; LANES], e: [[f64; 3]; LANES], out: &mut [Uni; LANES]) {
         let o = std::array::from_fn(|v| Lanes(std::array::from_fn(|i| o[i][v])));
         let e = std::array::from_fn(|v| Lanes(std::array::from_fn(|i| e[i][v])));
-        let mut out = [Lanes::ZERO; MAX_DEGREE + 1];
-        self.compose_in(o, e, &mut out);
-        std::array::from_fn(|i| out.map(|c| c.0[i]))
+        let mut lanes = [Lanes::ZERO; MAX_DEGREE + 1];
+        self.compose_in(o, e, &mut lanes);
+        for (k, c) in lanes.iter().enumerate() {
+            for (ray, v) in out.iter_mut().zip(c.0) {
+                ray[k] = v;
+            }
+        }
+    }
+
+    /// [`Compiled::compose_into`] in double-double arithmetic, compiled with fused
+    /// multiply-adds in hardware as well, chosen at run time (the same bits either way).
+    pub fn compose_dd(&self, o: [Dd; 3], e: [Dd; 3], out: &mut [Dd; MAX_DEGREE + 1]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("fma") {
+            // SAFETY: the processor has FMA, checked just above.
+            return unsafe { self.compose_dd_fma(o, e, out) };
+        }
+        self.compose_in(o, e, out)
+    }
+
+    /// [`Compiled::compose_dd`] compiled for FMA.
+    ///
+    /// # Safety
+    /// The processor must have FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "fma")]
+    unsafe fn compose_dd_fma(&self, o: [Dd; 3], e: [Dd; 3], out: &mut [Dd; MAX_DEGREE + 1]) {
+        self.compose_in(o, e, out)
     }
 
     /// [`Compiled::compose`] into `out` (all `MAX_DEGREE + 1` entries are written; those
@@ -945,6 +1027,16 @@ mod tests {
                 let want = compose_reference::<Dd>(&c, od, ed);
                 let bits = |v: [Dd; MAX_DEGREE + 1]| v.map(|d| (d.hi.to_bits(), d.lo.to_bits()));
                 assert_eq!(bits(got), bits(want), "{o:?} {e:?}");
+                // The version chosen at run time (with hardware FMA where there is one).
+                let mut got = [Dd::ZERO; MAX_DEGREE + 1];
+                c.compose_dd(od, ed, &mut got);
+                assert_eq!(bits(got), bits(want), "{o:?} {e:?}");
+                // Its value in double-double at the ray's origin, on both code paths.
+                let (a, b) = (c.eval_dd(o), c.eval_dd_in(o));
+                assert_eq!(
+                    (a.hi.to_bits(), a.lo.to_bits()),
+                    (b.hi.to_bits(), b.lo.to_bits())
+                );
             }
         }
     }
@@ -968,9 +1060,38 @@ mod tests {
                 let e: [[f64; 3]; LANES] = std::array::from_fn(|_| [0; 3].map(|_| coordinate()));
                 let alone: [Uni; LANES] = std::array::from_fn(|i| c.compose(o[i], e[i]));
                 let bits = |v: [Uni; LANES]| v.map(|u| u.map(f64::to_bits));
-                // The baseline code path, whatever the processor, and the one chosen at run time.
-                assert_eq!(bits(c.compose_lanes_in(o, e)), bits(alone));
-                assert_eq!(bits(c.compose_lanes(o, e)), bits(alone));
+                // The baseline code path, whatever the processor, and the one chosen at run
+                // time, into a buffer that holds something else before.
+                let mut out = [[f64::NAN; MAX_DEGREE + 1]; LANES];
+                c.compose_lanes_in(o, e, &mut out);
+                assert_eq!(bits(out), bits(alone));
+                let mut out = [[f64::NAN; MAX_DEGREE + 1]; LANES];
+                c.compose_lanes(o, e, &mut out);
+                assert_eq!(bits(out), bits(alone));
+            }
+        }
+    }
+
+    #[test]
+    fn the_magnitude_bound_is_never_below_the_computed_magnitude_sum() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut coordinate = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let u = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            match state % 5 {
+                0 => 0.0,
+                1 => u * 1e-200,
+                2 => u * 1e3,
+                _ => u * 5.0,
+            }
+        };
+        for c in composition_surfaces() {
+            for _ in 0..2000 {
+                let p = [0; 3].map(|_| coordinate());
+                let (bound, sum) = (c.magnitude_bound(p), c.eval_with_bound(p).1);
+                assert!(bound >= sum, "{p:?}: bound {bound} below {sum}");
             }
         }
     }
