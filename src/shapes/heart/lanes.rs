@@ -9,7 +9,7 @@
 //! other processor runs and the tests also run.
 
 use super::surface::{sextic_coefficients, BOUNDS, BOUNDS_MARGIN};
-use super::{upper_ellipsoid, Chord, HeartShape, POLISH_WINDOW, SELF_HIT_GUARD};
+use super::{quadratic_span, upper_ellipsoid, Chord, HeartShape, POLISH_WINDOW, SELF_HIT_GUARD};
 use crate::geometry::{DVec3, Ray};
 use crate::shapes::placed::Placement;
 use crate::shapes::LANES;
@@ -128,32 +128,13 @@ fn chords_in(
         let a = 2.0 * ex * ex + ey * ey + ez * ez;
         let hb = 2.0 * px * ex + py * ey + pz * ez;
         let c = 2.0 * px * px + py * py + pz * pz - rr;
-        let disc = hb * hb - a * c;
-        let qq = -(hb + hb.signum() * disc.sqrt());
-        let (u0, u1) = (qq / a, c / qq);
-        let (u0, u1) = if u0 > u1 { (u1, u0) } else { (u0, u1) };
-        let (u0, u1) = if u0.is_finite() & u1.is_finite() {
-            (u0, u1)
-        } else {
-            (0.0, len)
-        };
-        let (u0, u1) = (u0.max(0.0), u1.min(len));
-        let inside_ok = (disc >= 0.0) & (u0 <= u1);
+        let (inside_ok, u0, u1) = quadratic_span(a, hb, c, len, (0.0, len));
         // The upper ellipsoid's span, cut to the part above the floor (`upper_span`).
         let oz = pz - upper_c;
         let hb_up = 2.0 * px * ex + py * ey + oz * ez;
         let k_up = 2.0 * px * px + py * py + oz * oz - upper_r * upper_r;
-        let disc_up = hb_up * hb_up - a * k_up;
-        let q_up = -(hb_up + hb_up.signum() * disc_up.sqrt());
-        let (w0, w1) = (q_up / a, k_up / q_up);
-        let (w0, w1) = if w0 > w1 { (w1, w0) } else { (w0, w1) };
-        let (w0, w1) = if w0.is_finite() & w1.is_finite() {
-            (w0, w1)
-        } else {
-            (0.0, len)
-        };
-        let (w0, w1) = (w0.max(above0), w1.min(above1));
-        let above_ok = above_ok & (disc_up >= 0.0) & (w0 <= w1);
+        let (upper_ok, w0, w1) = quadratic_span(a, hb_up, k_up, len, (above0, above1));
+        let above_ok = above_ok & upper_ok;
         let (above0, above1) = (w0, w1);
         let both = above_ok & inside_ok;
         let v0 = if both {

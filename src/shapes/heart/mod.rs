@@ -320,22 +320,8 @@ fn clip_lower_half(r: &Ray, t0: f64, t1: f64) -> Option<(f64, f64)> {
     let a = 2.0 * d.x * d.x + d.y * d.y + d.z * d.z;
     let hb = 2.0 * o.x * d.x + o.y * d.y + o.z * d.z;
     let c = 2.0 * o.x * o.x + o.y * o.y + o.z * o.z - rr;
-    let disc = hb * hb - a * c;
-    let inside = if disc >= 0.0 {
-        let q = -(hb + hb.signum() * disc.sqrt());
-        let (mut u0, mut u1) = (q / a, c / q);
-        if u0 > u1 {
-            std::mem::swap(&mut u0, &mut u1);
-        }
-        if !(u0.is_finite() && u1.is_finite()) {
-            // q = 0: o at the centre plane with hb = 0 and c = 0; keep everything.
-            (u0, u1) = (0.0, len);
-        }
-        let (u0, u1) = (u0.max(0.0), u1.min(len));
-        (u0 <= u1).then_some((u0, u1))
-    } else {
-        None
-    };
+    let (inside_ok, u0, u1) = quadratic_span(a, hb, c, len, (0.0, len));
+    let inside = inside_ok.then_some((u0, u1));
     let upper = above.and_then(|p| upper_span(o, d, len, p));
     let (u0, u1) = match (upper, inside) {
         (Some(p), Some(q)) => (p.0.min(q.0), p.1.max(q.1)),
@@ -369,18 +355,27 @@ fn upper_span(o: DVec3, d: DVec3, len: f64, (above0, above1): (f64, f64)) -> Opt
     let a = 2.0 * d.x * d.x + d.y * d.y + d.z * d.z;
     let hb = 2.0 * o.x * d.x + o.y * d.y + oz * d.z;
     let k = 2.0 * o.x * o.x + o.y * o.y + oz * oz - r * r;
+    let (ok, w0, w1) = quadratic_span(a, hb, k, len, (above0, above1));
+    ok.then_some((w0, w1))
+}
+
+/// The span `(u0, u1)` within `[lo, hi]` where `a·u² + 2·hb·u + k ≤ 0` (`a > 0`: a ray inside an
+/// ellipsoid), and whether it is not empty; a degenerate ray through the centre plane
+/// (`q = 0`) keeps `[0, len]`. Without branches, so that the lanes ([`lanes::chords`]) and the
+/// scalar chord make the same operations.
+#[inline(always)]
+fn quadratic_span(a: f64, hb: f64, k: f64, len: f64, (lo, hi): (f64, f64)) -> (bool, f64, f64) {
     let disc = hb * hb - a * k;
     let q = -(hb + hb.signum() * disc.sqrt());
-    let (w0, w1) = (q / a, k / q);
-    let (w0, w1) = if w0 > w1 { (w1, w0) } else { (w0, w1) };
-    // q = 0 (a degenerate ray at the centre plane): keep everything.
-    let (w0, w1) = if w0.is_finite() && w1.is_finite() {
-        (w0, w1)
+    let (u0, u1) = (q / a, k / q);
+    let (u0, u1) = if u0 > u1 { (u1, u0) } else { (u0, u1) };
+    let (u0, u1) = if u0.is_finite() & u1.is_finite() {
+        (u0, u1)
     } else {
         (0.0, len)
     };
-    let (w0, w1) = (w0.max(above0), w1.min(above1));
-    (disc >= 0.0 && w0 <= w1).then_some((w0, w1))
+    let (u0, u1) = (u0.max(lo), u1.min(hi));
+    ((disc >= 0.0) & (u0 <= u1), u0, u1)
 }
 
 impl ObjectShape for HeartShape {
