@@ -9,7 +9,10 @@
 //! other processor runs and the tests also run.
 
 use super::surface::{sextic_coefficients, BOUNDS, BOUNDS_MARGIN};
-use super::{quadratic_span, upper_ellipsoid, Chord, HeartShape, POLISH_WINDOW, SELF_HIT_GUARD};
+use super::{
+    ellipsoid_span, upper_ellipsoid, Chord, HeartShape, LOWER_ELLIPSOID, POLISH_WINDOW,
+    SELF_HIT_GUARD,
+};
 use crate::geometry::{DVec3, Ray};
 use crate::shapes::placed::Placement;
 use crate::shapes::LANES;
@@ -104,8 +107,7 @@ fn chords_in(
     BOUNDS.clip_lanes(&[ox, oy, oz], &[dx, dy, dz], &mut t0, &mut t1, &mut alive);
     // The lower half's ellipsoid and the half-space above it, from the box entry.
     let z_floor = -BOUNDS_MARGIN;
-    let rr = (1.0 + BOUNDS_MARGIN) * (1.0 + BOUNDS_MARGIN);
-    let (upper_c, upper_r) = upper_ellipsoid();
+    let upper = upper_ellipsoid();
     for i in 0..LANES {
         let (px, py, pz) = (
             ox[i] + t0[i] * dx[i],
@@ -124,16 +126,10 @@ fn chords_in(
         } else {
             (pz >= z_floor, 0.0, len)
         };
-        // Inside the ellipsoid.
-        let a = 2.0 * ex * ex + ey * ey + ez * ez;
-        let hb = 2.0 * px * ex + py * ey + pz * ez;
-        let c = 2.0 * px * px + py * py + pz * pz - rr;
-        let (inside_ok, u0, u1) = quadratic_span(a, hb, c, len, (0.0, len));
-        // The upper ellipsoid's span, cut to the part above the floor (`upper_span`).
-        let oz = pz - upper_c;
-        let hb_up = 2.0 * px * ex + py * ey + oz * ez;
-        let k_up = 2.0 * px * px + py * py + oz * oz - upper_r * upper_r;
-        let (upper_ok, w0, w1) = quadratic_span(a, hb_up, k_up, len, (above0, above1));
+        // Inside the lower half's ellipsoid; inside the upper half's above the floor.
+        let (p, e) = ([px, py, pz], [ex, ey, ez]);
+        let (inside_ok, u0, u1) = ellipsoid_span(p, e, LOWER_ELLIPSOID, len, (0.0, len));
+        let (upper_ok, w0, w1) = ellipsoid_span(p, e, upper, len, (above0, above1));
         let above_ok = above_ok & upper_ok;
         let (above0, above1) = (w0, w1);
         let both = above_ok & inside_ok;

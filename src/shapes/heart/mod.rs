@@ -315,14 +315,14 @@ fn clip_lower_half(r: &Ray, t0: f64, t1: f64) -> Option<(f64, f64)> {
     } else {
         (o.z >= z_floor).then_some((0.0, len))
     };
-    // Inside 2X² + Y² + Z² ≤ (1 + margin)²: a·u² + 2·hb·u + c ≤ 0.
-    let rr = (1.0 + BOUNDS_MARGIN) * (1.0 + BOUNDS_MARGIN);
-    let a = 2.0 * d.x * d.x + d.y * d.y + d.z * d.z;
-    let hb = 2.0 * o.x * d.x + o.y * d.y + o.z * d.z;
-    let c = 2.0 * o.x * o.x + o.y * o.y + o.z * o.z - rr;
-    let (inside_ok, u0, u1) = quadratic_span(a, hb, c, len, (0.0, len));
+    // Inside 2X² + Y² + Z² ≤ (1 + margin)².
+    let (p, e) = (o.to_array(), d.to_array());
+    let (inside_ok, u0, u1) = ellipsoid_span(p, e, LOWER_ELLIPSOID, len, (0.0, len));
     let inside = inside_ok.then_some((u0, u1));
-    let upper = above.and_then(|p| upper_span(o, d, len, p));
+    let upper = above.and_then(|range| {
+        let (ok, w0, w1) = ellipsoid_span(p, e, upper_ellipsoid(), len, range);
+        ok.then_some((w0, w1))
+    });
     let (u0, u1) = match (upper, inside) {
         (Some(p), Some(q)) => (p.0.min(q.0), p.1.max(q.1)),
         (Some(p), None) | (None, Some(p)) => p,
@@ -335,28 +335,37 @@ fn clip_lower_half(r: &Ray, t0: f64, t1: f64) -> Option<(f64, f64)> {
 /// whose cube root is below 1.1050.
 const CBRT_B_MAX: f64 = 1.106;
 
-/// The centre height `c` and radius `R` of the ellipsoid `2X² + Y² + (Z − c)² ≤ R²` that holds
-/// the heart's upper half: above `Z = 0` the surface has `A = ∛B·Z ≤ 2c·Z` with
-/// `c = CBRT_B_MAX/2`, i.e. `2X² + Y² + (Z − c)² ≤ 1 + c²`; `R` is widened by
-/// [`BOUNDS_MARGIN`].
+/// The ellipsoid `2X² + Y² + Z² ≤ (1 + margin)²` that holds the heart's lower half, as
+/// `(c, R²)` of `2X² + Y² + (Z − c)² ≤ R²` (see [`ellipsoid_span`]).
+const LOWER_ELLIPSOID: (f64, f64) = (0.0, (1.0 + BOUNDS_MARGIN) * (1.0 + BOUNDS_MARGIN));
+
+/// The ellipsoid `2X² + Y² + (Z − c)² ≤ R²` that holds the heart's upper half, as `(c, R²)`:
+/// above `Z = 0` the surface has `A = ∛B·Z ≤ 2c·Z` with `c = CBRT_B_MAX/2`, i.e.
+/// `2X² + Y² + (Z − c)² ≤ 1 + c²`; `R` is widened by [`BOUNDS_MARGIN`].
 #[inline(always)]
 fn upper_ellipsoid() -> (f64, f64) {
     let c = 0.5 * CBRT_B_MAX;
-    (c, (1.0 + c * c).sqrt() + BOUNDS_MARGIN)
+    let r = (1.0 + c * c).sqrt() + BOUNDS_MARGIN;
+    (c, r * r)
 }
 
-/// The part of `above` (an interval of `u`, within `[0, len]`) where the ray `o + u·d` is
-/// inside the upper half's ellipsoid ([`upper_ellipsoid`]), or `None` when it is nowhere
-/// inside there. The lanes ([`lanes::chords`]) compute it with the same operations.
+/// The span `(u0, u1)` within `range` where the ray `p + u·e` is inside the ellipsoid
+/// `2X² + Y² + (Z − c)² ≤ R²` (`(c, R²)` given), and whether it is not empty; a ray of
+/// `len` along the chord. The scalar chord and the lanes ([`lanes::chords`]) both call it,
+/// so they make the same operations.
 #[inline(always)]
-fn upper_span(o: DVec3, d: DVec3, len: f64, (above0, above1): (f64, f64)) -> Option<(f64, f64)> {
-    let (c, r) = upper_ellipsoid();
-    let oz = o.z - c;
-    let a = 2.0 * d.x * d.x + d.y * d.y + d.z * d.z;
-    let hb = 2.0 * o.x * d.x + o.y * d.y + oz * d.z;
-    let k = 2.0 * o.x * o.x + o.y * o.y + oz * oz - r * r;
-    let (ok, w0, w1) = quadratic_span(a, hb, k, len, (above0, above1));
-    ok.then_some((w0, w1))
+fn ellipsoid_span(
+    p: [f64; 3],
+    e: [f64; 3],
+    (centre_z, r2): (f64, f64),
+    len: f64,
+    range: (f64, f64),
+) -> (bool, f64, f64) {
+    let pz = p[2] - centre_z;
+    let a = 2.0 * e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+    let hb = 2.0 * p[0] * e[0] + p[1] * e[1] + pz * e[2];
+    let k = 2.0 * p[0] * p[0] + p[1] * p[1] + pz * pz - r2;
+    quadratic_span(a, hb, k, len, range)
 }
 
 /// The span `(u0, u1)` within `[lo, hi]` where `a·u² + 2·hb·u + k ≤ 0` (`a > 0`: a ray inside an
@@ -474,8 +483,8 @@ mod tests {
         }
         // Surface points above Z = 0 (sign changes of g along vertical lines, bisected): each
         // in the ellipsoid, and tight enough that the test means something.
-        let (c, r) = upper_ellipsoid();
-        let r = r - BOUNDS_MARGIN;
+        let (c, r2) = upper_ellipsoid();
+        let r = r2.sqrt() - BOUNDS_MARGIN;
         let mut worst = f64::NEG_INFINITY;
         let mut points = 0;
         for i in 0..=60 {
