@@ -212,16 +212,23 @@ struct PixelSampler<'a> {
 }
 
 /// The rectangle of the full image outside which no camera ray of `job` meets an object's
-/// bounding box, if the camera sees all of the boxes from in front.
+/// bounding box (nor, where the object gives them, one of its enclosing ellipsoids), if the
+/// camera sees all of the boxes from in front.
 fn seen_rect(job: &Job) -> Option<ImageRect> {
+    let (camera, w, h) = (job.camera, job.full_width, job.full_height);
     job.scene
         .objects
         .iter()
         .try_fold(ImageRect::NOTHING, |rect, object| {
-            let r = job
-                .camera
-                .image_rect(&object.bounds, job.full_width, job.full_height)?;
-            Some(rect.union(r))
+            let boxed = camera.image_rect(&object.bounds, w, h)?;
+            let ellipsoids = object.shape.enclosing_ellipsoids();
+            let tighter = ellipsoids
+                .iter()
+                .try_fold(ImageRect::NOTHING, |r, e| {
+                    Some(r.union(camera.ellipsoid_image_rect(e, w, h)?))
+                })
+                .filter(|_| !ellipsoids.is_empty());
+            Some(rect.union(tighter.map_or(boxed, |t| boxed.intersection(t))))
         })
 }
 
