@@ -178,6 +178,121 @@ impl Camera {
     }
 }
 
+impl Camera {
+    /// The outline of a solid ellipsoid's image on the image plane of a `width × height`
+    /// image (an ellipse), to find which points of each row see it
+    /// ([`EllipseImage::row_span`]); `None` when part of the ellipsoid is not in front of the
+    /// eye (or it is not finite, or flat).
+    pub fn ellipsoid_image(
+        &self,
+        e: &SolidEllipsoid,
+        width: u32,
+        height: u32,
+    ) -> Option<EllipseImage> {
+        self.ellipsoid_image_rect(e, width, height)?;
+        let inv = e.axes.inverse();
+        if !inv.is_finite() {
+            return None;
+        }
+        // In the unit ball's coordinates the ray from the eye towards f + sx·r + sy·t is
+        // o + λ·(F + sx·R + sy·T); it meets the ball iff D = (o·w)² − |w|²(|o|² − 1) ≥ 0,
+        // a quadratic form in (sx, sy): sᵀPs + 2qᵀs + r₀.
+        let o = inv * (self.eye - e.centre);
+        let (f, r, t) = (inv * self.forward, inv * self.right, inv * self.true_up);
+        let k = o.length_squared() - 1.0;
+        let (a0, a1, a2) = (o.dot(f), o.dot(r), o.dot(t));
+        let p = [
+            [a1 * a1 - k * r.dot(r), a1 * a2 - k * r.dot(t)],
+            [a1 * a2 - k * r.dot(t), a2 * a2 - k * t.dot(t)],
+        ];
+        let q = [a0 * a1 - k * f.dot(r), a0 * a2 - k * f.dot(t)];
+        let r0 = a0 * a0 - k * f.dot(f);
+        // D = δ − (s − c)ᵀG(s − c) with G = −P (positive definite for a bounded image).
+        let g = [[-p[0][0], -p[0][1]], [-p[1][0], -p[1][1]]];
+        let det = g[0][0] * g[1][1] - g[0][1] * g[1][0];
+        if !(g[0][0] > 0.0 && det > 0.0 && det.is_finite()) {
+            return None;
+        }
+        let g_inv = [
+            [g[1][1] / det, -g[0][1] / det],
+            [-g[1][0] / det, g[0][0] / det],
+        ];
+        let c = [
+            g_inv[0][0] * q[0] + g_inv[0][1] * q[1],
+            g_inv[1][0] * q[0] + g_inv[1][1] * q[1],
+        ];
+        let delta = r0 + q[0] * c[0] + q[1] * c[1];
+        if !(delta > 0.0 && delta.is_finite()) {
+            return None;
+        }
+        let (w, h) = (width as f64, height as f64);
+        Some(EllipseImage {
+            centre: c,
+            g,
+            delta,
+            // The rightmost point is c + G⁻¹·eₓ·√(δ / (G⁻¹)₁₁): its offset in sy.
+            sy_of_rightmost: g_inv[1][0] * (delta / g_inv[0][0]).sqrt(),
+            half_width: self.half_width,
+            half_height: self.half_width * h / w,
+            width: w,
+            height: h,
+        })
+    }
+}
+
+/// The image of a solid ellipsoid (see [`Camera::ellipsoid_image`]): the image-plane
+/// points `(sx, sy)` (at unit distance) with `(s − c)ᵀG(s − c) ≤ δ`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EllipseImage {
+    centre: [f64; 2],
+    g: [[f64; 2]; 2],
+    delta: f64,
+    sy_of_rightmost: f64,
+    half_width: f64,
+    half_height: f64,
+    width: f64,
+    height: f64,
+}
+
+impl EllipseImage {
+    /// The columns `(x0, x1)` (pixels, as [`Camera::ray`] takes them) that hold every point
+    /// of the rows `y0 ≤ y ≤ y1` whose primary ray meets the ellipsoid, with the margin of
+    /// [`Camera::image_rect`] on every side; `None` when none does.
+    pub fn row_span(&self, y0: f64, y1: f64) -> Option<(f64, f64)> {
+        // Rows widened by the margin, as image-plane offsets from the centre (sy falls as y
+        // grows).
+        let to_sy = |y: f64| (1.0 - 2.0 * y / self.height) * self.half_height;
+        let pad = |v: f64| 2.0 + 1e-9 * v.abs();
+        let (v_lo, v_hi) = (
+            to_sy(y1 + pad(y1)) - self.centre[1],
+            to_sy(y0 - pad(y0)) - self.centre[1],
+        );
+        // The ellipse's rows: G₁₁u² + 2G₁₂uv + G₂₂v² ≤ δ has a u for v² ≤ δ·G₁₁/det.
+        let [[g11, g12], [_, g22]] = self.g;
+        let det = g11 * g22 - g12 * g12;
+        let v_reach = (self.delta * g11 / det).sqrt();
+        let (lo, hi) = (v_lo.max(-v_reach), v_hi.min(v_reach));
+        let some_row = lo <= hi;
+        if !some_row {
+            return None;
+        }
+        // u at the edge of the ellipse on row v: (−G₁₂v ± √(G₁₂²v² − G₁₁(G₂₂v² − δ))) / G₁₁;
+        // the right edge is concave in v, largest at the rightmost point's v, the left edge
+        // smallest at the leftmost point's (−that).
+        let edge = |v: f64, side: f64| {
+            let root = (g12 * g12 * v * v - g11 * (g22 * v * v - self.delta))
+                .max(0.0)
+                .sqrt();
+            (-g12 * v + side * root) / g11
+        };
+        let right = edge(self.sy_of_rightmost.clamp(lo, hi), 1.0);
+        let left = edge((-self.sy_of_rightmost).clamp(lo, hi), -1.0);
+        let to_x = |u: f64| ((u + self.centre[0]) / self.half_width + 1.0) * 0.5 * self.width;
+        let (x0, x1) = (to_x(left), to_x(right));
+        (x0.is_finite() && x1.is_finite()).then(|| (x0 - pad(x0), x1 + pad(x1)))
+    }
+}
+
 /// A rectangle of the image plane, in pixels (see [`Camera::image_rect`]): the points
 /// `x.0 ≤ x ≤ x.1`, `y.0 ≤ y ≤ y.1`; empty when `x.0 > x.1`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -403,10 +518,95 @@ mod tests {
             tight > 100,
             "the rectangles are close to the ellipsoids: {tight}"
         );
-        // An ellipsoid around the eye has no rectangle.
+        // An ellipsoid around the eye has no rectangle (and no image).
         let cam = Camera::new(DVec3::ZERO, DVec3::X, DVec3::Z, 40.0).unwrap();
         let around = SolidEllipsoid::axis_aligned(DVec3::new(0.5, 0.0, 0.0), DVec3::ONE);
         assert_eq!(cam.ellipsoid_image_rect(&around, w, h), None);
+        assert_eq!(cam.ellipsoid_image(&around, w, h), None);
+    }
+
+    #[test]
+    fn no_ray_from_outside_an_ellipsoid_row_span_meets_the_ellipsoid() {
+        let mut state = 0x1234_5678_9abc_def1u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (w, h) = (320, 240);
+        let (mut outside, mut images, mut narrower) = (0, 0, 0);
+        for _ in 0..200 {
+            let eye = DVec3::new(next() * 4.0 - 2.0, next() * 4.0 - 2.0, 6.0 + next());
+            let look = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
+            let up = DVec3::new(next() - 0.5, 1.0, 0.0);
+            let cam = Camera::new(eye, look, up, 20.0 + 100.0 * next()).unwrap();
+            let mut axis = || DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 2.0;
+            let axes = glam::DMat3::from_cols(axis(), axis(), axis());
+            let centre = DVec3::new(next() * 2.0 - 1.0, next() * 2.0 - 1.0, next() * 2.0 - 1.0);
+            if axes.determinant().abs() < 1e-3 {
+                continue;
+            }
+            let e = SolidEllipsoid { centre, axes };
+            let Some(image) = cam.ellipsoid_image(&e, w, h) else {
+                continue;
+            };
+            images += 1;
+            let rect = cam.ellipsoid_image_rect(&e, w, h).unwrap();
+            let inv = axes.inverse();
+            let meets = |ray: &Ray| {
+                let (o, d) = (inv * (ray.origin - centre), inv * ray.dir);
+                let (a, b, c) = (d.length_squared(), o.dot(d), o.length_squared() - 1.0);
+                let disc = b * b - a * c;
+                disc >= 0.0 && -b + disc.sqrt() > 0.0
+            };
+            for _ in 0..300 {
+                // A band of one row (or of a few), and a point in it.
+                let y0 = (next() * 1.4 * h as f64 - 0.2 * h as f64).floor();
+                let y1 = y0 + if next() < 0.5 { 1.0 } else { 16.0 };
+                let span = image.row_span(y0, y1);
+                if let Some((x0, x1)) = span {
+                    assert!(
+                        x0 >= rect.x.0 - 1e-6 && x1 <= rect.x.1 + 1e-6,
+                        "{span:?} {rect:?}"
+                    );
+                    if x1 - x0 < rect.x.1 - rect.x.0 - 1.0 {
+                        narrower += 1;
+                    }
+                }
+                let x = next() * 1.4 * w as f64 - 0.2 * w as f64;
+                let y = y0 + (y1 - y0) * next();
+                if span.is_some_and(|(x0, x1)| x >= x0 && x <= x1) {
+                    continue;
+                }
+                outside += 1;
+                let ray = cam.ray(x, y, w, h);
+                assert!(
+                    !meets(&ray),
+                    "({x}, {y}) is outside {span:?} but its ray meets {e:?}"
+                );
+            }
+            // The points of the outline are inside their row's span.
+            for _ in 0..300 {
+                let u = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
+                let v = centre + axes * u - eye;
+                let depth = v.dot(cam.forward);
+                let x = (v.dot(cam.right) / depth / cam.half_width + 1.0) * 0.5 * w as f64;
+                let half_h = cam.half_width * h as f64 / w as f64;
+                let y = (1.0 - v.dot(cam.true_up) / depth / half_h) * 0.5 * h as f64;
+                let (x0, x1) = image.row_span(y.floor(), y.floor() + 1.0).unwrap();
+                assert!(
+                    x >= x0 && x <= x1,
+                    "({x}, {y}) outside its row's span ({x0}, {x1})"
+                );
+            }
+        }
+        assert!(images > 100, "{images}");
+        assert!(outside > 10_000, "{outside}");
+        assert!(
+            narrower > 10_000,
+            "the spans are no tighter than the rectangle: {narrower}"
+        );
     }
 
     #[test]

@@ -8,7 +8,7 @@
 
 use super::sampling::{mix, pixel_key, point_in_grid, strata, Sample};
 use super::{Shader, TILE_SIZE};
-use crate::camera::{Camera, ImageRect};
+use crate::camera::Camera;
 use crate::film::{self, Image, Region, Vec3};
 use crate::geometry::{DVec3, Ray};
 use crate::scene::Scene;
@@ -107,7 +107,7 @@ pub(crate) fn run<S: Shader>(
         seed: mix(job.seed),
         seen: shader
             .miss_colour()
-            .and_then(|colour| Some((seen_rect(job)?, colour))),
+            .and_then(|colour| Some((seen_rows(job)?, colour))),
     };
     let mut image = if job.alpha {
         Image::transparent(width, height)
@@ -206,30 +206,51 @@ struct PixelSampler<'a> {
     pixel_grid: (u32, u32),
     /// `mix(seed)`.
     seed: u64,
-    /// Where a camera ray may meet an object's box, and the shader's colour for the rays
-    /// that meet none ([`Shader::miss_colour`]); `None`: every ray is traced.
-    seen: Option<(ImageRect, DVec3)>,
+    /// Where a camera ray may meet an object's bounds (from [`seen_rows`]), and the
+    /// shader's colour for the rays that meet none ([`Shader::miss_colour`]); `None`:
+    /// every ray is traced.
+    seen: Option<(Vec<(f64, f64)>, DVec3)>,
 }
 
-/// The rectangle of the full image outside which no camera ray of `job` meets an object's
-/// bounding box (nor, where the object gives them, one of its enclosing ellipsoids), if the
-/// camera sees all of the boxes from in front.
-fn seen_rect(job: &Job) -> Option<ImageRect> {
+/// For each row of `job`'s region, from the top: the columns `(x0, x1)` of the full image
+/// outside which no camera ray of the row meets an object's bounding box (nor, where the
+/// object gives them, one of its enclosing ellipsoids); empty (`x0 > x1`) when none can.
+/// `None` when the camera does not see every box from in front.
+fn seen_rows(job: &Job) -> Option<Vec<(f64, f64)>> {
     let (camera, w, h) = (job.camera, job.full_width, job.full_height);
-    job.scene
-        .objects
-        .iter()
-        .try_fold(ImageRect::NOTHING, |rect, object| {
-            let boxed = camera.image_rect(&object.bounds, w, h)?;
-            let ellipsoids = object.shape.enclosing_ellipsoids();
-            let tighter = ellipsoids
-                .iter()
-                .try_fold(ImageRect::NOTHING, |r, e| {
-                    Some(r.union(camera.ellipsoid_image_rect(e, w, h)?))
-                })
-                .filter(|_| !ellipsoids.is_empty());
-            Some(rect.union(tighter.map_or(boxed, |t| boxed.intersection(t))))
-        })
+    let nothing = (f64::INFINITY, f64::NEG_INFINITY);
+    let hull = |a: (f64, f64), b: (f64, f64)| (a.0.min(b.0), a.1.max(b.1));
+    let region = job.region;
+    let mut rows = vec![nothing; region.height as usize];
+    for object in &job.scene.objects {
+        let boxed = camera.image_rect(&object.bounds, w, h)?;
+        // The ellipsoids' images, if the camera sees them all.
+        let images: Option<Vec<_>> = object
+            .shape
+            .enclosing_ellipsoids()
+            .iter()
+            .map(|e| camera.ellipsoid_image(e, w, h))
+            .collect();
+        let images = images.filter(|i| !i.is_empty());
+        for (row, span) in rows.iter_mut().enumerate() {
+            let y = f64::from(region.y) + row as f64;
+            if !boxed.meets(boxed.x, (y, y + 1.0)) {
+                continue;
+            }
+            let mut seen = boxed.x;
+            if let Some(images) = &images {
+                let near = images
+                    .iter()
+                    .filter_map(|i| i.row_span(y, y + 1.0))
+                    .fold(nothing, hull);
+                seen = (seen.0.max(near.0), seen.1.min(near.1));
+            }
+            if seen.0 <= seen.1 {
+                *span = hull(*span, seen);
+            }
+        }
+    }
+    Some(rows)
 }
 
 impl PixelSampler<'_> {
@@ -264,7 +285,7 @@ impl PixelSampler<'_> {
                 // Whole groups of LANES neighbouring pixels go to the shader together.
                 let lanes = (x1 - x).min(LANES as u32);
                 let (sums, hits, group_rays) = if let Some(colour) =
-                    self.unseen(region.x + x, lanes, image_y)
+                    self.unseen(region.x + x, lanes, y)
                 {
                     // No camera ray of these pixels meets a box: each sample is a miss.
                     let mut sum = DVec3::ZERO;
@@ -303,11 +324,11 @@ impl PixelSampler<'_> {
     /// The shader's [`Shader::miss_colour`] when no camera ray of the `count` pixels from
     /// `(image_x, image_y)` rightwards can meet an object's box, else `None`.
     #[inline]
-    fn unseen(&self, image_x: u32, count: u32, image_y: u32) -> Option<DVec3> {
-        let (rect, colour) = self.seen?;
-        let xs = (image_x as f64, (image_x + count) as f64);
-        let ys = (image_y as f64, (image_y + 1) as f64);
-        (!rect.meets(xs, ys)).then_some(colour)
+    fn unseen(&self, image_x: u32, count: u32, region_y: u32) -> Option<DVec3> {
+        let (rows, colour) = self.seen.as_ref()?;
+        let (x0, x1) = rows[region_y as usize];
+        let (a, b) = (image_x as f64, (image_x + count) as f64);
+        (b < x0 || a > x1).then_some(*colour)
     }
 
     /// The sum of the colours of pixel `(image_x, image_y)`'s samples (of those that hit an
@@ -484,11 +505,10 @@ mod tests {
             seed: 0,
             alpha: false,
         };
-        let rect = seen_rect(&job).expect("the box is in front of the eye");
-        assert!(
-            rect.x.1 < 25.0 && rect.y.0 > 0.0 && rect.y.1 < 21.0,
-            "{rect:?}"
-        );
+        let rows = seen_rows(&job).expect("the box is in front of the eye");
+        assert!(rows[0].0 > rows[0].1, "the top row sees nothing: {rows:?}");
+        assert!(rows.iter().all(|r| r.1 < 25.0), "{rows:?}");
+        assert!(rows[10].0 < rows[10].1 && rows[10].1 - rows[10].0 > rows[5].1 - rows[5].0);
         for spp in [1, 3] {
             let setup = ShadeSetup {
                 scene: &scene,
