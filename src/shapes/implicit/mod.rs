@@ -554,7 +554,13 @@ impl ImplicitShape {
     fn span(&self, s: &Surface, ray: &Ray, t_min: f64, t_max: f64) -> Option<Span> {
         let (t_mid, t_half, mid, e) = self.chord(ray)?;
         let guard = if t_min >= 0.0 {
-            t_min.max(SELF_HIT_GUARD * t_half)
+            // `t_min.max(…)` (neither is NaN here) in one comparison.
+            let g = SELF_HIT_GUARD * t_half;
+            if g > t_min {
+                g
+            } else {
+                t_min
+            }
         } else {
             t_min
         };
@@ -726,7 +732,15 @@ impl Span {
             deg,
             inv,
             s_lo: (self.lo_t - self.t_mid) / self.t_half,
-            s_hi: ((self.hi_t - self.t_mid) / self.t_half).min(1.0),
+            // `.min(1.0)` (1 for a NaN) in one comparison.
+            s_hi: {
+                let s_hi = (self.hi_t - self.t_mid) / self.t_half;
+                if s_hi < 1.0 {
+                    s_hi
+                } else {
+                    1.0
+                }
+            },
         })
     }
 }
@@ -748,7 +762,11 @@ struct Query {
 /// degree left and the factor applied, or `None` for a zero or non-finite polynomial.
 #[inline]
 fn normalise(c: &mut Uni, n: usize) -> Option<(usize, f64)> {
-    let big = c[..=n].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    // `f64::max`'s answer (a NaN coefficient is passed over; `m` is never NaN or −0) in one
+    // comparison.
+    let big = c[..=n]
+        .iter()
+        .fold(0.0f64, |m, v| if v.abs() > m { v.abs() } else { m });
     if !(big > 0.0 && big.is_finite()) {
         return None;
     }
