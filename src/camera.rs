@@ -1,6 +1,6 @@
 //! The pinhole camera.
 
-use crate::geometry::{DVec3, Ray};
+use crate::geometry::{Aabb, DVec3, Ray, SolidEllipsoid};
 
 /// Why a camera is degenerate.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -91,6 +91,144 @@ impl Camera {
         let dir = (self.forward + sx * self.right + sy * self.true_up).normalize();
         Ray::new(self.eye, dir)
     }
+
+    /// A rectangle of the image plane of a `width × height` image (pixels, as [`Camera::ray`]
+    /// takes them) that holds every point whose primary ray meets `bounds`, with a margin of
+    /// a few pixels for rounding; `None` when part of the box is not in front of the eye (or
+    /// is not finite), as the primary rays of any point may then meet it.
+    pub fn image_rect(&self, bounds: &Aabb, width: u32, height: u32) -> Option<ImageRect> {
+        if bounds.min.cmpgt(bounds.max).any() {
+            return Some(ImageRect::NOTHING);
+        }
+        let (w, h) = (width as f64, height as f64);
+        let half_h = self.half_width * h / w;
+        let mut rect = ImageRect::NOTHING;
+        for corner in 0..8 {
+            let pick = |bit: u32, lo: f64, hi: f64| if corner & bit == 0 { lo } else { hi };
+            let c = DVec3::new(
+                pick(1, bounds.min.x, bounds.max.x),
+                pick(2, bounds.min.y, bounds.max.y),
+                pick(4, bounds.min.z, bounds.max.z),
+            );
+            let v = c - self.eye;
+            let depth = v.dot(self.forward);
+            // Well in front of the eye: the projection of the box is then the hull of its
+            // corners' projections (a convex set seen from outside its half-space).
+            let in_front = depth > 1e-9 * v.length();
+            if !in_front || !v.is_finite() {
+                return None;
+            }
+            // The image point whose ray passes through the corner: the inverse of `ray`.
+            let x = (v.dot(self.right) / depth / self.half_width + 1.0) * 0.5 * w;
+            let y = (1.0 - v.dot(self.true_up) / depth / half_h) * 0.5 * h;
+            if !(x.is_finite() && y.is_finite()) {
+                return None;
+            }
+            rect = ImageRect {
+                x: (rect.x.0.min(x), rect.x.1.max(x)),
+                y: (rect.y.0.min(y), rect.y.1.max(y)),
+            };
+        }
+        Some(rect.padded())
+    }
+
+    /// [`Camera::image_rect`] for a solid ellipsoid: a rectangle of the image plane that
+    /// holds every point whose primary ray meets `e`, with the same margin; `None` when part
+    /// of the ellipsoid is not in front of the eye (or it is not finite).
+    pub fn ellipsoid_image_rect(
+        &self,
+        e: &SolidEllipsoid,
+        width: u32,
+        height: u32,
+    ) -> Option<ImageRect> {
+        let (w, h) = (width as f64, height as f64);
+        let half_h = self.half_width * h / w;
+        let v = e.centre - self.eye;
+        // Image coordinate X along `side` (X = (p − eye)·side / (p − eye)·forward): its
+        // extremes over the ellipsoid are where the plane through the eye with normal
+        // side − X·forward touches it, |v·n| = |axesᵀ·n|, a quadratic in X.
+        let f = e.axes.transpose() * self.forward;
+        let depth = v.dot(self.forward);
+        let nearest = depth - f.length();
+        let in_front = nearest > 1e-9 * depth.abs();
+        if !in_front || !v.is_finite() || !f.is_finite() {
+            return None;
+        }
+        let range = |side: DVec3| -> Option<(f64, f64)> {
+            let s = e.axes.transpose() * side;
+            let a = v.dot(side);
+            let qa = depth * depth - f.length_squared();
+            let qb = a * depth - s.dot(f);
+            let qc = a * a - s.length_squared();
+            let disc = (qb * qb - qa * qc).max(0.0).sqrt();
+            let (lo, hi) = ((qb - disc) / qa, (qb + disc) / qa);
+            (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
+        };
+        let (x0, x1) = range(self.right)?;
+        let (y0, y1) = range(self.true_up)?;
+        let to_x = |sx: f64| (sx / self.half_width + 1.0) * 0.5 * w;
+        let to_y = |sy: f64| (1.0 - sy / half_h) * 0.5 * h;
+        Some(
+            ImageRect {
+                x: (to_x(x0), to_x(x1)),
+                y: (to_y(y1), to_y(y0)),
+            }
+            .padded(),
+        )
+    }
+}
+
+/// A rectangle of the image plane, in pixels (see [`Camera::image_rect`]): the points
+/// `x.0 ≤ x ≤ x.1`, `y.0 ≤ y ≤ y.1`; empty when `x.0 > x.1`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImageRect {
+    /// Smallest and largest column coordinate.
+    pub x: (f64, f64),
+    /// Smallest and largest row coordinate.
+    pub y: (f64, f64),
+}
+
+impl ImageRect {
+    /// The rectangle that holds no point; the identity of [`ImageRect::union`].
+    pub const NOTHING: ImageRect = ImageRect {
+        x: (f64::INFINITY, f64::NEG_INFINITY),
+        y: (f64::INFINITY, f64::NEG_INFINITY),
+    };
+
+    /// The rectangle widened for rounding: by two pixels and a relative part of its
+    /// coordinates on every side (rounding in [`Camera::ray`], the bound tests and the
+    /// projection is far below a pixel).
+    fn padded(self) -> ImageRect {
+        let pad = |(lo, hi): (f64, f64)| {
+            let m = 2.0 + 1e-9 * lo.abs().max(hi.abs());
+            (lo - m, hi + m)
+        };
+        ImageRect {
+            x: pad(self.x),
+            y: pad(self.y),
+        }
+    }
+
+    /// The points in both.
+    pub fn intersection(self, other: ImageRect) -> ImageRect {
+        ImageRect {
+            x: (self.x.0.max(other.x.0), self.x.1.min(other.x.1)),
+            y: (self.y.0.max(other.y.0), self.y.1.min(other.y.1)),
+        }
+    }
+
+    /// The smallest rectangle holding both.
+    pub fn union(self, other: ImageRect) -> ImageRect {
+        ImageRect {
+            x: (self.x.0.min(other.x.0), self.x.1.max(other.x.1)),
+            y: (self.y.0.min(other.y.0), self.y.1.max(other.y.1)),
+        }
+    }
+
+    /// Whether the rectangle meets the square `[x0, x1] × [y0, y1]` of image-plane points.
+    pub fn meets(&self, (x0, x1): (f64, f64), (y0, y1): (f64, f64)) -> bool {
+        x0 <= self.x.1 && x1 >= self.x.0 && y0 <= self.y.1 && y1 >= self.y.0
+    }
 }
 
 #[cfg(test)]
@@ -113,6 +251,162 @@ mod tests {
         // The top edge follows the aspect ratio: tan = 0.5 above the axis.
         let top = cam.ray(50.0, 0.0, 100, 50).dir;
         assert!((top - DVec3::new(0.0, 1.0, 0.5).normalize()).length() < 1e-12);
+    }
+
+    #[test]
+    fn no_ray_from_outside_a_box_image_rect_meets_the_box() {
+        // Small deterministic generator: boxes in front of tilted cameras, then image points
+        // all over (and beyond) the image.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (w, h) = (64, 48);
+        let mut outside = 0;
+        for _ in 0..300 {
+            let eye = DVec3::new(next() * 4.0 - 2.0, next() * 4.0 - 2.0, 6.0 + next());
+            let look = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
+            let cam = Camera::new(
+                eye,
+                look,
+                DVec3::new(next() - 0.5, 1.0, 0.0),
+                20.0 + 100.0 * next(),
+            )
+            .unwrap();
+            let centre = DVec3::new(next() * 2.0 - 1.0, next() * 2.0 - 1.0, next() * 2.0 - 1.0);
+            let half = DVec3::new(next(), next(), next()) * 1.5 + DVec3::splat(0.01);
+            let bounds = Aabb {
+                min: centre - half,
+                max: centre + half,
+            };
+            let Some(rect) = cam.image_rect(&bounds, w, h) else {
+                continue;
+            };
+            // The box's centre is seen inside the rectangle.
+            let v = centre - eye;
+            let dir = v / v.length();
+            assert!(bounds
+                .clip(&Ray::new(eye, dir), 0.0, f64::INFINITY)
+                .is_some());
+            for _ in 0..200 {
+                let (x, y) = (
+                    next() * 1.4 * w as f64 - 0.2 * w as f64,
+                    next() * 1.4 * h as f64 - 0.2 * h as f64,
+                );
+                if rect.meets((x, x), (y, y)) {
+                    continue;
+                }
+                outside += 1;
+                let ray = cam.ray(x, y, w, h);
+                assert!(
+                    bounds.clip(&ray, 0.0, f64::INFINITY).is_none(),
+                    "({x}, {y}) is outside {rect:?} but its ray meets {bounds:?}"
+                );
+            }
+        }
+        assert!(
+            outside > 10_000,
+            "the rectangles leave out most points: {outside}"
+        );
+        // A box around or behind the eye has no rectangle; an empty one holds nothing.
+        let cam = Camera::new(DVec3::ZERO, DVec3::X, DVec3::Z, 40.0).unwrap();
+        let around = Aabb {
+            min: DVec3::splat(-1.0),
+            max: DVec3::splat(1.0),
+        };
+        assert_eq!(cam.image_rect(&around, w, h), None);
+        let behind = Aabb {
+            min: DVec3::new(-3.0, -1.0, -1.0),
+            max: DVec3::new(-2.0, 1.0, 1.0),
+        };
+        assert_eq!(cam.image_rect(&behind, w, h), None);
+        let rect = cam.image_rect(&Aabb::EMPTY, w, h).unwrap();
+        assert!(!rect.meets((0.0, 64.0), (0.0, 48.0)));
+    }
+
+    #[test]
+    fn no_ray_from_outside_an_ellipsoid_image_rect_meets_the_ellipsoid() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (w, h) = (640, 480);
+        let (mut outside, mut tight) = (0, 0);
+        for _ in 0..300 {
+            let eye = DVec3::new(next() * 4.0 - 2.0, next() * 4.0 - 2.0, 6.0 + next());
+            let look = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
+            let up = DVec3::new(next() - 0.5, 1.0, 0.0);
+            let cam = Camera::new(eye, look, up, 20.0 + 100.0 * next()).unwrap();
+            let mut axis = || DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 2.0;
+            let axes = glam::DMat3::from_cols(axis(), axis(), axis());
+            let centre = DVec3::new(next() * 2.0 - 1.0, next() * 2.0 - 1.0, next() * 2.0 - 1.0);
+            let e = SolidEllipsoid { centre, axes };
+            if axes.determinant().abs() < 1e-3 {
+                continue;
+            }
+            let Some(rect) = cam.ellipsoid_image_rect(&e, w, h) else {
+                continue;
+            };
+            let inv = axes.inverse();
+            let meets = |ray: &Ray| {
+                // |o + t·d|² = 1 in the unit ball's coordinates, for some t > 0.
+                let (o, d) = (inv * (ray.origin - centre), inv * ray.dir);
+                let (a, b, c) = (d.length_squared(), o.dot(d), o.length_squared() - 1.0);
+                let disc = b * b - a * c;
+                disc >= 0.0 && -b + disc.sqrt() > 0.0
+            };
+            // Every point of the ellipsoid's surface is inside the rectangle, and some are
+            // within a few pixels of each side (the rectangle is tight).
+            let mut reach = ImageRect::NOTHING;
+            for _ in 0..400 {
+                let u = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
+                let p = centre + axes * u;
+                let v = p - eye;
+                let depth = v.dot(cam.forward);
+                let x = (v.dot(cam.right) / depth / cam.half_width + 1.0) * 0.5 * w as f64;
+                let half_h = cam.half_width * h as f64 / w as f64;
+                let y = (1.0 - v.dot(cam.true_up) / depth / half_h) * 0.5 * h as f64;
+                assert!(rect.meets((x, x), (y, y)), "({x}, {y}) not in {rect:?}");
+                reach = reach.union(ImageRect {
+                    x: (x, x),
+                    y: (y, y),
+                });
+            }
+            if rect.x.1 - reach.x.1 < 3.0 && reach.x.0 - rect.x.0 < 3.0 {
+                tight += 1;
+            }
+            for _ in 0..200 {
+                let x = next() * 1.4 * w as f64 - 0.2 * w as f64;
+                let y = next() * 1.4 * h as f64 - 0.2 * h as f64;
+                if rect.meets((x, x), (y, y)) {
+                    continue;
+                }
+                outside += 1;
+                let ray = cam.ray(x, y, w, h);
+                assert!(
+                    !meets(&ray),
+                    "({x}, {y}) is outside {rect:?} but its ray meets {e:?}"
+                );
+            }
+        }
+        assert!(
+            outside > 10_000,
+            "the rectangles leave out most points: {outside}"
+        );
+        assert!(
+            tight > 100,
+            "the rectangles are close to the ellipsoids: {tight}"
+        );
+        // An ellipsoid around the eye has no rectangle.
+        let cam = Camera::new(DVec3::ZERO, DVec3::X, DVec3::Z, 40.0).unwrap();
+        let around = SolidEllipsoid::axis_aligned(DVec3::new(0.5, 0.0, 0.0), DVec3::ONE);
+        assert_eq!(cam.ellipsoid_image_rect(&around, w, h), None);
     }
 
     #[test]

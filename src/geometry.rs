@@ -42,6 +42,26 @@ pub struct Aabb {
     pub max: DVec3,
 }
 
+/// A solid ellipsoid: the points `centre + axes·u` with `|u| ≤ 1` (a bound some shapes
+/// give besides their box, see [`crate::shapes::Shape::enclosing_ellipsoids`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolidEllipsoid {
+    /// The centre.
+    pub centre: DVec3,
+    /// The linear map from the unit ball: its columns are three conjugate semi-axes.
+    pub axes: DMat3,
+}
+
+impl SolidEllipsoid {
+    /// The ellipsoid `Σ ((p − centre)ᵢ / semi_axesᵢ)² ≤ 1`, its axes along x, y and z.
+    pub fn axis_aligned(centre: DVec3, semi_axes: DVec3) -> Self {
+        Self {
+            centre,
+            axes: DMat3::from_diagonal(semi_axes),
+        }
+    }
+}
+
 impl Aabb {
     /// The box that contains nothing; the identity for [`Aabb::union`].
     pub const EMPTY: Aabb = Aabb {
@@ -252,6 +272,14 @@ impl Frame {
     #[inline]
     pub fn point_to_world(&self, p: DVec3) -> DVec3 {
         self.m * p + self.position
+    }
+
+    /// An object-space solid ellipsoid in world space (the same points, mapped).
+    pub fn ellipsoid_to_world(&self, e: &SolidEllipsoid) -> SolidEllipsoid {
+        SolidEllipsoid {
+            centre: self.point_to_world(e.centre),
+            axes: self.m * e.axes,
+        }
     }
 
     /// An object-space normal (any length) as a unit world-space normal, same side.

@@ -61,6 +61,14 @@ pub trait Shader: Sync {
         }
         out
     }
+
+    /// The colour of every primary ray that meets no object's bounding box, when the shader
+    /// gives them all one colour, counting the ray once, reporting it as a miss
+    /// ([`Sample::report_primary_hit`]) and drawing no random number: then the scheduler may
+    /// answer such rays without tracing them. `None` (the default): every ray is traced.
+    fn miss_colour(&self) -> Option<DVec3> {
+        None
+    }
 }
 
 /// What a shader is built from for one render.

@@ -42,6 +42,10 @@ pub fn legend() -> super::Legend {
 }
 
 impl Shader for Normals<'_> {
+    fn miss_colour(&self) -> Option<DVec3> {
+        Some(DVec3::ZERO)
+    }
+
     fn radiance(&self, ray: &Ray, sample: &mut Sample) -> DVec3 {
         sample.count_ray();
         let hit = self.scene.intersect(ray, 0.0, f64::INFINITY);

@@ -8,7 +8,7 @@
 
 use super::sampling::{mix, pixel_key, point_in_grid, strata, Sample};
 use super::{Shader, TILE_SIZE};
-use crate::camera::Camera;
+use crate::camera::{Camera, ImageRect};
 use crate::film::{self, Image, Region, Vec3};
 use crate::geometry::{DVec3, Ray};
 use crate::scene::Scene;
@@ -105,6 +105,9 @@ pub(crate) fn run<S: Shader>(
         spp: job.spp.max(1),
         pixel_grid: strata(job.spp),
         seed: mix(job.seed),
+        seen: shader
+            .miss_colour()
+            .and_then(|colour| Some((seen_rect(job)?, colour))),
     };
     let mut image = if job.alpha {
         Image::transparent(width, height)
@@ -203,6 +206,30 @@ struct PixelSampler<'a> {
     pixel_grid: (u32, u32),
     /// `mix(seed)`.
     seed: u64,
+    /// Where a camera ray may meet an object's box, and the shader's colour for the rays
+    /// that meet none ([`Shader::miss_colour`]); `None`: every ray is traced.
+    seen: Option<(ImageRect, DVec3)>,
+}
+
+/// The rectangle of the full image outside which no camera ray of `job` meets an object's
+/// bounding box (nor, where the object gives them, one of its enclosing ellipsoids), if the
+/// camera sees all of the boxes from in front.
+fn seen_rect(job: &Job) -> Option<ImageRect> {
+    let (camera, w, h) = (job.camera, job.full_width, job.full_height);
+    job.scene
+        .objects
+        .iter()
+        .try_fold(ImageRect::NOTHING, |rect, object| {
+            let boxed = camera.image_rect(&object.bounds, w, h)?;
+            let ellipsoids = object.shape.enclosing_ellipsoids();
+            let tighter = ellipsoids
+                .iter()
+                .try_fold(ImageRect::NOTHING, |r, e| {
+                    Some(r.union(camera.ellipsoid_image_rect(e, w, h)?))
+                })
+                .filter(|_| !ellipsoids.is_empty());
+            Some(rect.union(tighter.map_or(boxed, |t| boxed.intersection(t))))
+        })
 }
 
 impl PixelSampler<'_> {
@@ -236,7 +263,17 @@ impl PixelSampler<'_> {
             while x < x1 {
                 // Whole groups of LANES neighbouring pixels go to the shader together.
                 let lanes = (x1 - x).min(LANES as u32);
-                let (sums, hits, group_rays) = if lanes == LANES as u32 {
+                let (sums, hits, group_rays) = if let Some(colour) =
+                    self.unseen(region.x + x, lanes, image_y)
+                {
+                    // No camera ray of these pixels meets a box: each sample is a miss.
+                    let mut sum = DVec3::ZERO;
+                    for _ in 0..self.spp {
+                        sum += colour;
+                    }
+                    let sum = if self.alpha { DVec3::ZERO } else { sum };
+                    ([sum; LANES], [0; LANES], u64::from(lanes * self.spp))
+                } else if lanes == LANES as u32 {
                     self.pixels_together(shader, region.x + x, image_y)
                 } else {
                     let mut sums = [DVec3::ZERO; LANES];
@@ -261,6 +298,16 @@ impl PixelSampler<'_> {
             }
         }
         (rays, true)
+    }
+
+    /// The shader's [`Shader::miss_colour`] when no camera ray of the `count` pixels from
+    /// `(image_x, image_y)` rightwards can meet an object's box, else `None`.
+    #[inline]
+    fn unseen(&self, image_x: u32, count: u32, image_y: u32) -> Option<DVec3> {
+        let (rect, colour) = self.seen?;
+        let xs = (image_x as f64, (image_x + count) as f64);
+        let ys = (image_y as f64, (image_y + 1) as f64);
+        (!rect.meets(xs, ys)).then_some(colour)
     }
 
     /// The sum of the colours of pixel `(image_x, image_y)`'s samples (of those that hit an
@@ -358,6 +405,16 @@ mod tests {
     }
 
     fn render<S: Shader>(scene: &Scene, shader: &S, spp: u32, alpha: bool) -> Image {
+        render_counting(scene, shader, spp, alpha).0
+    }
+
+    /// [`render`] with the rays traced.
+    fn render_counting<S: Shader>(
+        scene: &Scene,
+        shader: &S,
+        spp: u32,
+        alpha: bool,
+    ) -> (Image, u64) {
         let pool = RenderPool::new(2).unwrap();
         let job = Job {
             scene,
@@ -376,7 +433,111 @@ mod tests {
                 assert_eq!(band_alpha.map(<[f32]>::len), alpha.then_some(pixels.len()));
             },
         };
-        run(&pool, shader, &job, &hooks).unwrap().0
+        run(&pool, shader, &job, &hooks).unwrap()
+    }
+
+    /// `S` with every ray traced: no [`Shader::miss_colour`].
+    struct Traced<'a, S>(&'a S);
+
+    impl<S: Shader> Shader for Traced<'_, S> {
+        fn radiance(&self, ray: &Ray, sample: &mut Sample) -> DVec3 {
+            self.0.radiance(ray, sample)
+        }
+
+        fn radiance_lanes(
+            &self,
+            rays: &[Ray; LANES],
+            samples: &mut [Sample; LANES],
+        ) -> [DVec3; LANES] {
+            self.0.radiance_lanes(rays, samples)
+        }
+    }
+
+    #[test]
+    fn pixels_no_camera_ray_can_see_are_the_traced_misses() {
+        // A sphere off to the left of a wide image, with a light and shadows: most pixels
+        // are outside the rectangle its box projects to, and are answered untraced.
+        let mut scene = unit_sphere_scene();
+        (scene.width, scene.height) = (37, 21);
+        scene.camera = Camera::new(
+            DVec3::new(2.5, 0.0, 5.0),
+            DVec3::new(2.5, 0.0, 0.0),
+            DVec3::Y,
+            70.0,
+        )
+        .unwrap();
+        scene.background = DVec3::new(0.2, 0.4, 0.6);
+        scene.ambient = DVec3::splat(0.1);
+        scene.lights.push(crate::lights::Light {
+            position: DVec3::new(3.0, 4.0, 5.0),
+            colour: DVec3::ONE,
+            radius: 0.5,
+            samples: 4,
+        });
+        let job = Job {
+            scene: &scene,
+            camera: &scene.camera,
+            full_width: scene.width,
+            full_height: scene.height,
+            region: Region::full(scene.width, scene.height),
+            spp: 1,
+            seed: 0,
+            alpha: false,
+        };
+        let rect = seen_rect(&job).expect("the box is in front of the eye");
+        assert!(
+            rect.x.1 < 25.0 && rect.y.0 > 0.0 && rect.y.1 < 21.0,
+            "{rect:?}"
+        );
+        for spp in [1, 3] {
+            let setup = ShadeSetup {
+                scene: &scene,
+                camera: &scene.camera,
+                spp,
+                max_depth: 2,
+                max_shadow_rays: None,
+            };
+            let whitted = Whitted::new(&setup);
+            let normals = crate::integrator::normals::Normals::new(&setup);
+            let depth = crate::integrator::depth::Depth::new(&setup);
+            for alpha in [false, true] {
+                let pairs = [
+                    (
+                        render_counting(&scene, &whitted, spp, alpha),
+                        render_counting(&scene, &Traced(&whitted), spp, alpha),
+                    ),
+                    (
+                        render_counting(&scene, &normals, spp, alpha),
+                        render_counting(&scene, &Traced(&normals), spp, alpha),
+                    ),
+                    (
+                        render_counting(&scene, &depth, spp, alpha),
+                        render_counting(&scene, &Traced(&depth), spp, alpha),
+                    ),
+                ];
+                for ((culled, culled_rays), (traced, traced_rays)) in pairs {
+                    assert_eq!(culled.pixels, traced.pixels, "spp {spp} alpha {alpha}");
+                    assert_eq!(culled.alpha, traced.alpha);
+                    assert_eq!(culled_rays, traced_rays);
+                }
+            }
+        }
+        // No object: every pixel is the background, untraced, one ray a sample.
+        scene.objects.clear();
+        let setup = ShadeSetup {
+            scene: &scene,
+            camera: &scene.camera,
+            spp: 2,
+            max_depth: 2,
+            max_shadow_rays: None,
+        };
+        let whitted = Whitted::new(&setup);
+        let (image, rays) = render_counting(&scene, &whitted, 2, false);
+        assert_eq!(rays, 2 * 37 * 21);
+        assert_eq!(
+            image.pixels,
+            render(&scene, &Traced(&whitted), 2, false).pixels
+        );
     }
 
     #[test]

@@ -167,6 +167,11 @@ pub struct Whitted<'a> {
 }
 
 impl Shader for Whitted<'_> {
+    fn miss_colour(&self) -> Option<DVec3> {
+        // `trace` counts the ray, and `shade` reports the miss and returns the background.
+        Some(self.scene.background)
+    }
+
     fn radiance(&self, ray: &Ray, sample: &mut Sample) -> DVec3 {
         self.trace(ray, 0.0, 0, sample)
     }

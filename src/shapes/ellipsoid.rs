@@ -3,7 +3,7 @@
 use super::placed::{ObjectShape, Placed, Placement, PlacementNames};
 use super::sphere::{first_root_in, sphere_roots, BOUNDS_PAD, SURFACE_SNAP};
 use super::ShapeError;
-use crate::geometry::{Aabb, DVec3, Ray};
+use crate::geometry::{Aabb, DVec3, Ray, SolidEllipsoid};
 
 /// The surface `centre + M·s`, `|s| = 1`, `M = [u v w]`: the unit sphere mapped by the frame,
 /// so `u`, `v`, `w` are semi-axis vectors (world units) that need not be orthogonal. Normals
@@ -58,6 +58,10 @@ impl ObjectShape for UnitSphere {
         let ext = DVec3::new(m.row(0).length(), m.row(1).length(), m.row(2).length());
         let c = at.frame().position;
         Aabb::new(c - ext, c + ext).padded(BOUNDS_PAD)
+    }
+
+    fn enclosing_ellipsoids(&self) -> Vec<SolidEllipsoid> {
+        vec![SolidEllipsoid::axis_aligned(DVec3::ZERO, DVec3::ONE)]
     }
 }
 

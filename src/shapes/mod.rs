@@ -2,7 +2,7 @@
 //! primitive is one new file here plus one keyword in `scene::parser`.
 
 pub use crate::geometry::LANES;
-use crate::geometry::{Aabb, DVec3, Ray};
+use crate::geometry::{Aabb, DVec3, Ray, SolidEllipsoid};
 
 mod boxes;
 mod ellipsoid;
@@ -84,6 +84,12 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
     fn normal(&self, p: DVec3) -> DVec3;
     /// World-space box containing the surface.
     fn bounds(&self) -> Aabb;
+    /// World-space solid ellipsoids whose union holds every point at which `intersect` may
+    /// report the surface (tighter than [`Shape::bounds`] somewhere, to be of use; the
+    /// renderer leaves out the pixels that see none of them). Empty (the default): none known.
+    fn enclosing_ellipsoids(&self) -> Vec<SolidEllipsoid> {
+        Vec::new()
+    }
     /// For a surface found by a polynomial root finder: what the root finder did for this
     /// ray in `(t_min, t_max)`, from the same queries [`Shape::intersect`] makes (same hit);
     /// `None` for other shapes, and for rays that never reach the root finder.

@@ -6,7 +6,7 @@
 //! ([`ObjectShape`]) together with the placement, which also maps normals and boxes back.
 
 use super::{Shape, ShapeError, SolverReport, LANES};
-use crate::geometry::{Aabb, DVec3, Frame, FrameError, Ray};
+use crate::geometry::{Aabb, DVec3, Frame, FrameError, Ray, SolidEllipsoid};
 
 /// A validated object frame (`p_world = M·p_object + position`) and `‖M⁻¹‖∞`, which bounds how
 /// much the rounding of a world point grows on its way into object space.
@@ -159,6 +159,10 @@ pub trait ObjectShape: Send + Sync + std::fmt::Debug {
     fn normal(&self, at: &Placement, q: DVec3) -> DVec3;
     /// World-space box containing the surface.
     fn bounds(&self, at: &Placement) -> Aabb;
+    /// See [`Shape::enclosing_ellipsoids`], in object space.
+    fn enclosing_ellipsoids(&self) -> Vec<SolidEllipsoid> {
+        Vec::new()
+    }
     /// See [`Shape::solver_report`]; the rays as for `intersect`.
     fn solver_report(
         &self,
@@ -252,6 +256,15 @@ impl<S: ObjectShape> Shape for Placed<S> {
 
     fn bounds(&self) -> Aabb {
         self.shape.bounds(&self.at)
+    }
+
+    fn enclosing_ellipsoids(&self) -> Vec<SolidEllipsoid> {
+        let frame = self.at.frame();
+        self.shape
+            .enclosing_ellipsoids()
+            .iter()
+            .map(|e| frame.ellipsoid_to_world(e))
+            .collect()
     }
 
     fn solver_report(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SolverReport> {

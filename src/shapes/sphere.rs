@@ -2,7 +2,7 @@
 //! and the ellipsoid share.
 
 use super::{all_finite, Shape, ShapeError};
-use crate::geometry::{Aabb, DVec3, Ray};
+use crate::geometry::{Aabb, DVec3, Ray, SolidEllipsoid};
 
 /// How close, relative to the magnitude of the coordinates involved, a ray origin must be to a
 /// surface to count as lying on it (its root is then reported as exactly `t = 0`). Covers the
@@ -118,6 +118,13 @@ impl Shape for Sphere {
             self.centre + DVec3::splat(self.radius),
         )
         .padded(BOUNDS_PAD)
+    }
+
+    fn enclosing_ellipsoids(&self) -> Vec<SolidEllipsoid> {
+        vec![SolidEllipsoid::axis_aligned(
+            self.centre,
+            DVec3::splat(self.radius + BOUNDS_PAD),
+        )]
     }
 }
 

@@ -43,7 +43,7 @@ pub use surface::{
 use super::placed::{ObjectShape, Placed, Placement};
 use super::report::Recorder;
 use super::{ShapeError, SolverReport, LANES};
-use crate::geometry::{Aabb, DVec3, Frame, Ray};
+use crate::geometry::{Aabb, DVec3, Frame, Ray, SolidEllipsoid};
 use crate::roots::Solver;
 
 /// Object-space length (the heart is about 2 units across in object space) below which a
@@ -467,6 +467,20 @@ impl ObjectShape for HeartShape {
     fn bounds(&self, at: &Placement) -> Aabb {
         at.bounds_to_world(&BOUNDS)
     }
+
+    fn enclosing_ellipsoids(&self) -> Vec<SolidEllipsoid> {
+        // The lower and the upper half's ellipsoids, `2X² + Y² + (Z − c)² ≤ R²`: every chord
+        // the solver searches meets one of them.
+        [LOWER_ELLIPSOID, upper_ellipsoid()]
+            .map(|(c, r2)| {
+                let r = r2.sqrt();
+                SolidEllipsoid::axis_aligned(
+                    DVec3::new(0.0, 0.0, c),
+                    DVec3::new(r * std::f64::consts::FRAC_1_SQRT_2, r, r),
+                )
+            })
+            .to_vec()
+    }
 }
 
 #[cfg(test)]
@@ -522,5 +536,46 @@ mod tests {
             "a surface point {worst} outside the ellipsoid"
         );
         assert!(worst > -0.05, "the ellipsoid is loose: {worst}");
+    }
+
+    #[test]
+    fn every_hit_is_inside_an_enclosing_ellipsoid() {
+        use crate::shapes::Shape;
+        // Placed off the origin and tilted, so that the placement of the ellipsoids counts.
+        let heart = Heart::new(
+            DVec3::new(0.5, -1.0, 2.0),
+            DVec3::new(1.0, 0.2, 0.0),
+            DVec3::new(-0.1, 0.8, 0.1),
+            DVec3::new(0.0, 0.0, 1.3),
+        )
+        .unwrap();
+        let ellipsoids = heart.enclosing_ellipsoids();
+        assert_eq!(ellipsoids.len(), 2);
+        let inside = |p: DVec3| {
+            ellipsoids
+                .iter()
+                .map(|e| (e.axes.inverse() * (p - e.centre)).length())
+                .fold(f64::INFINITY, f64::min)
+        };
+        let bounds = heart.bounds();
+        let (mut hits, mut deepest) = (0, 0.0f64);
+        for corpus_ray in heart_corpus() {
+            // The corpus rays are object-space: carry them to the world.
+            let frame = heart.frame();
+            let ray = Ray::new(
+                frame.point_to_world(corpus_ray.origin),
+                frame.m * corpus_ray.dir,
+            );
+            let Some(t) = heart.intersect(&ray, 0.0, f64::INFINITY) else {
+                continue;
+            };
+            hits += 1;
+            let q = inside(ray.at(t));
+            assert!(q <= 1.0, "a hit at {} of the nearest ellipsoid's radius", q);
+            deepest = deepest.max(q);
+            assert!(bounds.contains(ray.at(t)));
+        }
+        assert!(hits > 1000, "{hits}");
+        assert!(deepest > 0.97, "the ellipsoids are loose: {deepest}");
     }
 }

@@ -32,7 +32,7 @@ use super::heart::HeartShape;
 use super::placed::{ObjectShape, Placed, Placement};
 use super::report::Recorder;
 use super::{SolverReport, LANES};
-use crate::geometry::{Aabb, DVec3, Frame, Ray};
+use crate::geometry::{Aabb, DVec3, Frame, Ray, SolidEllipsoid};
 use crate::roots::Solver;
 use dd::Dd;
 use poly::{Compiled, Gradient, Poly, Powers, Uni};
@@ -1006,6 +1006,17 @@ impl ObjectShape for ImplicitShape {
                 }
                 None => Aabb::new(sphere.min, sphere.min),
             },
+        }
+    }
+
+    fn enclosing_ellipsoids(&self) -> Vec<SolidEllipsoid> {
+        match &self.kind {
+            // The whole heart without a clip, else the clip sphere (see `heart_span`).
+            Kind::Heart(h) if self.bound >= presets::HEART_RADIUS => h.enclosing_ellipsoids(),
+            _ => vec![SolidEllipsoid::axis_aligned(
+                DVec3::ZERO,
+                DVec3::splat(self.bound * (1.0 + 1e-9)),
+            )],
         }
     }
 }
