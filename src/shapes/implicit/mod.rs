@@ -35,7 +35,7 @@ use super::{SolverReport, LANES};
 use crate::geometry::{Aabb, DVec3, Frame, Ray, SolidEllipsoid};
 use crate::roots::Solver;
 use dd::Dd;
-use poly::{Compiled, Poly, Powers, Uni};
+use poly::{Compiled, Gradient, Poly, Powers, Uni};
 pub use presets::{Preset, HEART_EQUATION};
 
 #[doc(hidden)]
@@ -105,6 +105,8 @@ fn is_root(c: &[f64], s: f64) -> bool {
 struct Surface {
     f: Compiled,
     grad: [Compiled; 3],
+    /// The same three partials, evaluated together (for the normal).
+    gradient: Gradient,
     /// Object-space box holding the surface's part inside the clip sphere
     /// ([`extent::zero_set_box`]); `None` when there is none.
     object_box: Option<Aabb>,
@@ -128,13 +130,13 @@ impl Surface {
     /// fallback where the signs are not split by a plane.
     fn normal_direction(&self, q: DVec3, h: f64) -> DVec3 {
         let p = q.to_array();
-        // One table of powers for the three partial derivatives (the same values each
-        // would compute alone).
-        let powers = Powers::new(p, self.grad.iter().map(|g| g.degree).max().unwrap_or(0));
-        let parts = self.grad.each_ref().map(|g| g.eval_with_bound_on(&powers));
-        let g = DVec3::new(parts[0].0, parts[1].0, parts[2].0);
-        let scale = parts.iter().fold(0.0f64, |m, v| m.max(v.1));
-        let terms = self.grad.iter().map(|g| g.terms.len()).max().unwrap_or(1) as f64;
+        // One table of powers and one pass for the three partial derivatives (the same
+        // values each would compute alone).
+        let powers = Powers::new(p, self.gradient.degree);
+        let (values, magnitudes) = self.gradient.eval_with_bound_on(&powers);
+        let g = DVec3::from_array(values);
+        let scale = magnitudes.iter().fold(0.0f64, |m, &v| m.max(v));
+        let terms = self.gradient.most_terms as f64;
         let noise = ROUNDING * terms * scale;
         if g.abs().max_element() > GRADIENT_MARGIN * noise {
             return g;
@@ -374,6 +376,7 @@ impl Implicit {
                 bound,
                 kind: Kind::Generic(Box::new(Surface {
                     f,
+                    gradient: Gradient::new(&grad),
                     grad,
                     object_box,
                 })),
@@ -551,7 +554,13 @@ impl ImplicitShape {
     fn span(&self, s: &Surface, ray: &Ray, t_min: f64, t_max: f64) -> Option<Span> {
         let (t_mid, t_half, mid, e) = self.chord(ray)?;
         let guard = if t_min >= 0.0 {
-            t_min.max(SELF_HIT_GUARD * t_half)
+            // `t_min.max(…)` (neither is NaN here) in one comparison.
+            let g = SELF_HIT_GUARD * t_half;
+            if g > t_min {
+                g
+            } else {
+                t_min
+            }
         } else {
             t_min
         };
@@ -723,7 +732,15 @@ impl Span {
             deg,
             inv,
             s_lo: (self.lo_t - self.t_mid) / self.t_half,
-            s_hi: ((self.hi_t - self.t_mid) / self.t_half).min(1.0),
+            // `.min(1.0)` (1 for a NaN) in one comparison.
+            s_hi: {
+                let s_hi = (self.hi_t - self.t_mid) / self.t_half;
+                if s_hi < 1.0 {
+                    s_hi
+                } else {
+                    1.0
+                }
+            },
         })
     }
 }
@@ -745,7 +762,11 @@ struct Query {
 /// degree left and the factor applied, or `None` for a zero or non-finite polynomial.
 #[inline]
 fn normalise(c: &mut Uni, n: usize) -> Option<(usize, f64)> {
-    let big = c[..=n].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    // `f64::max`'s answer (a NaN coefficient is passed over; `m` is never NaN or −0) in one
+    // comparison.
+    let big = c[..=n]
+        .iter()
+        .fold(0.0f64, |m, v| if v.abs() > m { v.abs() } else { m });
     if !(big > 0.0 && big.is_finite()) {
         return None;
     }

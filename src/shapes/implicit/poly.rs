@@ -344,6 +344,64 @@ impl Powers {
     }
 }
 
+/// The three partial derivatives of a polynomial (each a [`Compiled`]) evaluated in one
+/// pass over a shared table of powers: row `r` holds term `r` of each partial, in that
+/// partial's own order, so that each sum takes its terms in the order
+/// [`Compiled::eval_with_bound_on`] takes them and gets the same bits. A partial with fewer
+/// terms is padded with `−0·1·1·1`, which adds nothing to either sum (`v + (−0) = v`, and the
+/// magnitude sum is never `−0`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gradient {
+    /// Per row, the coefficient of each partial's term.
+    coefs: Vec<[f64; 3]>,
+    /// Per row, the exponents of each partial's term.
+    exps: Vec<[Exps; 3]>,
+    /// Highest total degree of the three partials.
+    pub degree: usize,
+    /// Most terms of any of the three partials.
+    pub most_terms: usize,
+}
+
+impl Gradient {
+    /// The gradient made of the three partial derivatives `parts` (x, y, z).
+    pub fn new(parts: &[Compiled; 3]) -> Gradient {
+        let most_terms = parts.iter().map(|g| g.terms.len()).max().unwrap_or(0);
+        let (mut coefs, mut exps) = (Vec::new(), Vec::new());
+        for r in 0..most_terms {
+            let term = |k: usize| parts[k].terms.get(r).map_or((-0.0, [0; 3]), |t| (t.c, t.e));
+            let row = [term(0), term(1), term(2)];
+            coefs.push(row.map(|t| t.0));
+            exps.push(row.map(|t| t.1));
+        }
+        Gradient {
+            coefs,
+            exps,
+            degree: parts.iter().map(|g| g.degree).max().unwrap_or(0),
+            most_terms,
+        }
+    }
+
+    /// For each partial, [`Compiled::eval_with_bound_on`] on `pw` (a table of powers up to
+    /// at least [`Gradient::degree`]): the values and the sums of the terms' magnitudes, the
+    /// same bits.
+    #[inline]
+    pub fn eval_with_bound_on(&self, pw: &Powers) -> ([f64; 3], [f64; 3]) {
+        let pw = &pw.0;
+        let (mut v, mut m) = ([0.0f64; 3], [0.0f64; 3]);
+        for (c, e) in self.coefs.iter().zip(&self.exps) {
+            for k in 0..3 {
+                let x = c[k]
+                    * pw[0][e[k][0] as usize]
+                    * pw[1][e[k][1] as usize]
+                    * pw[2][e[k][2] as usize];
+                v[k] += x;
+                m[k] += x.abs();
+            }
+        }
+        (v, m)
+    }
+}
+
 /// `row[k] ← xᵏ` for `k ≤ D`, each the previous one times `x`.
 #[inline(always)]
 fn powers_into<const D: usize>(row: &mut [f64; MAX_DEGREE + 1], x: f64) {
@@ -561,7 +619,8 @@ impl Compiled {
     }
 
     /// [`Compiled::compose`] of [`LANES`] rays at once (ray `i` is `o[i] + s·e[i]`) into `out`:
-    /// `out[i]` becomes exactly `self.compose(o[i], e[i])`, bit for bit (all entries written).
+    /// `out[i][..=degree]` becomes exactly `self.compose(o[i], e[i])[..=degree]`, bit for bit
+    /// (the entries above the degree, zero in `compose`, are left as they are).
     /// Compiled for AVX2 as well, chosen at run time.
     pub fn compose_lanes(
         &self,
@@ -600,7 +659,8 @@ impl Compiled {
         let e = std::array::from_fn(|v| Lanes(std::array::from_fn(|i| e[i][v])));
         let mut lanes = [Lanes::ZERO; MAX_DEGREE + 1];
         self.compose_in(o, e, &mut lanes);
-        for (k, c) in lanes.iter().enumerate() {
+        // Only the coefficients up to the degree: the rest are zero, and left as they are.
+        for (k, c) in lanes[..=self.degree].iter().enumerate() {
             for (ray, v) in out.iter_mut().zip(c.0) {
                 ray[k] = v;
             }
@@ -966,7 +1026,7 @@ mod tests {
     }
 
     /// Surfaces of every degree from 1 to 16 with gaps in every exponent, and the presets.
-    fn composition_surfaces() -> Vec<Compiled> {
+    fn composition_surfaces_polys() -> Vec<Poly> {
         let mut eqs: Vec<String> = [
             "x - 2*y + 0.5*z + 3",
             "x^2 + y^2 + z^2 - 1",
@@ -991,8 +1051,14 @@ mod tests {
         ] {
             eqs.push(crate::shapes::implicit::preset_equation(name, &params).unwrap());
         }
-        eqs.iter()
-            .map(|eq| Compiled::new(&expand(eq).unwrap()))
+        eqs.iter().map(|eq| expand(eq).unwrap()).collect()
+    }
+
+    /// [`composition_surfaces_polys`] compiled.
+    fn composition_surfaces() -> Vec<Compiled> {
+        composition_surfaces_polys()
+            .iter()
+            .map(Compiled::new)
             .collect()
     }
 
@@ -1062,12 +1128,17 @@ mod tests {
                 let bits = |v: [Uni; LANES]| v.map(|u| u.map(f64::to_bits));
                 // The baseline code path, whatever the processor, and the one chosen at run
                 // time, into a buffer that holds something else before.
+                // Up to the degree; the entries above it are left as they were.
+                let mut want = alone;
+                for w in &mut want {
+                    w[c.degree + 1..].fill(f64::NAN);
+                }
                 let mut out = [[f64::NAN; MAX_DEGREE + 1]; LANES];
                 c.compose_lanes_in(o, e, &mut out);
-                assert_eq!(bits(out), bits(alone));
+                assert_eq!(bits(out), bits(want));
                 let mut out = [[f64::NAN; MAX_DEGREE + 1]; LANES];
                 c.compose_lanes(o, e, &mut out);
-                assert_eq!(bits(out), bits(alone));
+                assert_eq!(bits(out), bits(want));
             }
         }
     }
@@ -1092,6 +1163,38 @@ mod tests {
                 let p = [0; 3].map(|_| coordinate());
                 let (bound, sum) = (c.magnitude_bound(p), c.eval_with_bound(p).1);
                 assert!(bound >= sum, "{p:?}: bound {bound} below {sum}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_gradient_in_one_pass_gives_each_partial_exactly() {
+        // Partials with different numbers of terms (padding in every column), a partial that
+        // is zero, and points with zero and negative coordinates.
+        for eq in [
+            "(x^2 + y^2 + z^2)^4 - 3*x^5*y*z^2 + x^3 - y*z + 0.25",
+            "x^3 + y - 1",
+            "x*y*z - 0.3",
+        ]
+        .map(|eq| expand(eq).unwrap())
+        .iter()
+        .chain(composition_surfaces_polys().iter())
+        {
+            let parts: [Compiled; 3] = std::array::from_fn(|v| Compiled::new(&eq.derivative(v)));
+            let g = Gradient::new(&parts);
+            for p in [
+                [0.3, -0.7, 1.1],
+                [1e-3, 2.5, -0.25],
+                [-1.5, 0.0, 0.9],
+                [-0.0, -2.0, 0.0],
+                [0.0, 0.0, 0.0],
+            ] {
+                let powers = Powers::new(p, g.degree);
+                let (v, m) = g.eval_with_bound_on(&powers);
+                for k in 0..3 {
+                    let (a, b) = parts[k].eval_with_bound_on(&powers);
+                    assert_eq!((v[k].to_bits(), m[k].to_bits()), (a.to_bits(), b.to_bits()));
+                }
             }
         }
     }
