@@ -33,6 +33,13 @@
 //! corpus it answers for about 98% of the rays; the rest (roots at or near multiple roots, or
 //! at the ends) go to the full method.
 //!
+//! [`Solver::first_root_lanes`] asks four queries of the same length at once (the heart's
+//! lanes of four rays): the usual path's fixed part (the fixed-size preparation, the expansion
+//! in the Bernstein basis and the whole interval's sign test) runs lane by lane in vector
+//! registers (AVX2 where the processor has it, chosen at run time), and each lane that test
+//! does not settle goes on alone where the scalar query would, so every lane's answer is the
+//! scalar one bit for bit (`lanes` module).
+//!
 //! No input makes these functions panic or loop without end (every loop is bounded); none
 //! allocates except [`sturm_roots`], for its result.
 
