@@ -286,9 +286,27 @@ pub(crate) fn search<const D: usize, O: Observer>(p: &Fixed<D>, obs: &mut O) -> 
     if !unit.is_finite() || root[0].abs() <= 64.0 * unit || root[n].abs() <= 64.0 * unit {
         return Fast::Undecided;
     }
+    search_from(p, &root, size, unit, variations(&root, 64.0 * unit), obs)
+}
+
+/// [`search`] after its first test: `root` holds the Bernstein coefficients on the whole
+/// interval, `size` and `unit` are the search's bounds, `whole` the whole interval's
+/// [`variations`] (both end coefficients already clear of `64·unit`). The lanes' query
+/// (`super::lanes`) computes these four at once and goes on here.
+#[inline(always)]
+pub(crate) fn search_from<const D: usize, O: Observer>(
+    p: &Fixed<D>,
+    root: &[f64; D],
+    size: f64,
+    unit: f64,
+    whole: Option<u32>,
+    obs: &mut O,
+) -> Fast {
+    let n = D - 1;
+    let root = *root;
     // The whole interval first: most queries end there. The loop's first piece is this one
     // again, with its variations already counted.
-    let mut known = Some(variations(&root, 64.0 * unit));
+    let mut known = Some(whole);
     match known {
         Some(Some(0)) => return Fast::NoRoot,
         Some(Some(1)) => return root_of_piece(p, &root, (0.0, 1.0), size, obs),

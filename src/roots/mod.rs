@@ -33,11 +33,19 @@
 //! corpus it answers for about 98% of the rays; the rest (roots at or near multiple roots, or
 //! at the ends) go to the full method.
 //!
+//! [`Solver::first_root_lanes`] asks four queries of the same length at once (the heart's
+//! lanes of four rays): the usual path's fixed part (the fixed-size preparation, the expansion
+//! in the Bernstein basis and the whole interval's sign test) runs lane by lane in vector
+//! registers (AVX2 where the processor has it, chosen at run time), and each lane that test
+//! does not settle goes on alone where the scalar query would, so every lane's answer is the
+//! scalar one bit for bit (`lanes` module).
+//!
 //! No input makes these functions panic or loop without end (every loop is bounded); none
 //! allocates except [`sturm_roots`], for its result.
 
 mod bernstein;
 mod cluster;
+mod lanes;
 mod prep;
 mod refine;
 mod sturm;
@@ -174,6 +182,34 @@ impl Solver {
             Solver::Sturm => first_root(coeffs, lo, hi),
             Solver::Yuksel => first_root_yuksel(coeffs, lo, hi),
         }
+    }
+
+    /// [`Solver::first_root`] of [`LANES`](crate::geometry::LANES) polynomials of the same
+    /// length `D` at once, each on its own interval `(lo[i], hi[i]]`: lane `i` of the answer
+    /// is always exactly `self.first_root(&coeffs[i], lo[i], hi[i])` (bit for bit), and
+    /// `None` without any work where `active[i]` is false. Faster per query than one at a
+    /// time for the usual polynomial (see the `lanes` module). No heap allocation.
+    #[inline]
+    pub fn first_root_lanes<const D: usize>(
+        self,
+        coeffs: &[[f64; D]; crate::geometry::LANES],
+        lo: [f64; crate::geometry::LANES],
+        hi: [f64; crate::geometry::LANES],
+        active: [bool; crate::geometry::LANES],
+    ) -> [Option<f64>; crate::geometry::LANES] {
+        lanes::first_roots(self, coeffs, lo, hi, active, lanes::Code::Detected)
+    }
+
+    /// [`Solver::first_root_lanes`] (the same answers) by the code that processors without
+    /// AVX2 run, whatever this one has: for tests and benchmarks.
+    pub fn first_root_lanes_baseline<const D: usize>(
+        self,
+        coeffs: &[[f64; D]; crate::geometry::LANES],
+        lo: [f64; crate::geometry::LANES],
+        hi: [f64; crate::geometry::LANES],
+        active: [bool; crate::geometry::LANES],
+    ) -> [Option<f64>; crate::geometry::LANES] {
+        lanes::first_roots(self, coeffs, lo, hi, active, lanes::Code::Baseline)
     }
 
     /// [`Solver::first_root`] with the same answer, also adding what the query did to

@@ -26,6 +26,7 @@ mod render_golden;
 mod render_shading;
 mod roots_cli;
 mod roots_heart;
+mod roots_lanes;
 mod roots_reference;
 mod roots_sturm;
 mod roots_trace;

@@ -11,7 +11,8 @@
 //!    sextic's coefficients are built from a point near the heart and are well scaled whatever
 //!    the distance, length of `d` or size of the heart;
 //! 4. the coefficients in closed form ([`sextic_coefficients`]) and the first root in `(0, 1]`
-//!    from the scene's [`Solver`];
+//!    from the scene's [`Solver`] (four rays' chords at once by [`Solver::first_root_lanes`]
+//!    where they come in lanes, the same answers);
 //! 5. that root polished by a few safeguarded Newton steps on the well-conditioned factor
 //!    `g = A − ∛B·Z` ([`factor_g`]): where `f` has a triple root (the equator curve) its root
 //!    is only good to ~1e-5, where `g`'s is good to the last bit;
@@ -202,7 +203,8 @@ impl HeartShape {
     }
 
     /// Steps 4–6 of the module doc on a chord from [`HeartShape::chord`]: the first hit
-    /// before `t_max`, with `polished` as for [`HeartShape::intersect_with`].
+    /// before `t_max`, with `polished` as for [`HeartShape::intersect_with`]. Its first query
+    /// is always `first_root(&chord.coeffs, 0.0, 1.0)` (the lanes answer it ahead).
     #[inline(always)]
     fn hit_on_chord(
         chord: &Chord,
@@ -421,13 +423,21 @@ impl ObjectShape for HeartShape {
         let solver = self.solver;
         let mut chords = [lanes::NO_CHORD; LANES];
         let alive = lanes::chords(at, local, t_min, t_max, &mut chords);
+        // Every chord's first query, `(0, 1]`, for the lanes at once; a lane's later queries
+        // (past a root the checks skipped) one at a time.
+        let coeffs = chords.map(|chord| chord.coeffs);
+        let first = solver.first_root_lanes(&coeffs, [0.0; LANES], [1.0; LANES], alive);
         let mut hits = [None; LANES];
         for (i, hit) in hits.iter_mut().enumerate() {
             if alive[i] {
+                let mut first = Some(first[i]);
                 *hit = Self::hit_on_chord(
                     &chords[i],
                     t_max[i],
-                    |c, lo, hi| solver.first_root(c, lo, hi),
+                    |c, lo, hi| match first.take() {
+                        Some(answer) => answer,
+                        None => solver.first_root(c, lo, hi),
+                    },
                     &mut false,
                 );
             }

@@ -1,0 +1,470 @@
+//! First-root queries for [`LANES`] polynomials at once ([`Solver::first_root_lanes`]): the
+//! usual path's fixed part (the fixed-size preparation, the expansion in the Bernstein basis
+//! and the whole interval's sign test) computed lane by lane in the same operations and the
+//! same order as the scalar query, without branches, so that the compiler keeps the lanes in
+//! vector registers; each lane the test does not settle then goes on alone where the scalar
+//! query would (the search over pieces, the refinement of its bracket, the strategy's own
+//! isolation). Every lane's answer is the scalar [`Solver::first_root`] bit for bit (tested):
+//! every step is an IEEE operation (no fused multiply-add is ever formed, as in the scalar
+//! code), and each `if` of the scalar code becomes a choice between two computed values.
+//!
+//! The lanes' part is compiled twice: for AVX2 (four `f64` lanes a register), chosen at run
+//! time when the processor has it, and for the x86-64 baseline (SSE2, two lanes), which every
+//! other processor runs and the tests also run.
+
+use super::bernstein::{self, Fast, INV_BINOMIAL};
+use super::prep::{Fixed, MAX_COEFFS};
+use super::{settle, Solver};
+use crate::geometry::LANES;
+
+/// One `f64` per lane.
+type Lanes = [f64; LANES];
+
+/// What the lanes' part found for one lane.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Status {
+    /// Not asked, refused (invalid input), or no root by the whole interval's test.
+    NoRoot,
+    /// Not the usual case of the fixed-size preparation: the scalar query.
+    Other,
+    /// An end coefficient too close to zero: the strategy's own isolation.
+    Undecided,
+    /// The whole interval's test did not settle it: the search goes on from its result
+    /// (`Some(v)`: `v` sign variations, `None`: an uncertain sign).
+    Search(Option<u32>),
+}
+
+/// The lanes' part of the queries: each lane's prepared polynomial (coefficients, scale,
+/// interval), its Bernstein coefficients on the whole interval and the search's bounds, where
+/// the status says they were computed.
+struct Front<const D: usize> {
+    c: [Lanes; D],
+    scale: Lanes,
+    lo: Lanes,
+    hi: Lanes,
+    b: [Lanes; D],
+    size: Lanes,
+    unit: Lanes,
+    status: [Status; LANES],
+}
+
+/// The binary exponent of a finite non-zero `x` (as `prep::exponent`, in 64 bits, which the
+/// lanes compute without conversions).
+#[inline(always)]
+fn exponent(x: f64) -> i64 {
+    ((x.to_bits() >> 52) & 0x7ff) as i64 - 1023
+}
+
+/// `2^k` for a normal exponent `k` (`−1022 ≤ k ≤ 1023`); meaningless otherwise.
+#[inline(always)]
+fn pow2(k: i64) -> f64 {
+    f64::from_bits(((k + 1023) as u64) << 52)
+}
+
+/// `a` where `pick`, else `b`.
+#[inline(always)]
+fn choose(pick: bool, a: f64, b: f64) -> f64 {
+    if pick {
+        a
+    } else {
+        b
+    }
+}
+
+/// The lanes' part (see the module documentation): `prep::prepare_fixed`, then
+/// `bernstein::bernstein_fixed` and the first test of `bernstein::search`, lane by lane.
+#[inline(always)]
+fn front_in<const D: usize>(
+    coeffs: &[[f64; D]; LANES],
+    lo: Lanes,
+    hi: Lanes,
+    active: [bool; LANES],
+) -> Front<D> {
+    let n = D - 1;
+    let mut c = [[0.0; LANES]; D];
+    for (j, cj) in c.iter_mut().enumerate() {
+        for (l, x) in cj.iter_mut().enumerate() {
+            *x = coeffs[l][j];
+        }
+    }
+    // The preparation's tests: valid, then the usual case (see `prepare_fixed`; its shortcut
+    // for an interval reaching 1 tests the same as its general rule, which is used here for
+    // every lane).
+    let mut valid = [false; LANES];
+    let mut usual = [false; LANES];
+    let mut er = [0i64; LANES];
+    for l in 0..LANES {
+        let finite = c.iter().fold(true, |ok, cj| ok & cj[l].is_finite());
+        valid[l] = active[l] & (lo[l] < hi[l]) & finite;
+        let r = lo[l].abs().max(hi[l].abs());
+        let cn = c[n][l];
+        let (an, mut pow, mut negligible) = (cn.abs(), 1.0, false);
+        for i in (0..n).rev() {
+            pow *= r;
+            negligible |= (c[i][l] != 0.0) & (an * pow <= f64::EPSILON * c[i][l].abs());
+        }
+        let e_r = exponent(r) + 1;
+        let e_n = exponent(cn);
+        let mut reaches = false;
+        for k in 1..D {
+            let ck = c[n - k][l];
+            reaches |= (ck != 0.0) & (exponent(ck) - e_n + 1 > k as i64 * (e_r - 1));
+        }
+        let (first, last) = (-(n as i64) * e_r - e_n, -e_n);
+        let normal = |k: i64| (-1022..=1023).contains(&k);
+        usual[l] = (cn != 0.0)
+            & r.is_finite()
+            & !negligible
+            & (-1000..=999).contains(&e_r)
+            & reaches
+            & normal(first)
+            & normal(last);
+        er[l] = e_r;
+        // The rescaling (meaningless in a lane that is not usual, and then not used).
+        for (j, cj) in c.iter_mut().enumerate() {
+            cj[l] *= pow2(j as i64 * e_r + first);
+        }
+    }
+    let mut scale = [0.0; LANES];
+    let (mut p_lo, mut p_hi) = ([0.0; LANES], [0.0; LANES]);
+    for l in 0..LANES {
+        let inv = pow2(-er[l]);
+        scale[l] = pow2(er[l]);
+        p_lo[l] = lo[l] * inv;
+        p_hi[l] = hi[l] * inv;
+    }
+    // `bernstein_fixed` on `[p_lo, p_hi]`.
+    let mut reversed = [false; LANES];
+    let (mut x0, mut h) = ([0.0; LANES], [0.0; LANES]);
+    for l in 0..LANES {
+        reversed[l] = p_hi[l].abs() < p_lo[l].abs();
+        x0[l] = choose(reversed[l], p_hi[l], p_lo[l]);
+        h[l] = choose(reversed[l], p_lo[l] - p_hi[l], p_hi[l] - p_lo[l]);
+    }
+    let mut d = c;
+    // The Taylor shift where `x0 ≠ 0` (none from zero, the heart's usual query).
+    if (0..LANES).any(|l| x0[l] != 0.0) {
+        let mut shifted = d;
+        for i in 0..n {
+            for j in (i..n).rev() {
+                for l in 0..LANES {
+                    shifted[j][l] += x0[l] * shifted[j + 1][l];
+                }
+            }
+        }
+        for (dj, sj) in d.iter_mut().zip(&shifted) {
+            for l in 0..LANES {
+                dj[l] = choose(x0[l] != 0.0, sj[l], dj[l]);
+            }
+        }
+    }
+    let mut hk = [1.0; LANES];
+    for (dj, ib) in d.iter_mut().zip(&INV_BINOMIAL[n]) {
+        for l in 0..LANES {
+            dj[l] *= hk[l] * ib;
+            hk[l] *= h[l];
+        }
+    }
+    for i in 1..D {
+        for j in (i..D).rev() {
+            let before = d[j - 1];
+            for (x, y) in d[j].iter_mut().zip(before) {
+                *x += y;
+            }
+        }
+    }
+    let mut b = d;
+    for (j, bj) in b.iter_mut().enumerate() {
+        for l in 0..LANES {
+            bj[l] = choose(reversed[l], d[n - j][l], d[j][l]);
+        }
+    }
+    // `search`'s bounds and its first test.
+    let mut size = [0.0; LANES];
+    let mut unit = [0.0; LANES];
+    let mut status = [Status::NoRoot; LANES];
+    for l in 0..LANES {
+        let w = p_hi[l] - p_lo[l];
+        let r = p_lo[l].abs() + w;
+        size[l] = c.iter().rev().fold(0.0, |s, cj| s * r + cj[l].abs());
+        unit[l] = (n + 1) as f64 * f64::EPSILON * size[l];
+        let margin = 64.0 * unit[l];
+        let ends_unclear =
+            !unit[l].is_finite() | (b[0][l].abs() <= margin) | (b[n][l].abs() <= margin);
+        let mut uncertain = false;
+        let mut changes = 0u32;
+        for j in 0..n {
+            uncertain |= b[j + 1][l].abs() <= margin;
+            changes += u32::from((b[j][l] < 0.0) != (b[j + 1][l] < 0.0));
+        }
+        status[l] = if !valid[l] {
+            Status::NoRoot
+        } else if !usual[l] {
+            Status::Other
+        } else if ends_unclear {
+            Status::Undecided
+        } else if uncertain {
+            Status::Search(None)
+        } else if changes == 0 {
+            Status::NoRoot
+        } else {
+            Status::Search(Some(changes.min(2)))
+        };
+    }
+    Front {
+        c,
+        scale,
+        lo: p_lo,
+        hi: p_hi,
+        b,
+        size,
+        unit,
+        status,
+    }
+}
+
+/// [`front_in`] compiled for AVX2.
+///
+/// # Safety
+/// The processor must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn front_avx2<const D: usize>(
+    coeffs: &[[f64; D]; LANES],
+    lo: Lanes,
+    hi: Lanes,
+    active: [bool; LANES],
+) -> Front<D> {
+    front_in(coeffs, lo, hi, active)
+}
+
+/// Which compiled copy of the lanes' part runs.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(super) enum Code {
+    /// AVX2 where the processor has it, else the baseline.
+    Detected,
+    /// The baseline copy (what processors without AVX2 run).
+    Baseline,
+}
+
+/// See [`Solver::first_root_lanes`]; `code` picks the copy of the lanes' part.
+#[inline]
+pub(super) fn first_roots<const D: usize>(
+    solver: Solver,
+    coeffs: &[[f64; D]; LANES],
+    lo: Lanes,
+    hi: Lanes,
+    active: [bool; LANES],
+    code: Code,
+) -> [Option<f64>; LANES] {
+    if !(2..=MAX_COEFFS).contains(&D) {
+        return std::array::from_fn(|l| {
+            active[l]
+                .then(|| solver.first_root(&coeffs[l], lo[l], hi[l]))
+                .flatten()
+        });
+    }
+    if !active.iter().any(|&a| a) {
+        return [None; LANES];
+    }
+    let front = match code {
+        #[cfg(target_arch = "x86_64")]
+        Code::Detected if std::arch::is_x86_feature_detected!("avx2") => {
+            // SAFETY: the processor has AVX2, checked just above.
+            unsafe { front_avx2(coeffs, lo, hi, active) }
+        }
+        _ => front_in(coeffs, lo, hi, active),
+    };
+    std::array::from_fn(|l| finish(solver, &front, l, coeffs, lo, hi))
+}
+
+/// Lane `l`'s answer from the lanes' part: the scalar query from where the lanes left it.
+#[inline(always)]
+fn finish<const D: usize>(
+    solver: Solver,
+    front: &Front<D>,
+    l: usize,
+    coeffs: &[[f64; D]; LANES],
+    lo: Lanes,
+    hi: Lanes,
+) -> Option<f64> {
+    let fixed = || Fixed::<D> {
+        c: std::array::from_fn(|j| front.c[j][l]),
+        scale: front.scale[l],
+        lo: front.lo[l],
+        hi: front.hi[l],
+    };
+    match front.status[l] {
+        Status::NoRoot => None,
+        Status::Other => solver.first_root(&coeffs[l], lo[l], hi[l]),
+        Status::Undecided => {
+            let p = fixed();
+            settle(solver, Fast::Undecided, || p.to_prepared(), &mut ())
+        }
+        Status::Search(whole) => {
+            let p = fixed();
+            let b: [f64; D] = std::array::from_fn(|j| front.b[j][l]);
+            let fast = bernstein::search_from(&p, &b, front.size[l], front.unit[l], whole, &mut ());
+            settle(solver, fast, || p.to_prepared(), &mut ())
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A xorshift stream of uniform numbers in `[0, 1)` from `seed` (not zero).
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// One random query of `D` coefficients: from real roots (some clustered or double, some
+    /// at the interval's ends), or random coefficients of mixed sizes with zeros, negligible
+    /// leading terms and non-finite values; on intervals from zero, around zero, far out,
+    /// reversed, empty or unbounded.
+    fn query<const D: usize>(next: &mut impl FnMut() -> f64) -> ([f64; D], f64, f64) {
+        let mut c = [0.0; D];
+        if next() < 0.5 {
+            c[0] = 1.0;
+            let base = next() * 2.0 - 0.5;
+            for k in 1..D {
+                let r = match (next() * 6.0) as u32 {
+                    0 => base,
+                    1 => base + (next() - 0.5) * 1e-7,
+                    2 => 0.0,
+                    _ => next() * 3.0 - 1.0,
+                };
+                // c ← c·(t − r), lowest power first.
+                for j in (0..k).rev() {
+                    c[j + 1] += c[j];
+                    c[j] *= -r;
+                }
+            }
+            if next() < 0.3 {
+                c[0] += (next() - 0.5) * 1e-3;
+            }
+        } else {
+            for cj in c.iter_mut() {
+                let size = 2f64.powi((next() * 60.0) as i32 - 30);
+                *cj = match (next() * 30.0) as u32 {
+                    0 => 0.0,
+                    1 => size,
+                    2 => f64::NAN,
+                    3 => f64::INFINITY,
+                    _ => (next() - 0.5) * size,
+                };
+            }
+            if next() < 0.1 {
+                c[D - 1] *= 1e-20;
+            }
+        }
+        let (lo, hi) = match (next() * 8.0) as u32 {
+            0 | 1 => (0.0, 1.0),
+            2 => (next() * 0.9, 1.0),
+            3 => (-1.0 - next(), next()),
+            4 => (next(), next()),
+            5 => (0.0, f64::INFINITY),
+            6 => (-2.0 * next(), -next() * 0.1),
+            _ => {
+                let lo = (next() - 0.7) * 2f64.powi((next() * 40.0) as i32 - 20);
+                (lo, lo + next() * 2f64.powi((next() * 40.0) as i32 - 20))
+            }
+        };
+        (c, lo, hi)
+    }
+
+    /// Both copies of the lanes' code against the scalar query on `groups` groups of random
+    /// queries of `D` coefficients; counts of (roots, no roots) found.
+    fn check<const D: usize>(seed: u64, groups: usize) -> (usize, usize) {
+        let mut next = uniform(seed);
+        let mut found = (0, 0);
+        for g in 0..groups {
+            let mut coeffs = [[0.0; D]; LANES];
+            let (mut lo, mut hi) = ([0.0; LANES], [0.0; LANES]);
+            for l in 0..LANES {
+                (coeffs[l], lo[l], hi[l]) = query::<D>(&mut next);
+            }
+            let active: [bool; LANES] = std::array::from_fn(|l| g % 7 != 0 || l % 2 == 0);
+            for &(solver, _) in Solver::ALL {
+                let detected = solver.first_root_lanes(&coeffs, lo, hi, active);
+                let baseline = solver.first_root_lanes_baseline(&coeffs, lo, hi, active);
+                for l in 0..LANES {
+                    let want = active[l]
+                        .then(|| solver.first_root(&coeffs[l], lo[l], hi[l]))
+                        .flatten();
+                    let bits = |x: Option<f64>| x.map(f64::to_bits);
+                    let what = (solver, coeffs[l], lo[l], hi[l]);
+                    assert_eq!(bits(detected[l]), bits(want), "{what:?}");
+                    assert_eq!(bits(baseline[l]), bits(want), "{what:?}");
+                    if active[l] {
+                        if want.is_some() {
+                            found.0 += 1;
+                        } else {
+                            found.1 += 1;
+                        }
+                    }
+                }
+            }
+        }
+        found
+    }
+
+    #[test]
+    fn every_lane_is_the_scalar_query_bit_for_bit() {
+        macro_rules! lengths {
+            ($($d:literal)*) => {
+                $(
+                    let (roots, none) = check::<$d>(0x9e37_79b9_7f4a_7c15 ^ $d, 1500);
+                    // Both outcomes are well represented.
+                    assert!(roots > 1500 && none > 1500, "{}: {roots} {none}", $d);
+                )*
+            };
+        }
+        lengths!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17);
+    }
+
+    #[test]
+    fn the_baseline_copy_runs_every_status() {
+        // The scalar copy by itself (what a processor without AVX2 runs), on queries that
+        // end in each status of the lanes' part.
+        let coeffs = [
+            [2.0, -3.0, 1.0],      // (t − 1)(t − 2) on (0, 1.5]: one variation, the root 1
+            [8.0, 1.0, 1.0],       // 8 + t + t²: no variation
+            [1.0, -2.0, 1.0],      // a double root: the search goes on
+            [2.0, -3.0, f64::NAN], // refused
+        ];
+        let (lo, hi) = ([0.0; LANES], [1.5, 3.0, 3.0, 3.0]);
+        let front = front_in(&coeffs, lo, hi, [true; LANES]);
+        assert_eq!(front.status[0], Status::Search(Some(1)));
+        assert_eq!(front.status[1], Status::NoRoot);
+        assert!(matches!(
+            front.status[2],
+            Status::Search(_) | Status::Undecided
+        ));
+        assert_eq!(front.status[3], Status::NoRoot);
+        let got = Solver::Sturm.first_root_lanes_baseline(&coeffs, lo, hi, [true; LANES]);
+        assert!((got[0].unwrap() - 1.0).abs() <= 2.0 * f64::EPSILON);
+        assert_eq!(got[1], None);
+        assert!((got[2].unwrap() - 1.0).abs() <= 1e-6);
+        assert_eq!(got[3], None);
+        // The unusual case (a zero leading coefficient) and the end of an interval at a root.
+        let coeffs = [[2.0, -3.0, 0.0], [2.0, -3.0, 1.0], [1.0; 3], [1.0; 3]];
+        let (lo, hi) = ([0.0, 1.0, 0.0, 0.0], [3.0; LANES]);
+        let front = front_in(&coeffs, lo, hi, [true, true, false, false]);
+        assert_eq!(front.status[0], Status::Other);
+        assert_eq!(front.status[1], Status::Undecided);
+        assert_eq!(front.status[2], Status::NoRoot);
+        let active = [true, true, false, true];
+        let got = Solver::Yuksel.first_root_lanes_baseline(&coeffs, lo, hi, active);
+        assert_eq!(got[0], Some(2.0 / 3.0));
+        assert!((got[1].unwrap() - 2.0).abs() <= 4.0 * f64::EPSILON);
+        assert_eq!(got[2], None);
+        assert_eq!(got[3], None);
+    }
+}
