@@ -350,6 +350,45 @@ impl ImageRect {
 mod tests {
     use super::*;
 
+    /// A deterministic stream of numbers uniform in `[0, 1)` (xorshift64).
+    fn uniform_stream(mut state: u64) -> impl FnMut() -> f64 {
+        move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// A camera a few units up the z axis, looking near the origin, tilted, with a field of
+    /// view of 20–120°.
+    fn random_camera(next: &mut impl FnMut() -> f64) -> Camera {
+        let eye = DVec3::new(next() * 4.0 - 2.0, next() * 4.0 - 2.0, 6.0 + next());
+        let look = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
+        let up = DVec3::new(next() - 0.5, 1.0, 0.0);
+        Camera::new(eye, look, up, 20.0 + 100.0 * next()).unwrap()
+    }
+
+    /// Whether the ray meets the solid ellipsoid at some `t > 0`: `|o + t·d|² = 1` in the
+    /// unit ball's coordinates has a root there.
+    fn ray_meets(e: &SolidEllipsoid, ray: &Ray) -> bool {
+        let inv = e.axes.inverse();
+        let (o, d) = (inv * (ray.origin - e.centre), inv * ray.dir);
+        let (a, b, c) = (d.length_squared(), o.dot(d), o.length_squared() - 1.0);
+        let disc = b * b - a * c;
+        disc >= 0.0 && -b + disc.sqrt() > 0.0
+    }
+
+    /// The image point (pixels of a `w × h` image) whose ray passes through `p`, in front.
+    fn image_point(cam: &Camera, p: DVec3, w: u32, h: u32) -> (f64, f64) {
+        let v = p - cam.eye;
+        let depth = v.dot(cam.forward);
+        let x = (v.dot(cam.right) / depth / cam.half_width + 1.0) * 0.5 * w as f64;
+        let half_h = cam.half_width * h as f64 / w as f64;
+        let y = (1.0 - v.dot(cam.true_up) / depth / half_h) * 0.5 * h as f64;
+        (x, y)
+    }
+
     #[test]
     fn centre_ray_looks_forward_and_edges_span_the_fov() {
         let eye = DVec3::new(1.0, 2.0, 3.0);
@@ -372,25 +411,12 @@ mod tests {
     fn no_ray_from_outside_a_box_image_rect_meets_the_box() {
         // Small deterministic generator: boxes in front of tilted cameras, then image points
         // all over (and beyond) the image.
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = uniform_stream(0x2545_f491_4f6c_dd1du64);
         let (w, h) = (64, 48);
         let mut outside = 0;
         for _ in 0..300 {
-            let eye = DVec3::new(next() * 4.0 - 2.0, next() * 4.0 - 2.0, 6.0 + next());
-            let look = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
-            let cam = Camera::new(
-                eye,
-                look,
-                DVec3::new(next() - 0.5, 1.0, 0.0),
-                20.0 + 100.0 * next(),
-            )
-            .unwrap();
+            let cam = random_camera(&mut next);
+            let eye = cam.eye;
             let centre = DVec3::new(next() * 2.0 - 1.0, next() * 2.0 - 1.0, next() * 2.0 - 1.0);
             let half = DVec3::new(next(), next(), next()) * 1.5 + DVec3::splat(0.01);
             let bounds = Aabb {
@@ -444,20 +470,11 @@ mod tests {
 
     #[test]
     fn no_ray_from_outside_an_ellipsoid_image_rect_meets_the_ellipsoid() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = uniform_stream(0x9e37_79b9_7f4a_7c15u64);
         let (w, h) = (640, 480);
         let (mut outside, mut tight) = (0, 0);
         for _ in 0..300 {
-            let eye = DVec3::new(next() * 4.0 - 2.0, next() * 4.0 - 2.0, 6.0 + next());
-            let look = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
-            let up = DVec3::new(next() - 0.5, 1.0, 0.0);
-            let cam = Camera::new(eye, look, up, 20.0 + 100.0 * next()).unwrap();
+            let cam = random_camera(&mut next);
             let mut axis = || DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 2.0;
             let axes = glam::DMat3::from_cols(axis(), axis(), axis());
             let centre = DVec3::new(next() * 2.0 - 1.0, next() * 2.0 - 1.0, next() * 2.0 - 1.0);
@@ -468,25 +485,13 @@ mod tests {
             let Some(rect) = cam.ellipsoid_image_rect(&e, w, h) else {
                 continue;
             };
-            let inv = axes.inverse();
-            let meets = |ray: &Ray| {
-                // |o + t·d|² = 1 in the unit ball's coordinates, for some t > 0.
-                let (o, d) = (inv * (ray.origin - centre), inv * ray.dir);
-                let (a, b, c) = (d.length_squared(), o.dot(d), o.length_squared() - 1.0);
-                let disc = b * b - a * c;
-                disc >= 0.0 && -b + disc.sqrt() > 0.0
-            };
+            let meets = |ray: &Ray| ray_meets(&e, ray);
             // Every point of the ellipsoid's surface is inside the rectangle, and some are
             // within a few pixels of each side (the rectangle is tight).
             let mut reach = ImageRect::NOTHING;
             for _ in 0..400 {
                 let u = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
-                let p = centre + axes * u;
-                let v = p - eye;
-                let depth = v.dot(cam.forward);
-                let x = (v.dot(cam.right) / depth / cam.half_width + 1.0) * 0.5 * w as f64;
-                let half_h = cam.half_width * h as f64 / w as f64;
-                let y = (1.0 - v.dot(cam.true_up) / depth / half_h) * 0.5 * h as f64;
+                let (x, y) = image_point(&cam, centre + axes * u, w, h);
                 assert!(rect.meets((x, x), (y, y)), "({x}, {y}) not in {rect:?}");
                 reach = reach.union(ImageRect {
                     x: (x, x),
@@ -527,20 +532,11 @@ mod tests {
 
     #[test]
     fn no_ray_from_outside_an_ellipsoid_row_span_meets_the_ellipsoid() {
-        let mut state = 0x1234_5678_9abc_def1u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = uniform_stream(0x1234_5678_9abc_def1u64);
         let (w, h) = (320, 240);
         let (mut outside, mut images, mut narrower) = (0, 0, 0);
         for _ in 0..200 {
-            let eye = DVec3::new(next() * 4.0 - 2.0, next() * 4.0 - 2.0, 6.0 + next());
-            let look = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
-            let up = DVec3::new(next() - 0.5, 1.0, 0.0);
-            let cam = Camera::new(eye, look, up, 20.0 + 100.0 * next()).unwrap();
+            let cam = random_camera(&mut next);
             let mut axis = || DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 2.0;
             let axes = glam::DMat3::from_cols(axis(), axis(), axis());
             let centre = DVec3::new(next() * 2.0 - 1.0, next() * 2.0 - 1.0, next() * 2.0 - 1.0);
@@ -553,13 +549,7 @@ mod tests {
             };
             images += 1;
             let rect = cam.ellipsoid_image_rect(&e, w, h).unwrap();
-            let inv = axes.inverse();
-            let meets = |ray: &Ray| {
-                let (o, d) = (inv * (ray.origin - centre), inv * ray.dir);
-                let (a, b, c) = (d.length_squared(), o.dot(d), o.length_squared() - 1.0);
-                let disc = b * b - a * c;
-                disc >= 0.0 && -b + disc.sqrt() > 0.0
-            };
+            let meets = |ray: &Ray| ray_meets(&e, ray);
             for _ in 0..300 {
                 // A band of one row (or of a few), and a point in it.
                 let y0 = (next() * 1.4 * h as f64 - 0.2 * h as f64).floor();
@@ -589,11 +579,7 @@ mod tests {
             // The points of the outline are inside their row's span.
             for _ in 0..300 {
                 let u = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
-                let v = centre + axes * u - eye;
-                let depth = v.dot(cam.forward);
-                let x = (v.dot(cam.right) / depth / cam.half_width + 1.0) * 0.5 * w as f64;
-                let half_h = cam.half_width * h as f64 / w as f64;
-                let y = (1.0 - v.dot(cam.true_up) / depth / half_h) * 0.5 * h as f64;
+                let (x, y) = image_point(&cam, centre + axes * u, w, h);
                 let (x0, x1) = image.row_span(y.floor(), y.floor() + 1.0).unwrap();
                 assert!(
                     x >= x0 && x <= x1,
