@@ -124,72 +124,31 @@ impl Camera {
             if !(x.is_finite() && y.is_finite()) {
                 return None;
             }
-            rect = ImageRect {
-                x: (rect.x.0.min(x), rect.x.1.max(x)),
-                y: (rect.y.0.min(y), rect.y.1.max(y)),
-            };
+            rect = rect.union(ImageRect {
+                x: (x, x),
+                y: (y, y),
+            });
         }
         Some(rect.padded())
     }
 
-    /// [`Camera::image_rect`] for a solid ellipsoid: a rectangle of the image plane that
-    /// holds every point whose primary ray meets `e`, with the same margin; `None` when part
-    /// of the ellipsoid is not in front of the eye (or it is not finite).
-    pub fn ellipsoid_image_rect(
-        &self,
-        e: &SolidEllipsoid,
-        width: u32,
-        height: u32,
-    ) -> Option<ImageRect> {
-        let (w, h) = (width as f64, height as f64);
-        let half_h = self.half_width * h / w;
-        let v = e.centre - self.eye;
-        // Image coordinate X along `side` (X = (p − eye)·side / (p − eye)·forward): its
-        // extremes over the ellipsoid are where the plane through the eye with normal
-        // side − X·forward touches it, |v·n| = |axesᵀ·n|, a quadratic in X.
-        let f = e.axes.transpose() * self.forward;
-        let depth = v.dot(self.forward);
-        let nearest = depth - f.length();
-        let in_front = nearest > 1e-9 * depth.abs();
-        if !in_front || !v.is_finite() || !f.is_finite() {
-            return None;
-        }
-        let range = |side: DVec3| -> Option<(f64, f64)> {
-            let s = e.axes.transpose() * side;
-            let a = v.dot(side);
-            let qa = depth * depth - f.length_squared();
-            let qb = a * depth - s.dot(f);
-            let qc = a * a - s.length_squared();
-            let disc = (qb * qb - qa * qc).max(0.0).sqrt();
-            let (lo, hi) = ((qb - disc) / qa, (qb + disc) / qa);
-            (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
-        };
-        let (x0, x1) = range(self.right)?;
-        let (y0, y1) = range(self.true_up)?;
-        let to_x = |sx: f64| (sx / self.half_width + 1.0) * 0.5 * w;
-        let to_y = |sy: f64| (1.0 - sy / half_h) * 0.5 * h;
-        Some(
-            ImageRect {
-                x: (to_x(x0), to_x(x1)),
-                y: (to_y(y1), to_y(y0)),
-            }
-            .padded(),
-        )
-    }
-}
-
-impl Camera {
     /// The outline of a solid ellipsoid's image on the image plane of a `width × height`
     /// image (an ellipse), to find which points of each row see it
-    /// ([`EllipseImage::row_span`]); `None` when part of the ellipsoid is not in front of the
-    /// eye (or it is not finite, or flat).
+    /// ([`EllipseImage::row_span`]) or the rectangle around it ([`EllipseImage::rect`]);
+    /// `None` when part of the ellipsoid is not in front of the eye (or it is not finite, or
+    /// flat).
     pub fn ellipsoid_image(
         &self,
         e: &SolidEllipsoid,
         width: u32,
         height: u32,
     ) -> Option<EllipseImage> {
-        self.ellipsoid_image_rect(e, width, height)?;
+        // All of it in front: its nearest depth, (c − eye)·forward − |axesᵀ·forward|, > 0.
+        let depth = (e.centre - self.eye).dot(self.forward);
+        let in_front = depth - (e.axes.transpose() * self.forward).length() > 1e-9 * depth.abs();
+        if !in_front || !e.centre.is_finite() {
+            return None;
+        }
         let inv = e.axes.inverse();
         if !inv.is_finite() {
             return None;
@@ -230,7 +189,10 @@ impl Camera {
             centre: c,
             g,
             delta,
-            // The rightmost point is c + G⁻¹·eₓ·√(δ / (G⁻¹)₁₁): its offset in sy.
+            // The ellipse reaches ±√(δ·(G⁻¹)₁₁) in sx and ±√(δ·(G⁻¹)₂₂) in sy; its rightmost
+            // point is c + G⁻¹·eₓ·√(δ / (G⁻¹)₁₁).
+            u_reach: (delta * g_inv[0][0]).sqrt(),
+            v_reach: (delta * g_inv[1][1]).sqrt(),
             sy_of_rightmost: g_inv[1][0] * (delta / g_inv[0][0]).sqrt(),
             half_width: self.half_width,
             half_height: self.half_width * h / w,
@@ -247,6 +209,9 @@ pub struct EllipseImage {
     centre: [f64; 2],
     g: [[f64; 2]; 2],
     delta: f64,
+    /// Half the ellipse's extent in sx and in sy.
+    u_reach: f64,
+    v_reach: f64,
     sy_of_rightmost: f64,
     half_width: f64,
     half_height: f64,
@@ -255,6 +220,30 @@ pub struct EllipseImage {
 }
 
 impl EllipseImage {
+    /// Image-plane `sx` as a column, in pixels.
+    fn column(&self, sx: f64) -> f64 {
+        (sx / self.half_width + 1.0) * 0.5 * self.width
+    }
+
+    /// Image-plane `sy` as a row, in pixels.
+    fn row(&self, sy: f64) -> f64 {
+        (1.0 - sy / self.half_height) * 0.5 * self.height
+    }
+
+    /// A rectangle of the image plane (pixels) that holds every point whose primary ray meets
+    /// the ellipsoid, with the margin of [`Camera::image_rect`].
+    pub fn rect(&self) -> ImageRect {
+        let [cx, cy] = self.centre;
+        ImageRect {
+            x: (
+                self.column(cx - self.u_reach),
+                self.column(cx + self.u_reach),
+            ),
+            y: (self.row(cy + self.v_reach), self.row(cy - self.v_reach)),
+        }
+        .padded()
+    }
+
     /// The columns `(x0, x1)` (pixels, as [`Camera::ray`] takes them) that hold every point
     /// of the rows `y0 ≤ y ≤ y1` whose primary ray meets the ellipsoid, with the margin of
     /// [`Camera::image_rect`] on every side; `None` when none does.
@@ -262,16 +251,13 @@ impl EllipseImage {
         // Rows widened by the margin, as image-plane offsets from the centre (sy falls as y
         // grows).
         let to_sy = |y: f64| (1.0 - 2.0 * y / self.height) * self.half_height;
-        let pad = |v: f64| 2.0 + 1e-9 * v.abs();
         let (v_lo, v_hi) = (
-            to_sy(y1 + pad(y1)) - self.centre[1],
-            to_sy(y0 - pad(y0)) - self.centre[1],
+            to_sy(y1 + margin(y1)) - self.centre[1],
+            to_sy(y0 - margin(y0)) - self.centre[1],
         );
-        // The ellipse's rows: G₁₁u² + 2G₁₂uv + G₂₂v² ≤ δ has a u for v² ≤ δ·G₁₁/det.
+        // The ellipse's rows: G₁₁u² + 2G₁₂uv + G₂₂v² ≤ δ has a u for |v| ≤ v_reach.
         let [[g11, g12], [_, g22]] = self.g;
-        let det = g11 * g22 - g12 * g12;
-        let v_reach = (self.delta * g11 / det).sqrt();
-        let (lo, hi) = (v_lo.max(-v_reach), v_hi.min(v_reach));
+        let (lo, hi) = (v_lo.max(-self.v_reach), v_hi.min(self.v_reach));
         let some_row = lo <= hi;
         if !some_row {
             return None;
@@ -287,10 +273,19 @@ impl EllipseImage {
         };
         let right = edge(self.sy_of_rightmost.clamp(lo, hi), 1.0);
         let left = edge((-self.sy_of_rightmost).clamp(lo, hi), -1.0);
-        let to_x = |u: f64| ((u + self.centre[0]) / self.half_width + 1.0) * 0.5 * self.width;
-        let (x0, x1) = (to_x(left), to_x(right));
-        (x0.is_finite() && x1.is_finite()).then(|| (x0 - pad(x0), x1 + pad(x1)))
+        let (x0, x1) = (
+            self.column(left + self.centre[0]),
+            self.column(right + self.centre[0]),
+        );
+        (x0.is_finite() && x1.is_finite()).then(|| (x0 - margin(x0), x1 + margin(x1)))
     }
+}
+
+/// The margin by which the image rectangles and row spans are widened for rounding at a
+/// coordinate `v` (pixels): two pixels and 1e-9 of `v` (rounding in [`Camera::ray`], the
+/// bound tests and the projections is far below a pixel).
+fn margin(v: f64) -> f64 {
+    2.0 + 1e-9 * v.abs()
 }
 
 /// A rectangle of the image plane, in pixels (see [`Camera::image_rect`]): the points
@@ -310,25 +305,15 @@ impl ImageRect {
         y: (f64::INFINITY, f64::NEG_INFINITY),
     };
 
-    /// The rectangle widened for rounding: by two pixels and a relative part of its
-    /// coordinates on every side (rounding in [`Camera::ray`], the bound tests and the
-    /// projection is far below a pixel).
+    /// The rectangle widened by the [`margin`] for rounding on every side.
     fn padded(self) -> ImageRect {
         let pad = |(lo, hi): (f64, f64)| {
-            let m = 2.0 + 1e-9 * lo.abs().max(hi.abs());
+            let m = margin(lo.abs().max(hi.abs()));
             (lo - m, hi + m)
         };
         ImageRect {
             x: pad(self.x),
             y: pad(self.y),
-        }
-    }
-
-    /// The points in both.
-    pub fn intersection(self, other: ImageRect) -> ImageRect {
-        ImageRect {
-            x: (self.x.0.max(other.x.0), self.x.1.min(other.x.1)),
-            y: (self.y.0.max(other.y.0), self.y.1.min(other.y.1)),
         }
     }
 
@@ -338,11 +323,6 @@ impl ImageRect {
             x: (self.x.0.min(other.x.0), self.x.1.max(other.x.1)),
             y: (self.y.0.min(other.y.0), self.y.1.max(other.y.1)),
         }
-    }
-
-    /// Whether the rectangle meets the square `[x0, x1] × [y0, y1]` of image-plane points.
-    pub fn meets(&self, (x0, x1): (f64, f64), (y0, y1): (f64, f64)) -> bool {
-        x0 <= self.x.1 && x1 >= self.x.0 && y0 <= self.y.1 && y1 >= self.y.0
     }
 }
 
@@ -367,6 +347,11 @@ mod tests {
         let look = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
         let up = DVec3::new(next() - 0.5, 1.0, 0.0);
         Camera::new(eye, look, up, 20.0 + 100.0 * next()).unwrap()
+    }
+
+    /// Whether the image point `(x, y)` is in the rectangle.
+    fn holds(rect: &ImageRect, x: f64, y: f64) -> bool {
+        (rect.x.0..=rect.x.1).contains(&x) && (rect.y.0..=rect.y.1).contains(&y)
     }
 
     /// Whether the ray meets the solid ellipsoid at some `t > 0`: `|o + t·d|² = 1` in the
@@ -437,7 +422,7 @@ mod tests {
                     next() * 1.4 * w as f64 - 0.2 * w as f64,
                     next() * 1.4 * h as f64 - 0.2 * h as f64,
                 );
-                if rect.meets((x, x), (y, y)) {
+                if holds(&rect, x, y) {
                     continue;
                 }
                 outside += 1;
@@ -465,7 +450,7 @@ mod tests {
         };
         assert_eq!(cam.image_rect(&behind, w, h), None);
         let rect = cam.image_rect(&Aabb::EMPTY, w, h).unwrap();
-        assert!(!rect.meets((0.0, 64.0), (0.0, 48.0)));
+        assert!(rect.x.0 > rect.x.1 && rect.y.0 > rect.y.1);
     }
 
     #[test]
@@ -482,7 +467,7 @@ mod tests {
             if axes.determinant().abs() < 1e-3 {
                 continue;
             }
-            let Some(rect) = cam.ellipsoid_image_rect(&e, w, h) else {
+            let Some(rect) = cam.ellipsoid_image(&e, w, h).map(|i| i.rect()) else {
                 continue;
             };
             let meets = |ray: &Ray| ray_meets(&e, ray);
@@ -492,7 +477,7 @@ mod tests {
             for _ in 0..400 {
                 let u = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
                 let (x, y) = image_point(&cam, centre + axes * u, w, h);
-                assert!(rect.meets((x, x), (y, y)), "({x}, {y}) not in {rect:?}");
+                assert!(holds(&rect, x, y), "({x}, {y}) not in {rect:?}");
                 reach = reach.union(ImageRect {
                     x: (x, x),
                     y: (y, y),
@@ -504,7 +489,7 @@ mod tests {
             for _ in 0..200 {
                 let x = next() * 1.4 * w as f64 - 0.2 * w as f64;
                 let y = next() * 1.4 * h as f64 - 0.2 * h as f64;
-                if rect.meets((x, x), (y, y)) {
+                if holds(&rect, x, y) {
                     continue;
                 }
                 outside += 1;
@@ -526,7 +511,6 @@ mod tests {
         // An ellipsoid around the eye has no rectangle (and no image).
         let cam = Camera::new(DVec3::ZERO, DVec3::X, DVec3::Z, 40.0).unwrap();
         let around = SolidEllipsoid::axis_aligned(DVec3::new(0.5, 0.0, 0.0), DVec3::ONE);
-        assert_eq!(cam.ellipsoid_image_rect(&around, w, h), None);
         assert_eq!(cam.ellipsoid_image(&around, w, h), None);
     }
 
@@ -548,7 +532,7 @@ mod tests {
                 continue;
             };
             images += 1;
-            let rect = cam.ellipsoid_image_rect(&e, w, h).unwrap();
+            let rect = cam.ellipsoid_image(&e, w, h).map(|i| i.rect()).unwrap();
             let meets = |ray: &Ray| ray_meets(&e, ray);
             for _ in 0..300 {
                 // A band of one row (or of a few), and a point in it.

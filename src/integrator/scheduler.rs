@@ -234,7 +234,8 @@ fn seen_rows(job: &Job) -> Option<Vec<(f64, f64)>> {
         let images = images.filter(|i| !i.is_empty());
         for (row, span) in rows.iter_mut().enumerate() {
             let y = f64::from(region.y) + row as f64;
-            if !boxed.meets(boxed.x, (y, y + 1.0)) {
+            let sees_box = y + 1.0 >= boxed.y.0 && y <= boxed.y.1;
+            if !sees_box {
                 continue;
             }
             let mut seen = boxed.x;
@@ -322,7 +323,8 @@ impl PixelSampler<'_> {
     }
 
     /// The shader's [`Shader::miss_colour`] when no camera ray of the `count` pixels from
-    /// `(image_x, image_y)` rightwards can meet an object's box, else `None`.
+    /// column `image_x` rightwards, in row `region_y` of the region, can meet an object's
+    /// bounds ([`seen_rows`]), else `None`.
     #[inline]
     fn unseen(&self, image_x: u32, count: u32, region_y: u32) -> Option<DVec3> {
         let (rows, colour) = self.seen.as_ref()?;
