@@ -28,7 +28,7 @@
 //! hit/miss the full method gives away from numerically multiple roots.
 
 use super::prep::{horner, Fixed, Prepared};
-use super::refine::{refine_simple, size_at};
+use super::refine::{refine_simple, size_at, Bracket};
 use super::trace::Observer;
 
 /// Halvings after which a piece that still has more than one sign variation is left to the
@@ -222,17 +222,29 @@ pub(super) fn bernstein_fixed<const D: usize>(c: &[f64; D], a: f64, b: f64) -> (
     (d, 4.0 * D as f64 * f64::EPSILON * size)
 }
 
-/// The first search's answer on a piece `[s0, s1]` of `[0, 1]` (Bernstein coefficients `b`)
-/// with one sign variation: its root refined on `P` (`c`, degree `D − 1`), or `Undecided`
-/// when the end values do not confirm the bracket.
+/// The search's answer from `bracket`: its root refined on `p`, scaled.
 #[inline(always)]
-fn root_of_piece<const D: usize, O: Observer>(
+fn refined<const D: usize>(bracket: &Bracket, p: &Fixed<D>, obs: &mut impl Observer) -> Fast {
+    let Bracket {
+        ta,
+        tb,
+        fa,
+        start,
+        size,
+    } = *bracket;
+    Fast::Root(refine_simple(&p.c, ta, tb, fa, start, size, obs) * p.scale)
+}
+
+/// The first search's bracket on a piece `[s0, s1]` of `[0, 1]` (Bernstein coefficients `b`)
+/// with one sign variation, or its answer without one: a root at the piece's end, or
+/// `Undecided` when the end values do not confirm the bracket.
+#[inline(always)]
+fn bracket_of_piece<const D: usize>(
     p: &Fixed<D>,
     b: &[f64; D],
     (s0, s1): (f64, f64),
     size: f64,
-    obs: &mut O,
-) -> Fast {
+) -> Result<Bracket, Fast> {
     let n = D - 1;
     let c = &p.c;
     let (lo, hi) = (p.lo, p.hi);
@@ -244,10 +256,10 @@ fn root_of_piece<const D: usize, O: Observer>(
     let fa = if ta == 0.0 { c[0] } else { horner(c, ta) };
     let fb = horner(c, tb);
     if fb == 0.0 {
-        return Fast::Root(tb * p.scale);
+        return Err(Fast::Root(tb * p.scale));
     }
     if fa == 0.0 || (fa < 0.0) == (fb < 0.0) || (fa < 0.0) != (b[0] < 0.0) {
-        return Fast::Undecided;
+        return Err(Fast::Undecided);
     }
     // Start where the piece's control polygon crosses zero: on a piece with one sign
     // variation it is close to the root, closer than false position on the end values.
@@ -266,7 +278,13 @@ fn root_of_piece<const D: usize, O: Observer>(
     } else {
         size_at(c, ta.abs().max(tb.abs()))
     };
-    Fast::Root(refine_simple(c, ta, tb, fa, start, size, obs) * p.scale)
+    Ok(Bracket {
+        ta,
+        tb,
+        fa,
+        start,
+        size,
+    })
 }
 
 /// The search for a polynomial of degree `D − 1` (a fixed size, so that the loops unroll and
@@ -291,10 +309,9 @@ pub(crate) fn search<const D: usize, O: Observer>(p: &Fixed<D>, obs: &mut O) -> 
 
 /// [`search`] after its first test: `root` holds the Bernstein coefficients on the whole
 /// interval, `size` and `unit` are the search's bounds, `whole` the whole interval's
-/// [`variations`] (both end coefficients already clear of `64·unit`). The lanes' query
-/// (`super::lanes`) computes these four at once and goes on here.
+/// [`variations`] (both end coefficients already clear of `64·unit`).
 #[inline(always)]
-pub(crate) fn search_from<const D: usize, O: Observer>(
+fn search_from<const D: usize, O: Observer>(
     p: &Fixed<D>,
     root: &[f64; D],
     size: f64,
@@ -302,14 +319,32 @@ pub(crate) fn search_from<const D: usize, O: Observer>(
     whole: Option<u32>,
     obs: &mut O,
 ) -> Fast {
+    match bracket_from(p, root, size, unit, whole, obs) {
+        Ok(bracket) => refined(&bracket, p, obs),
+        Err(fast) => fast,
+    }
+}
+
+/// [`search_from`] up to the refinement: the first root's bracket, or the answer when the
+/// search ends without one. The lanes' query (`super::lanes`) computes the first test for
+/// four queries at once, goes on here lane by lane, and refines the lanes' brackets together.
+#[inline(always)]
+pub(crate) fn bracket_from<const D: usize, O: Observer>(
+    p: &Fixed<D>,
+    root: &[f64; D],
+    size: f64,
+    unit: f64,
+    whole: Option<u32>,
+    obs: &mut O,
+) -> Result<Bracket, Fast> {
     let n = D - 1;
     let root = *root;
     // The whole interval first: most queries end there. The loop's first piece is this one
     // again, with its variations already counted.
     let mut known = Some(whole);
     match known {
-        Some(Some(0)) => return Fast::NoRoot,
-        Some(Some(1)) => return root_of_piece(p, &root, (0.0, 1.0), size, obs),
+        Some(Some(0)) => return Err(Fast::NoRoot),
+        Some(Some(1)) => return bracket_of_piece(p, &root, (0.0, 1.0), size),
         _ => {}
     }
     // Depth-first over pieces `[s0, s1]` of `[0, 1]`, left first. The piece at depth `d` was
@@ -331,7 +366,7 @@ pub(crate) fn search_from<const D: usize, O: Observer>(
             Some(0) => {
                 // No root here: the next pending piece.
                 if pending == 0 {
-                    return Fast::NoRoot;
+                    return Err(Fast::NoRoot);
                 }
                 depth = 63 - pending.leading_zeros();
                 pending &= !(1 << depth);
@@ -351,23 +386,23 @@ pub(crate) fn search_from<const D: usize, O: Observer>(
                 keep_right(&mut b, s0 / s1);
                 continue;
             }
-            Some(1) => return root_of_piece(p, &b, (s0, s1), size, obs),
+            Some(1) => return bracket_of_piece(p, &b, (s0, s1), size),
             _ => {}
         }
         if depth as usize + 1 >= MAX_DEPTH {
-            return Fast::Undecided;
+            return Err(Fast::Undecided);
         }
         obs.split();
         let sm = s0 + SPLIT * (s1 - s0);
         keep_left(&mut b, SPLIT);
         if b[n].abs() <= margin || !(sm > s0 && sm < s1) {
-            return Fast::Undecided;
+            return Err(Fast::Undecided);
         }
         depth += 1;
         pending |= 1 << depth;
         s1 = sm;
     }
-    Fast::Undecided
+    Err(Fast::Undecided)
 }
 
 #[cfg(test)]

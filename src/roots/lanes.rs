@@ -3,8 +3,9 @@
 //! and the whole interval's sign test) computed lane by lane in the same operations and the
 //! same order as the scalar query, without branches, so that the compiler keeps the lanes in
 //! vector registers; each lane the test does not settle then goes on alone where the scalar
-//! query would (the search over pieces, the refinement of its bracket, the strategy's own
-//! isolation). Every lane's answer is the scalar [`Solver::first_root`] bit for bit (tested):
+//! query would (the search over pieces, the strategy's own isolation), except that the
+//! refinements of the lanes' brackets take their steps in turn (`refine::refine_simple_lanes`),
+//! so that the lanes' chains of dependent operations overlap. Every lane's answer is the scalar [`Solver::first_root`] bit for bit (tested):
 //! every step is an IEEE operation (no fused multiply-add is ever formed, as in the scalar
 //! code), and each `if` of the scalar code becomes a choice between two computed values.
 //!
@@ -14,6 +15,7 @@
 
 use super::bernstein::{self, Fast, INV_BINOMIAL};
 use super::prep::{Fixed, MAX_COEFFS};
+use super::refine::refine_simple_lanes;
 use super::{settle, Solver};
 use crate::geometry::LANES;
 
@@ -275,39 +277,44 @@ pub(super) fn first_roots<const D: usize>(
         }
         _ => front_in(coeffs, lo, hi, active),
     };
-    std::array::from_fn(|l| finish(solver, &front, l, coeffs, lo, hi))
-}
-
-/// Lane `l`'s answer from the lanes' part: the scalar query from where the lanes left it.
-#[inline(always)]
-fn finish<const D: usize>(
-    solver: Solver,
-    front: &Front<D>,
-    l: usize,
-    coeffs: &[[f64; D]; LANES],
-    lo: Lanes,
-    hi: Lanes,
-) -> Option<f64> {
-    let fixed = || Fixed::<D> {
+    // Each lane on from the lanes' part, as the scalar query goes on (see `observed`), up to
+    // the refinement of the search's bracket; then the lanes' brackets refined together.
+    let fixed: [Fixed<D>; LANES] = std::array::from_fn(|l| Fixed::<D> {
         c: std::array::from_fn(|j| front.c[j][l]),
         scale: front.scale[l],
         lo: front.lo[l],
         hi: front.hi[l],
-    };
-    match front.status[l] {
-        Status::NoRoot => None,
-        Status::Other => solver.first_root(&coeffs[l], lo[l], hi[l]),
-        Status::Undecided => {
-            let p = fixed();
-            settle(solver, Fast::Undecided, || p.to_prepared(), &mut ())
-        }
-        Status::Search(whole) => {
-            let p = fixed();
-            let b: [f64; D] = std::array::from_fn(|j| front.b[j][l]);
-            let fast = bernstein::search_from(&p, &b, front.size[l], front.unit[l], whole, &mut ());
-            settle(solver, fast, || p.to_prepared(), &mut ())
+    });
+    let mut answers = [None; LANES];
+    let mut brackets = [None; LANES];
+    for l in 0..LANES {
+        let p = &fixed[l];
+        answers[l] = match front.status[l] {
+            Status::NoRoot => None,
+            Status::Other => solver.first_root(&coeffs[l], lo[l], hi[l]),
+            Status::Undecided => settle(solver, Fast::Undecided, || p.to_prepared(), &mut ()),
+            Status::Search(whole) => {
+                let b: [f64; D] = std::array::from_fn(|j| front.b[j][l]);
+                match bernstein::bracket_from(p, &b, front.size[l], front.unit[l], whole, &mut ()) {
+                    Ok(bracket) => {
+                        brackets[l] = Some(bracket);
+                        None
+                    }
+                    Err(fast) => settle(solver, fast, || p.to_prepared(), &mut ()),
+                }
+            }
+        };
+    }
+    if brackets.iter().any(Option::is_some) {
+        let roots = refine_simple_lanes(std::array::from_fn(|l| &fixed[l].c), brackets);
+        for l in 0..LANES {
+            if brackets[l].is_some() {
+                // `settle` of the scalar query's `Fast::Root`.
+                answers[l] = Some(roots[l] * fixed[l].scale);
+            }
         }
     }
+    answers
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 //! one simple root (the Bernstein fast path).
 
 use super::trace::Observer;
+use crate::geometry::LANES;
 
 /// Steps allowed to the refinement (bisection of a `f64` range needs at most about 2100).
 const MAX_ITER: usize = 2200;
@@ -61,39 +62,130 @@ pub(crate) fn refine_simple(
 #[inline(always)]
 fn refine_with<const HALLEY: bool>(
     c: &[f64],
-    mut a: f64,
-    mut b: f64,
+    a: f64,
+    b: f64,
     fa: f64,
     start: f64,
     size: f64,
     obs: &mut impl Observer,
 ) -> f64 {
-    let neg_a = fa < 0.0;
-    let mut x = start;
-    if !(x > a && x < b) {
-        x = 0.5 * (a + b);
-    }
-    let (mut step, mut step_before) = (b - a, b - a);
+    let mut state = Refinement::new(a, b, fa, start, size);
     for _ in 0..MAX_ITER {
         obs.refine_step();
+        if let Some(root) = state.step::<HALLEY>(c) {
+            return root;
+        }
+    }
+    state.x
+}
+
+/// A bracket `[ta, tb]` of one simple root for [`refine_simple`], with `fa = P(ta)`, the
+/// starting point and the bound on the size of `P`'s terms that function takes.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Bracket {
+    pub ta: f64,
+    pub tb: f64,
+    pub fa: f64,
+    pub start: f64,
+    pub size: f64,
+}
+
+/// [`refine_simple`] of up to [`LANES`] brackets at once, lane `l` on `c[l]` where
+/// `bracket[l]` is `Some` (other lanes' answers are meaningless): each lane's answer is
+/// `refine_simple`'s bit for bit (the same steps), the lanes' steps taken in turn so that
+/// their chains of dependent operations (evaluation, division) overlap instead of following
+/// one another.
+#[inline(always)]
+pub(crate) fn refine_simple_lanes<const D: usize>(
+    c: [&[f64; D]; LANES],
+    bracket: [Option<Bracket>; LANES],
+) -> [f64; LANES] {
+    let mut state = bracket.map(|b| b.map(|b| Refinement::new(b.ta, b.tb, b.fa, b.start, b.size)));
+    let mut out = [0.0; LANES];
+    for _ in 0..MAX_ITER {
+        let mut running = false;
+        for l in 0..LANES {
+            if let Some(s) = &mut state[l] {
+                match s.step::<true>(c[l]) {
+                    Some(root) => {
+                        out[l] = root;
+                        state[l] = None;
+                    }
+                    None => running = true,
+                }
+            }
+        }
+        if !running {
+            return out;
+        }
+    }
+    for l in 0..LANES {
+        if let Some(s) = &state[l] {
+            out[l] = s.x;
+        }
+    }
+    out
+}
+
+/// The state of one refinement between its steps (see [`Refinement::step`]).
+#[derive(Clone, Copy, Debug)]
+struct Refinement {
+    /// The bracket `[a, b]`, with `P(a) < 0` when `neg_a`.
+    a: f64,
+    b: f64,
+    neg_a: bool,
+    /// The bound on the size of `P`'s terms in the bracket.
+    size: f64,
+    /// The current point.
+    x: f64,
+    /// The last two steps' lengths.
+    step: f64,
+    step_before: f64,
+}
+
+impl Refinement {
+    #[inline(always)]
+    fn new(a: f64, b: f64, fa: f64, start: f64, size: f64) -> Self {
+        let x = if start > a && start < b {
+            start
+        } else {
+            0.5 * (a + b)
+        };
+        Self {
+            a,
+            b,
+            neg_a: fa < 0.0,
+            size,
+            x,
+            step: b - a,
+            step_before: b - a,
+        }
+    }
+
+    /// One step from `x`: `Some(root)` when the refinement ends there, else `None` with the
+    /// state moved on.
+    #[inline(always)]
+    fn step<const HALLEY: bool>(&mut self, c: &[f64]) -> Option<f64> {
+        let Self { a, b, x, .. } = *self;
         let (v, d, h) = eval3(c, x);
         if v == 0.0 {
-            return x;
+            return Some(x);
         }
         // The rounding-noise test below, first against the bound `size` (which the size at
         // `x` cannot exceed, the products rounding monotonically), so that the size at `x` is
         // computed only near the root.
         let noise = |size: f64| v.abs() <= 4.0 * f64::EPSILON * size;
-        if noise(size) && noise(size_at(c, x.abs())) {
+        if noise(self.size) && noise(size_at(c, x.abs())) {
             // `p(x)` is rounding noise: one last Newton step is as close as `p` allows.
             let last = x - v / d;
-            return if last >= a && last <= b { last } else { x };
+            return Some(if last >= a && last <= b { last } else { x });
         }
-        if (v < 0.0) == neg_a {
-            a = x;
+        if (v < 0.0) == self.neg_a {
+            self.a = x;
         } else {
-            b = x;
+            self.b = x;
         }
+        let (a, b) = (self.a, self.b);
         // Halley: x − p·p' / (p'² − p·p''/2); Schröder: x − p·p' / (p'² − p·p'').
         let den = if HALLEY {
             d * d - v * h
@@ -105,20 +197,20 @@ fn refine_with<const HALLEY: bool>(
         } else {
             x - v / d
         };
-        if (next - x).abs() > 0.5 * step_before || !(next > a && next < b) {
+        if (next - x).abs() > 0.5 * self.step_before || !(next > a && next < b) {
             next = 0.5 * (a + b);
             if next <= a || next >= b {
-                return x;
+                return Some(x);
             }
         }
-        step_before = step;
-        step = (next - x).abs();
-        if step <= 2.0 * f64::EPSILON * next.abs() {
-            return next;
+        self.step_before = self.step;
+        self.step = (next - x).abs();
+        if self.step <= 2.0 * f64::EPSILON * next.abs() {
+            return Some(next);
         }
-        x = next;
+        self.x = next;
+        None
     }
-    x
 }
 
 #[cfg(test)]
