@@ -371,11 +371,8 @@ impl PixelSampler<'_> {
         });
         let mut sums = [DVec3::ZERO; LANES];
         let mut hits = [0u32; LANES];
-        let mut rays = [Ray::new(DVec3::ZERO, DVec3::Z); LANES];
         for i in 0..self.spp {
-            for (lane, (ray, state)) in rays.iter_mut().zip(states.iter_mut()).enumerate() {
-                *ray = self.camera_ray(state, i, image_x + lane as u32, image_y);
-            }
+            let rays = self.camera_rays(&mut states, i, image_x, image_y);
             let colours = shader.radiance_lanes(&rays, &mut states);
             for lane in 0..LANES {
                 if !self.alpha {
@@ -400,6 +397,31 @@ impl PixelSampler<'_> {
         let (dx, dy) = point_in_grid(i, self.pixel_grid, u, v);
         self.camera
             .ray(image_x as f64 + dx, image_y as f64 + dy, full_w, full_h)
+    }
+
+    /// [`PixelSampler::camera_ray`] of sample `i` for the [`LANES`] pixels from
+    /// `(image_x, image_y)` rightwards, lane `lane` drawing from `states[lane]`: the same rays
+    /// and random numbers, the rays made together ([`Camera::rays_lanes`]).
+    #[inline]
+    fn camera_rays(
+        &self,
+        states: &mut [Sample; LANES],
+        i: u32,
+        image_x: u32,
+        image_y: u32,
+    ) -> [Ray; LANES] {
+        let (full_w, full_h) = self.full;
+        let mut xs = [0.0; LANES];
+        let mut ys = [0.0; LANES];
+        for (lane, state) in states.iter_mut().enumerate() {
+            state.index = i;
+            state.primary_hit = None;
+            let (u, v) = (state.uniform(), state.uniform());
+            let (dx, dy) = point_in_grid(i, self.pixel_grid, u, v);
+            xs[lane] = (image_x + lane as u32) as f64 + dx;
+            ys[lane] = image_y as f64 + dy;
+        }
+        self.camera.rays_lanes(xs, ys, full_w, full_h)
     }
 
     /// Whether the sample's primary `ray` hit an object: as its shader reported, or else
