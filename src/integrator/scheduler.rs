@@ -105,9 +105,10 @@ pub(crate) fn run<S: Shader>(
         spp: job.spp.max(1),
         pixel_grid: strata(job.spp),
         seed: mix(job.seed),
-        seen: shader
-            .miss_colour()
-            .and_then(|colour| Some((seen_rows(job)?, colour))),
+        seen: shader.miss_colour().and_then(|colour| {
+            let stored = unseen_pixel(colour, job.spp.max(1), job.alpha);
+            Some((seen_rows(job)?, stored))
+        }),
     };
     let mut image = if job.alpha {
         Image::transparent(width, height)
@@ -206,10 +207,21 @@ struct PixelSampler<'a> {
     pixel_grid: (u32, u32),
     /// `mix(seed)`.
     seed: u64,
-    /// Where a camera ray may meet an object's bounds (from [`seen_rows`]), and the
-    /// shader's colour for the rays that meet none ([`Shader::miss_colour`]); `None`:
-    /// every ray is traced.
-    seen: Option<(Vec<(f64, f64)>, DVec3)>,
+    /// Where a camera ray may meet an object's bounds (from [`seen_rows`]), and the stored
+    /// value of a pixel whose rays meet none ([`unseen_pixel`]); `None`: every ray is traced.
+    seen: Option<(Vec<(f64, f64)>, Vec3)>,
+}
+
+/// What the film stores for a pixel all `spp` samples of which are misses of colour
+/// `colour` (the shader's [`Shader::miss_colour`]): their mean as a traced pixel's is made
+/// (nothing with `alpha`, where misses add no colour).
+fn unseen_pixel(colour: DVec3, spp: u32, alpha: bool) -> Vec3 {
+    let mut sum = DVec3::ZERO;
+    for _ in 0..spp {
+        sum += colour;
+    }
+    let sum = if alpha { DVec3::ZERO } else { sum };
+    film::to_stored(sum * (1.0 / spp as f64))
 }
 
 /// For each row of `job`'s region, from the top: the columns `(x0, x1)` of the full image
@@ -285,17 +297,19 @@ impl PixelSampler<'_> {
             while x < x1 {
                 // Whole groups of LANES neighbouring pixels go to the shader together.
                 let lanes = (x1 - x).min(LANES as u32);
-                let (sums, hits, group_rays) = if let Some(colour) =
-                    self.unseen(region.x + x, lanes, y)
-                {
+                if let Some(stored) = self.unseen(region.x + x, lanes, y) {
                     // No camera ray of these pixels meets a box: each sample is a miss.
-                    let mut sum = DVec3::ZERO;
-                    for _ in 0..self.spp {
-                        sum += colour;
+                    let start = ((y - y0) * width + x) as usize;
+                    let end = start + lanes as usize;
+                    band.pixels[start..end].fill(stored);
+                    if let Some(alpha) = band.alpha.as_deref_mut() {
+                        alpha[start..end].fill(film::to_stored_alpha(0.0));
                     }
-                    let sum = if self.alpha { DVec3::ZERO } else { sum };
-                    ([sum; LANES], [0; LANES], u64::from(lanes * self.spp))
-                } else if lanes == LANES as u32 {
+                    rays += u64::from(lanes * self.spp);
+                    x += lanes;
+                    continue;
+                }
+                let (sums, hits, group_rays) = if lanes == LANES as u32 {
                     self.pixels_together(shader, region.x + x, image_y)
                 } else {
                     let mut sums = [DVec3::ZERO; LANES];
@@ -322,15 +336,15 @@ impl PixelSampler<'_> {
         (rays, true)
     }
 
-    /// The shader's [`Shader::miss_colour`] when no camera ray of the `count` pixels from
-    /// column `image_x` rightwards, in row `region_y` of the region, can meet an object's
-    /// bounds ([`seen_rows`]), else `None`.
+    /// The stored value of a pixel every sample of which misses ([`unseen_pixel`]) when no
+    /// camera ray of the `count` pixels from column `image_x` rightwards, in row `region_y`
+    /// of the region, can meet an object's bounds ([`seen_rows`]), else `None`.
     #[inline]
-    fn unseen(&self, image_x: u32, count: u32, region_y: u32) -> Option<DVec3> {
-        let (rows, colour) = self.seen.as_ref()?;
+    fn unseen(&self, image_x: u32, count: u32, region_y: u32) -> Option<Vec3> {
+        let (rows, stored) = self.seen.as_ref()?;
         let (x0, x1) = rows[region_y as usize];
         let (a, b) = (image_x as f64, (image_x + count) as f64);
-        (b < x0 || a > x1).then_some(*colour)
+        (b < x0 || a > x1).then_some(*stored)
     }
 
     /// The sum of the colours of pixel `(image_x, image_y)`'s samples (of those that hit an
