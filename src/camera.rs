@@ -1,6 +1,6 @@
 //! The pinhole camera.
 
-use crate::geometry::{Aabb, DVec3, Ray, SolidEllipsoid};
+use crate::geometry::{Aabb, DVec3, Ray, SolidEllipsoid, LANES};
 
 /// Why a camera is degenerate.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -90,6 +90,31 @@ impl Camera {
         let sy = (1.0 - 2.0 * y / height as f64) * half_h;
         let dir = (self.forward + sx * self.right + sy * self.true_up).normalize();
         Ray::new(self.eye, dir)
+    }
+
+    /// [`Camera::ray`] through [`LANES`] image-plane points `(xs[i], ys[i])` at once: lane `i`
+    /// is exactly `self.ray(xs[i], ys[i], width, height)`, bit for bit. The lanes' divisions
+    /// and square roots are independent of each other, which lets them run side by side.
+    #[inline]
+    pub fn rays_lanes(
+        &self,
+        xs: [f64; LANES],
+        ys: [f64; LANES],
+        width: u32,
+        height: u32,
+    ) -> [Ray; LANES] {
+        let (w, h) = (width as f64, height as f64);
+        let half_w = self.half_width;
+        let half_h = half_w * h / w;
+        // Each step lane by lane over arrays, in the operation order of `ray` (and of glam's
+        // `normalize`: the reciprocal of the square root of the dot product, then a product).
+        let sx: [f64; LANES] = std::array::from_fn(|i| (2.0 * xs[i] / w - 1.0) * half_w);
+        let sy: [f64; LANES] = std::array::from_fn(|i| (1.0 - 2.0 * ys[i] / h) * half_h);
+        let dirs: [DVec3; LANES] =
+            std::array::from_fn(|i| self.forward + sx[i] * self.right + sy[i] * self.true_up);
+        let lengths: [f64; LANES] = std::array::from_fn(|i| dirs[i].dot(dirs[i]).sqrt());
+        let recips: [f64; LANES] = std::array::from_fn(|i| 1.0 / lengths[i]);
+        std::array::from_fn(|i| Ray::new(self.eye, dirs[i] * recips[i]))
     }
 
     /// A rectangle of the image plane of a `width × height` image (pixels, as [`Camera::ray`]
@@ -347,6 +372,24 @@ mod tests {
         let look = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
         let up = DVec3::new(next() - 0.5, 1.0, 0.0);
         Camera::new(eye, look, up, 20.0 + 100.0 * next()).unwrap()
+    }
+
+    #[test]
+    fn rays_in_lanes_are_the_single_rays_bit_for_bit() {
+        let mut next = uniform_stream(0x5eed_cafe);
+        for _ in 0..500 {
+            let camera = random_camera(&mut next);
+            let (width, height) = (1 + (next() * 2000.0) as u32, 1 + (next() * 2000.0) as u32);
+            let xs: [f64; LANES] = std::array::from_fn(|_| next() * width as f64);
+            let ys: [f64; LANES] = std::array::from_fn(|_| next() * height as f64);
+            let lanes = camera.rays_lanes(xs, ys, width, height);
+            for i in 0..LANES {
+                let single = camera.ray(xs[i], ys[i], width, height);
+                assert_eq!(lanes[i].origin.to_array(), single.origin.to_array());
+                let bits = |d: DVec3| d.to_array().map(f64::to_bits);
+                assert_eq!(bits(lanes[i].dir), bits(single.dir), "lane {i}");
+            }
+        }
     }
 
     /// Whether the image point `(x, y)` is in the rectangle.

@@ -336,28 +336,65 @@ fn srgb8_table() -> &'static Srgb8Table {
     TABLE.get_or_init(|| {
         let mut first_linear = [0.0; 256];
         for (code, first) in first_linear.iter_mut().enumerate().skip(1) {
-            // Non-negative doubles order like their bit patterns: bisect on the bits for
-            // the first value the formula maps to `code` or above.
-            let (mut lo, mut hi) = (0u64, 1f64.to_bits());
-            while lo < hi {
-                let mid = lo + (hi - lo) / 2;
-                if srgb8_by_formula(f64::from_bits(mid)) as usize >= code {
-                    hi = mid;
-                } else {
-                    lo = mid + 1;
-                }
-            }
-            *first = f64::from_bits(lo);
+            *first = first_with_code(code);
         }
+        // The formula is monotone (the test sweeps it), so the code of a bucket's lower edge
+        // is the number of codes whose first value it has reached.
         let mut bucket_code = [0; SRGB_BUCKETS + 1];
-        for (i, code) in bucket_code.iter_mut().enumerate() {
-            *code = srgb8_by_formula(i as f64 / SRGB_BUCKETS as f64);
+        let mut code = 0;
+        for (i, out) in bucket_code.iter_mut().enumerate() {
+            let edge = i as f64 / SRGB_BUCKETS as f64;
+            while code < 255 && first_linear[code + 1] <= edge {
+                code += 1;
+            }
+            *out = code as u8;
         }
         Srgb8Table {
             first_linear,
             bucket_code,
         }
     })
+}
+
+/// The smallest linear value in `[0, 1]` that the formula maps to `code` (1–255) or above.
+/// Non-negative doubles order like their bit patterns: from the curve's inverse at the code's
+/// lower rounding edge (a few ulps off), steps of doubling length find bit patterns on both
+/// sides, and a bisection between them the first one.
+fn first_with_code(code: usize) -> f64 {
+    let reaches = |bits: u64| srgb8_by_formula(f64::from_bits(bits)) as usize >= code;
+    let edge = (code as f64 - 0.5) / 255.0;
+    let guess = if edge <= 0.040_45 {
+        edge / 12.92
+    } else {
+        ((edge + 0.055) / 1.055).powf(2.4)
+    };
+    let top = 1f64.to_bits();
+    let start = guess.clamp(0.0, 1.0).to_bits();
+    // `lo` never reaches the code (0 does not: its code is 0), `hi` always does (1 does).
+    let (mut lo, mut hi) = (start, start);
+    let mut step = 1;
+    if reaches(start) {
+        while lo > 0 && reaches(lo) {
+            hi = lo;
+            lo = lo.saturating_sub(step);
+            step *= 2;
+        }
+    } else {
+        while hi < top && !reaches(hi) {
+            lo = hi;
+            hi = (hi + step).min(top);
+            step *= 2;
+        }
+    }
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if reaches(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    f64::from_bits(hi)
 }
 
 /// The sRGB transfer curve evaluated directly; the definition [`linear_to_srgb8`] follows.
@@ -403,6 +440,10 @@ mod tests {
         for i in 0..SRGB_BUCKETS {
             let (lo, hi) = (table.bucket_code[i], table.bucket_code[i + 1]);
             assert!(hi - lo <= 1, "bucket {i} spans codes {lo}..={hi}");
+        }
+        for (i, &code) in table.bucket_code.iter().enumerate() {
+            let edge = i as f64 / SRGB_BUCKETS as f64;
+            assert_eq!(code, srgb8_by_formula(edge), "bucket {i}");
         }
         for code in 1..=255usize {
             let first = table.first_linear[code];

@@ -105,9 +105,10 @@ pub(crate) fn run<S: Shader>(
         spp: job.spp.max(1),
         pixel_grid: strata(job.spp),
         seed: mix(job.seed),
-        seen: shader
-            .miss_colour()
-            .and_then(|colour| Some((seen_rows(job)?, colour))),
+        seen: shader.miss_colour().and_then(|colour| {
+            let stored = unseen_pixel(colour, job.spp.max(1), job.alpha);
+            Some((seen_rows(job)?, stored))
+        }),
     };
     let mut image = if job.alpha {
         Image::transparent(width, height)
@@ -206,10 +207,21 @@ struct PixelSampler<'a> {
     pixel_grid: (u32, u32),
     /// `mix(seed)`.
     seed: u64,
-    /// Where a camera ray may meet an object's bounds (from [`seen_rows`]), and the
-    /// shader's colour for the rays that meet none ([`Shader::miss_colour`]); `None`:
-    /// every ray is traced.
-    seen: Option<(Vec<(f64, f64)>, DVec3)>,
+    /// Where a camera ray may meet an object's bounds (from [`seen_rows`]), and the stored
+    /// value of a pixel whose rays meet none ([`unseen_pixel`]); `None`: every ray is traced.
+    seen: Option<(Vec<(f64, f64)>, Vec3)>,
+}
+
+/// What the film stores for a pixel all `spp` samples of which are misses of colour
+/// `colour` (the shader's [`Shader::miss_colour`]): their mean as a traced pixel's is made
+/// (nothing with `alpha`, where misses add no colour).
+fn unseen_pixel(colour: DVec3, spp: u32, alpha: bool) -> Vec3 {
+    let mut sum = DVec3::ZERO;
+    for _ in 0..spp {
+        sum += colour;
+    }
+    let sum = if alpha { DVec3::ZERO } else { sum };
+    film::to_stored(sum * (1.0 / spp as f64))
 }
 
 /// For each row of `job`'s region, from the top: the columns `(x0, x1)` of the full image
@@ -285,17 +297,19 @@ impl PixelSampler<'_> {
             while x < x1 {
                 // Whole groups of LANES neighbouring pixels go to the shader together.
                 let lanes = (x1 - x).min(LANES as u32);
-                let (sums, hits, group_rays) = if let Some(colour) =
-                    self.unseen(region.x + x, lanes, y)
-                {
+                if let Some(stored) = self.unseen(region.x + x, lanes, y) {
                     // No camera ray of these pixels meets a box: each sample is a miss.
-                    let mut sum = DVec3::ZERO;
-                    for _ in 0..self.spp {
-                        sum += colour;
+                    let start = ((y - y0) * width + x) as usize;
+                    let end = start + lanes as usize;
+                    band.pixels[start..end].fill(stored);
+                    if let Some(alpha) = band.alpha.as_deref_mut() {
+                        alpha[start..end].fill(film::to_stored_alpha(0.0));
                     }
-                    let sum = if self.alpha { DVec3::ZERO } else { sum };
-                    ([sum; LANES], [0; LANES], u64::from(lanes * self.spp))
-                } else if lanes == LANES as u32 {
+                    rays += u64::from(lanes * self.spp);
+                    x += lanes;
+                    continue;
+                }
+                let (sums, hits, group_rays) = if lanes == LANES as u32 {
                     self.pixels_together(shader, region.x + x, image_y)
                 } else {
                     let mut sums = [DVec3::ZERO; LANES];
@@ -322,15 +336,15 @@ impl PixelSampler<'_> {
         (rays, true)
     }
 
-    /// The shader's [`Shader::miss_colour`] when no camera ray of the `count` pixels from
-    /// column `image_x` rightwards, in row `region_y` of the region, can meet an object's
-    /// bounds ([`seen_rows`]), else `None`.
+    /// The stored value of a pixel every sample of which misses ([`unseen_pixel`]) when no
+    /// camera ray of the `count` pixels from column `image_x` rightwards, in row `region_y`
+    /// of the region, can meet an object's bounds ([`seen_rows`]), else `None`.
     #[inline]
-    fn unseen(&self, image_x: u32, count: u32, region_y: u32) -> Option<DVec3> {
-        let (rows, colour) = self.seen.as_ref()?;
+    fn unseen(&self, image_x: u32, count: u32, region_y: u32) -> Option<Vec3> {
+        let (rows, stored) = self.seen.as_ref()?;
         let (x0, x1) = rows[region_y as usize];
         let (a, b) = (image_x as f64, (image_x + count) as f64);
-        (b < x0 || a > x1).then_some(*colour)
+        (b < x0 || a > x1).then_some(*stored)
     }
 
     /// The sum of the colours of pixel `(image_x, image_y)`'s samples (of those that hit an
@@ -371,11 +385,8 @@ impl PixelSampler<'_> {
         });
         let mut sums = [DVec3::ZERO; LANES];
         let mut hits = [0u32; LANES];
-        let mut rays = [Ray::new(DVec3::ZERO, DVec3::Z); LANES];
         for i in 0..self.spp {
-            for (lane, (ray, state)) in rays.iter_mut().zip(states.iter_mut()).enumerate() {
-                *ray = self.camera_ray(state, i, image_x + lane as u32, image_y);
-            }
+            let rays = self.camera_rays(&mut states, i, image_x, image_y);
             let colours = shader.radiance_lanes(&rays, &mut states);
             for lane in 0..LANES {
                 if !self.alpha {
@@ -400,6 +411,31 @@ impl PixelSampler<'_> {
         let (dx, dy) = point_in_grid(i, self.pixel_grid, u, v);
         self.camera
             .ray(image_x as f64 + dx, image_y as f64 + dy, full_w, full_h)
+    }
+
+    /// [`PixelSampler::camera_ray`] of sample `i` for the [`LANES`] pixels from
+    /// `(image_x, image_y)` rightwards, lane `lane` drawing from `states[lane]`: the same rays
+    /// and random numbers, the rays made together ([`Camera::rays_lanes`]).
+    #[inline]
+    fn camera_rays(
+        &self,
+        states: &mut [Sample; LANES],
+        i: u32,
+        image_x: u32,
+        image_y: u32,
+    ) -> [Ray; LANES] {
+        let (full_w, full_h) = self.full;
+        let mut xs = [0.0; LANES];
+        let mut ys = [0.0; LANES];
+        for (lane, state) in states.iter_mut().enumerate() {
+            state.index = i;
+            state.primary_hit = None;
+            let (u, v) = (state.uniform(), state.uniform());
+            let (dx, dy) = point_in_grid(i, self.pixel_grid, u, v);
+            xs[lane] = (image_x + lane as u32) as f64 + dx;
+            ys[lane] = image_y as f64 + dy;
+        }
+        self.camera.rays_lanes(xs, ys, full_w, full_h)
     }
 
     /// Whether the sample's primary `ray` hit an object: as its shader reported, or else
