@@ -84,12 +84,26 @@ impl Camera {
     /// of the image, `(x + 0.5, y + 0.5)` the centre of pixel `(x, y)`) of a `width × height`
     /// image. The direction is unit length.
     pub fn ray(&self, x: f64, y: f64, width: u32, height: u32) -> Ray {
-        let half_w = self.half_width;
-        let half_h = half_w * height as f64 / width as f64;
-        let sx = (2.0 * x / width as f64 - 1.0) * half_w;
-        let sy = (1.0 - 2.0 * y / height as f64) * half_h;
-        let dir = (self.forward + sx * self.right + sy * self.true_up).normalize();
-        Ray::new(self.eye, dir)
+        let plane = self.plane(width, height);
+        Ray::new(self.eye, self.through(plane.sx(x), plane.sy(y)).normalize())
+    }
+
+    /// The image plane of a `width × height` image.
+    fn plane(&self, width: u32, height: u32) -> ImagePlane {
+        let (w, h) = (width as f64, height as f64);
+        ImagePlane {
+            half_width: self.half_width,
+            half_height: self.half_width * h / w,
+            width: w,
+            height: h,
+        }
+    }
+
+    /// The direction (not normalised) from the eye through the image-plane point `(sx, sy)`
+    /// at unit distance.
+    #[inline]
+    fn through(&self, sx: f64, sy: f64) -> DVec3 {
+        self.forward + sx * self.right + sy * self.true_up
     }
 
     /// [`Camera::ray`] through [`LANES`] image-plane points `(xs[i], ys[i])` at once: lane `i`
@@ -103,15 +117,11 @@ impl Camera {
         width: u32,
         height: u32,
     ) -> [Ray; LANES] {
-        let (w, h) = (width as f64, height as f64);
-        let half_w = self.half_width;
-        let half_h = half_w * h / w;
+        let plane = self.plane(width, height);
         // Each step lane by lane over arrays, in the operation order of `ray` (and of glam's
         // `normalize`: the reciprocal of the square root of the dot product, then a product).
-        let sx: [f64; LANES] = std::array::from_fn(|i| (2.0 * xs[i] / w - 1.0) * half_w);
-        let sy: [f64; LANES] = std::array::from_fn(|i| (1.0 - 2.0 * ys[i] / h) * half_h);
         let dirs: [DVec3; LANES] =
-            std::array::from_fn(|i| self.forward + sx[i] * self.right + sy[i] * self.true_up);
+            std::array::from_fn(|i| self.through(plane.sx(xs[i]), plane.sy(ys[i])));
         let lengths: [f64; LANES] = std::array::from_fn(|i| dirs[i].dot(dirs[i]).sqrt());
         let recips: [f64; LANES] = std::array::from_fn(|i| 1.0 / lengths[i]);
         std::array::from_fn(|i| Ray::new(self.eye, dirs[i] * recips[i]))
@@ -125,8 +135,7 @@ impl Camera {
         if bounds.min.cmpgt(bounds.max).any() {
             return Some(ImageRect::NOTHING);
         }
-        let (w, h) = (width as f64, height as f64);
-        let half_h = self.half_width * h / w;
+        let plane = self.plane(width, height);
         let mut rect = ImageRect::NOTHING;
         for corner in 0..8 {
             let pick = |bit: u32, lo: f64, hi: f64| if corner & bit == 0 { lo } else { hi };
@@ -144,8 +153,8 @@ impl Camera {
                 return None;
             }
             // The image point whose ray passes through the corner: the inverse of `ray`.
-            let x = (v.dot(self.right) / depth / self.half_width + 1.0) * 0.5 * w;
-            let y = (1.0 - v.dot(self.true_up) / depth / half_h) * 0.5 * h;
+            let x = plane.column(v.dot(self.right) / depth);
+            let y = plane.row(v.dot(self.true_up) / depth);
             if !(x.is_finite() && y.is_finite()) {
                 return None;
             }
@@ -209,7 +218,6 @@ impl Camera {
         if !(delta > 0.0 && delta.is_finite()) {
             return None;
         }
-        let (w, h) = (width as f64, height as f64);
         Some(EllipseImage {
             centre: c,
             g,
@@ -219,10 +227,7 @@ impl Camera {
             u_reach: (delta * g_inv[0][0]).sqrt(),
             v_reach: (delta * g_inv[1][1]).sqrt(),
             sy_of_rightmost: g_inv[1][0] * (delta / g_inv[0][0]).sqrt(),
-            half_width: self.half_width,
-            half_height: self.half_width * h / w,
-            width: w,
-            height: h,
+            plane: self.plane(width, height),
         })
     }
 }
@@ -238,33 +243,59 @@ pub struct EllipseImage {
     u_reach: f64,
     v_reach: f64,
     sy_of_rightmost: f64,
+    plane: ImagePlane,
+}
+
+/// The image plane of a `width × height` image: pixel coordinates (as [`Camera::ray`] takes
+/// them) against offsets `(sx, sy)` along the camera's right and up vectors at unit distance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ImagePlane {
+    /// The plane's half extents at unit distance.
     half_width: f64,
     half_height: f64,
+    /// The image's size in pixels.
     width: f64,
     height: f64,
 }
 
-impl EllipseImage {
-    /// Image-plane `sx` as a column, in pixels.
+impl ImagePlane {
+    /// Column `x` (pixels) as the offset `sx`.
+    #[inline]
+    fn sx(&self, x: f64) -> f64 {
+        (2.0 * x / self.width - 1.0) * self.half_width
+    }
+
+    /// Row `y` (pixels) as the offset `sy` (it falls as `y` grows).
+    #[inline]
+    fn sy(&self, y: f64) -> f64 {
+        (1.0 - 2.0 * y / self.height) * self.half_height
+    }
+
+    /// The offset `sx` as a column, in pixels.
     fn column(&self, sx: f64) -> f64 {
         (sx / self.half_width + 1.0) * 0.5 * self.width
     }
 
-    /// Image-plane `sy` as a row, in pixels.
+    /// The offset `sy` as a row, in pixels.
     fn row(&self, sy: f64) -> f64 {
         (1.0 - sy / self.half_height) * 0.5 * self.height
     }
+}
 
+impl EllipseImage {
     /// A rectangle of the image plane (pixels) that holds every point whose primary ray meets
     /// the ellipsoid, with the margin of [`Camera::image_rect`].
     pub fn rect(&self) -> ImageRect {
         let [cx, cy] = self.centre;
         ImageRect {
             x: (
-                self.column(cx - self.u_reach),
-                self.column(cx + self.u_reach),
+                self.plane.column(cx - self.u_reach),
+                self.plane.column(cx + self.u_reach),
             ),
-            y: (self.row(cy + self.v_reach), self.row(cy - self.v_reach)),
+            y: (
+                self.plane.row(cy + self.v_reach),
+                self.plane.row(cy - self.v_reach),
+            ),
         }
         .padded()
     }
@@ -275,10 +306,10 @@ impl EllipseImage {
     pub fn row_span(&self, y0: f64, y1: f64) -> Option<(f64, f64)> {
         // Rows widened by the margin, as image-plane offsets from the centre (sy falls as y
         // grows).
-        let to_sy = |y: f64| (1.0 - 2.0 * y / self.height) * self.half_height;
+        let plane = &self.plane;
         let (v_lo, v_hi) = (
-            to_sy(y1 + margin(y1)) - self.centre[1],
-            to_sy(y0 - margin(y0)) - self.centre[1],
+            plane.sy(y1 + margin(y1)) - self.centre[1],
+            plane.sy(y0 - margin(y0)) - self.centre[1],
         );
         // The ellipse's rows: G₁₁u² + 2G₁₂uv + G₂₂v² ≤ δ has a u for |v| ≤ v_reach.
         let [[g11, g12], [_, g22]] = self.g;
@@ -299,8 +330,8 @@ impl EllipseImage {
         let right = edge(self.sy_of_rightmost.clamp(lo, hi), 1.0);
         let left = edge((-self.sy_of_rightmost).clamp(lo, hi), -1.0);
         let (x0, x1) = (
-            self.column(left + self.centre[0]),
-            self.column(right + self.centre[0]),
+            self.plane.column(left + self.centre[0]),
+            self.plane.column(right + self.centre[0]),
         );
         (x0.is_finite() && x1.is_finite()).then(|| (x0 - margin(x0), x1 + margin(x1)))
     }
@@ -354,16 +385,7 @@ impl ImageRect {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A deterministic stream of numbers uniform in `[0, 1)` (xorshift64).
-    fn uniform_stream(mut state: u64) -> impl FnMut() -> f64 {
-        move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
+    use crate::testing::uniform_stream;
 
     /// A camera a few units up the z axis, looking near the origin, tilted, with a field of
     /// view of 20–120°.
@@ -372,6 +394,15 @@ mod tests {
         let look = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
         let up = DVec3::new(next() - 0.5, 1.0, 0.0);
         Camera::new(eye, look, up, 20.0 + 100.0 * next()).unwrap()
+    }
+
+    /// A random ellipsoid near the origin (three random conjugate semi-axes of up to about
+    /// 1.7), or `None` when it is nearly flat.
+    fn random_ellipsoid(next: &mut impl FnMut() -> f64) -> Option<SolidEllipsoid> {
+        let mut axis = || DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 2.0;
+        let axes = glam::DMat3::from_cols(axis(), axis(), axis());
+        let centre = DVec3::new(next() * 2.0 - 1.0, next() * 2.0 - 1.0, next() * 2.0 - 1.0);
+        (axes.determinant().abs() >= 1e-3).then_some(SolidEllipsoid { centre, axes })
     }
 
     #[test]
@@ -503,13 +534,10 @@ mod tests {
         let (mut outside, mut tight) = (0, 0);
         for _ in 0..300 {
             let cam = random_camera(&mut next);
-            let mut axis = || DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 2.0;
-            let axes = glam::DMat3::from_cols(axis(), axis(), axis());
-            let centre = DVec3::new(next() * 2.0 - 1.0, next() * 2.0 - 1.0, next() * 2.0 - 1.0);
-            let e = SolidEllipsoid { centre, axes };
-            if axes.determinant().abs() < 1e-3 {
+            let Some(e) = random_ellipsoid(&mut next) else {
                 continue;
-            }
+            };
+            let SolidEllipsoid { centre, axes } = e;
             let Some(rect) = cam.ellipsoid_image(&e, w, h).map(|i| i.rect()) else {
                 continue;
             };
@@ -564,18 +592,15 @@ mod tests {
         let (mut outside, mut images, mut narrower) = (0, 0, 0);
         for _ in 0..200 {
             let cam = random_camera(&mut next);
-            let mut axis = || DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 2.0;
-            let axes = glam::DMat3::from_cols(axis(), axis(), axis());
-            let centre = DVec3::new(next() * 2.0 - 1.0, next() * 2.0 - 1.0, next() * 2.0 - 1.0);
-            if axes.determinant().abs() < 1e-3 {
+            let Some(e) = random_ellipsoid(&mut next) else {
                 continue;
-            }
-            let e = SolidEllipsoid { centre, axes };
+            };
+            let SolidEllipsoid { centre, axes } = e;
             let Some(image) = cam.ellipsoid_image(&e, w, h) else {
                 continue;
             };
             images += 1;
-            let rect = cam.ellipsoid_image(&e, w, h).map(|i| i.rect()).unwrap();
+            let rect = image.rect();
             let meets = |ray: &Ray| ray_meets(&e, ray);
             for _ in 0..300 {
                 // A band of one row (or of a few), and a point in it.

@@ -405,12 +405,19 @@ impl PixelSampler<'_> {
     #[inline]
     fn camera_ray(&self, state: &mut Sample, i: u32, image_x: u32, image_y: u32) -> Ray {
         let (full_w, full_h) = self.full;
+        let (x, y) = self.sample_point(state, i, image_x, image_y);
+        self.camera.ray(x, y, full_w, full_h)
+    }
+
+    /// The image-plane point (pixels) of sample `i` of pixel `(image_x, image_y)`, its jitter
+    /// drawn from `state`, which is made ready for that sample.
+    #[inline]
+    fn sample_point(&self, state: &mut Sample, i: u32, image_x: u32, image_y: u32) -> (f64, f64) {
         state.index = i;
         state.primary_hit = None;
         let (u, v) = (state.uniform(), state.uniform());
         let (dx, dy) = point_in_grid(i, self.pixel_grid, u, v);
-        self.camera
-            .ray(image_x as f64 + dx, image_y as f64 + dy, full_w, full_h)
+        (image_x as f64 + dx, image_y as f64 + dy)
     }
 
     /// [`PixelSampler::camera_ray`] of sample `i` for the [`LANES`] pixels from
@@ -428,12 +435,7 @@ impl PixelSampler<'_> {
         let mut xs = [0.0; LANES];
         let mut ys = [0.0; LANES];
         for (lane, state) in states.iter_mut().enumerate() {
-            state.index = i;
-            state.primary_hit = None;
-            let (u, v) = (state.uniform(), state.uniform());
-            let (dx, dy) = point_in_grid(i, self.pixel_grid, u, v);
-            xs[lane] = (image_x + lane as u32) as f64 + dx;
-            ys[lane] = image_y as f64 + dy;
+            (xs[lane], ys[lane]) = self.sample_point(state, i, image_x + lane as u32, image_y);
         }
         self.camera.rays_lanes(xs, ys, full_w, full_h)
     }
@@ -512,6 +514,16 @@ mod tests {
         }
     }
 
+    /// `shader`'s render of `scene` has the same pixels, coverage and ray count as the same
+    /// shader's with every ray traced.
+    fn assert_culling_changes_nothing<S: Shader>(scene: &Scene, shader: &S, spp: u32, alpha: bool) {
+        let (culled, culled_rays) = render_counting(scene, shader, spp, alpha);
+        let (traced, traced_rays) = render_counting(scene, &Traced(shader), spp, alpha);
+        assert_eq!(culled.pixels, traced.pixels, "spp {spp} alpha {alpha}");
+        assert_eq!(culled.alpha, traced.alpha);
+        assert_eq!(culled_rays, traced_rays);
+    }
+
     #[test]
     fn pixels_no_camera_ray_can_see_are_the_traced_misses() {
         // A sphere off to the left of a wide image, with a light and shadows: most pixels
@@ -559,25 +571,9 @@ mod tests {
             let normals = crate::integrator::normals::Normals::new(&setup);
             let depth = crate::integrator::depth::Depth::new(&setup);
             for alpha in [false, true] {
-                let pairs = [
-                    (
-                        render_counting(&scene, &whitted, spp, alpha),
-                        render_counting(&scene, &Traced(&whitted), spp, alpha),
-                    ),
-                    (
-                        render_counting(&scene, &normals, spp, alpha),
-                        render_counting(&scene, &Traced(&normals), spp, alpha),
-                    ),
-                    (
-                        render_counting(&scene, &depth, spp, alpha),
-                        render_counting(&scene, &Traced(&depth), spp, alpha),
-                    ),
-                ];
-                for ((culled, culled_rays), (traced, traced_rays)) in pairs {
-                    assert_eq!(culled.pixels, traced.pixels, "spp {spp} alpha {alpha}");
-                    assert_eq!(culled.alpha, traced.alpha);
-                    assert_eq!(culled_rays, traced_rays);
-                }
+                assert_culling_changes_nothing(&scene, &whitted, spp, alpha);
+                assert_culling_changes_nothing(&scene, &normals, spp, alpha);
+                assert_culling_changes_nothing(&scene, &depth, spp, alpha);
             }
         }
         // No object: every pixel is the background, untraced, one ray a sample.

@@ -304,30 +304,19 @@ pub(crate) fn search<const D: usize, O: Observer>(p: &Fixed<D>, obs: &mut O) -> 
     if !unit.is_finite() || root[0].abs() <= 64.0 * unit || root[n].abs() <= 64.0 * unit {
         return Fast::Undecided;
     }
-    search_from(p, &root, size, unit, variations(&root, 64.0 * unit), obs)
-}
-
-/// [`search`] after its first test: `root` holds the Bernstein coefficients on the whole
-/// interval, `size` and `unit` are the search's bounds, `whole` the whole interval's
-/// [`variations`] (both end coefficients already clear of `64·unit`).
-#[inline(always)]
-fn search_from<const D: usize, O: Observer>(
-    p: &Fixed<D>,
-    root: &[f64; D],
-    size: f64,
-    unit: f64,
-    whole: Option<u32>,
-    obs: &mut O,
-) -> Fast {
-    match bracket_from(p, root, size, unit, whole, obs) {
+    let whole = variations(&root, 64.0 * unit);
+    match bracket_from(p, &root, size, unit, whole, obs) {
         Ok(bracket) => refined(&bracket, p, obs),
         Err(fast) => fast,
     }
 }
 
-/// [`search_from`] up to the refinement: the first root's bracket, or the answer when the
-/// search ends without one. The lanes' query (`super::lanes`) computes the first test for
-/// four queries at once, goes on here lane by lane, and refines the lanes' brackets together.
+/// [`search`] after its first test, up to the refinement: the first root's bracket, or the
+/// answer when the search ends without one. `root` holds the Bernstein coefficients on the
+/// whole interval, `size` and `unit` are the search's bounds, `whole` the whole interval's
+/// [`variations`] (both end coefficients already clear of `64·unit`). The lanes' query
+/// (`super::lanes`) computes the first test for four queries at once, goes on here lane by
+/// lane, and refines the lanes' brackets together.
 #[inline(always)]
 pub(crate) fn bracket_from<const D: usize, O: Observer>(
     p: &Fixed<D>,

@@ -4,8 +4,9 @@
 //! same order as the scalar query, without branches, so that the compiler keeps the lanes in
 //! vector registers; each lane the test does not settle then goes on alone where the scalar
 //! query would (the search over pieces, the strategy's own isolation), except that the
-//! refinements of the lanes' brackets take their steps in turn (`refine::refine_simple_lanes`),
-//! so that the lanes' chains of dependent operations overlap. Every lane's answer is the scalar [`Solver::first_root`] bit for bit (tested):
+//! refinements of the lanes' brackets take their steps in turn
+//! (`refine::refine_simple_lanes`), so that the lanes' chains of dependent operations
+//! overlap. Every lane's answer is the scalar [`Solver::first_root`] bit for bit (tested):
 //! every step is an IEEE operation (no fused multiply-add is ever formed, as in the scalar
 //! code), and each `if` of the scalar code becomes a choice between two computed values.
 //!
@@ -320,16 +321,7 @@ pub(super) fn first_roots<const D: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A xorshift stream of uniform numbers in `[0, 1)` from `seed` (not zero).
-    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
-        move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
+    use crate::testing::uniform_stream;
 
     /// One random query of `D` coefficients: from real roots (some clustered or double, some
     /// at the interval's ends), or random coefficients of mixed sizes with zeros, negligible
@@ -389,7 +381,7 @@ mod tests {
     /// Both copies of the lanes' code against the scalar query on `groups` groups of random
     /// queries of `D` coefficients; counts of (roots, no roots) found.
     fn check<const D: usize>(seed: u64, groups: usize) -> (usize, usize) {
-        let mut next = uniform(seed);
+        let mut next = uniform_stream(seed);
         let mut found = (0, 0);
         for g in 0..groups {
             let mut coeffs = [[0.0; D]; LANES];

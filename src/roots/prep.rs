@@ -381,16 +381,7 @@ fn rescale(coeffs: &[f64], n: usize, en: i32, e: i32) -> ([f64; MAX_COEFFS], f64
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A xorshift stream of uniform numbers in `[0, 1)` from `seed` (not zero).
-    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
-        move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
+    use crate::testing::uniform_stream;
 
     #[test]
     fn mul_pow2_is_exact_and_safe() {
@@ -417,7 +408,7 @@ mod tests {
     fn shortcut_agrees_with_the_general_scaling() {
         // Random polynomials of random degree, coefficient sizes and intervals (some holding
         // all the roots, some far smaller or larger than the roots' scale).
-        let mut next = uniform(0x2545_f491_4f6c_dd1d);
+        let mut next = uniform_stream(0x2545_f491_4f6c_dd1d);
         let mut answered = 0;
         for _ in 0..20_000 {
             let n = 1 + (next() * 16.0) as usize;
@@ -473,7 +464,7 @@ mod tests {
     fn the_fixed_size_preparation_is_the_general_one() {
         // As above, with exact powers of two, zeros, non-finite values and empty intervals
         // mixed in; every length the fixed path takes.
-        let mut next = uniform(0x5851_f42d_4c95_7f2d);
+        let mut next = uniform_stream(0x5851_f42d_4c95_7f2d);
         let mut fixed = 0;
         for i in 0..40_000 {
             let n = 1 + i % 16;
@@ -519,7 +510,7 @@ mod tests {
     fn trimming_on_the_unit_interval_follows_the_rule() {
         // Leading coefficients around ε times another one, on an interval reaching 1 (where
         // the powers of r are skipped): the degree left is the rule's, term by term.
-        let mut next = uniform(0x9e37_79b9_7f4a_7c15);
+        let mut next = uniform_stream(0x9e37_79b9_7f4a_7c15);
         let mut trimmed = 0;
         for _ in 0..20_000 {
             let n = 1 + (next() * 16.0) as usize;

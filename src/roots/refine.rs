@@ -221,13 +221,7 @@ mod tests {
     fn the_size_bound_changes_no_answer() {
         // (t − r)·(t² + q) with a simple root r in [0.1, 0.9] and q > 0, scaled: the answer
         // with the bound at the bracket's far end is the one without a bound, bit for bit.
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::testing::uniform_stream(0x2545_f491_4f6c_dd1d);
         for _ in 0..5_000 {
             let (r, q, k) = (
                 0.1 + 0.8 * next(),

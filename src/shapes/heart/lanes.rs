@@ -204,13 +204,7 @@ mod tests {
     /// and on the surface, along the axes (zero components), degenerate (zero, NaN,
     /// infinite), each with a random `t_max`, some of them idle (`t_max = −∞`).
     fn rays(seed: u64, count: usize) -> Vec<(Ray, f64)> {
-        let mut state = seed;
-        let mut uniform = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = crate::testing::uniform_stream(seed);
         let mut out = Vec::new();
         for k in 0..count {
             let mut v = || DVec3::new(uniform(), uniform(), uniform()) * 2.0 - DVec3::ONE;
