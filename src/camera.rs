@@ -135,24 +135,25 @@ impl Camera {
         if bounds.min.cmpgt(bounds.max).any() {
             return Some(ImageRect::NOTHING);
         }
+        self.hull_rect(&bounds.corners(), width, height)
+    }
+
+    /// [`Camera::image_rect`] for the convex hull of `points` (the corners of a
+    /// [`crate::geometry::Hexahedron`], say): every point whose primary ray meets the hull lies in the rectangle; `None` when
+    /// a point is not in front of the eye (or is not finite).
+    pub fn hull_rect(&self, points: &[DVec3], width: u32, height: u32) -> Option<ImageRect> {
         let plane = self.plane(width, height);
         let mut rect = ImageRect::NOTHING;
-        for corner in 0..8 {
-            let pick = |bit: u32, lo: f64, hi: f64| if corner & bit == 0 { lo } else { hi };
-            let c = DVec3::new(
-                pick(1, bounds.min.x, bounds.max.x),
-                pick(2, bounds.min.y, bounds.max.y),
-                pick(4, bounds.min.z, bounds.max.z),
-            );
+        for &c in points {
             let v = c - self.eye;
             let depth = v.dot(self.forward);
-            // Well in front of the eye: the projection of the box is then the hull of its
-            // corners' projections (a convex set seen from outside its half-space).
+            // Well in front of the eye: the projection of the hull is then the hull of its
+            // points' projections (a convex set seen from outside its half-space).
             let in_front = depth > 1e-9 * v.length();
             if !in_front || !v.is_finite() {
                 return None;
             }
-            // The image point whose ray passes through the corner: the inverse of `ray`.
+            // The image point whose ray passes through the point: the inverse of `ray`.
             let x = plane.column(v.dot(self.right) / depth);
             let y = plane.row(v.dot(self.true_up) / depth);
             if !(x.is_finite() && y.is_finite()) {
@@ -385,6 +386,7 @@ impl ImageRect {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::Frame;
     use crate::testing::uniform_stream;
 
     /// A camera a few units up the z axis, looking near the origin, tilted, with a field of
@@ -467,12 +469,12 @@ mod tests {
     }
 
     #[test]
-    fn no_ray_from_outside_a_box_image_rect_meets_the_box() {
+    fn no_ray_from_outside_a_box_or_parallelepiped_image_rect_meets_it() {
         // Small deterministic generator: boxes in front of tilted cameras, then image points
         // all over (and beyond) the image.
         let mut next = uniform_stream(0x2545_f491_4f6c_dd1du64);
         let (w, h) = (64, 48);
-        let mut outside = 0;
+        let (mut outside, mut skewed_outside) = (0, 0);
         for _ in 0..300 {
             let cam = random_camera(&mut next);
             let eye = cam.eye;
@@ -506,10 +508,35 @@ mod tests {
                     "({x}, {y}) is outside {rect:?} but its ray meets {bounds:?}"
                 );
             }
+            // The same box skewed and moved by a frame: a parallelepiped, its hull's rectangle.
+            let mut axis = || DVec3::new(next(), next(), next()) * 1.2 - DVec3::splat(0.6);
+            let (u, v, w_axis) = (DVec3::X + axis(), DVec3::Y + axis(), DVec3::Z + axis());
+            let Ok(frame) = Frame::new(axis(), u, v, w_axis) else {
+                continue;
+            };
+            let cell = frame.box_to_world(&bounds);
+            let Some(rect) = cam.hull_rect(&cell.corners, w, h) else {
+                continue;
+            };
+            for _ in 0..200 {
+                let (x, y) = (
+                    next() * 1.4 * w as f64 - 0.2 * w as f64,
+                    next() * 1.4 * h as f64 - 0.2 * h as f64,
+                );
+                if holds(&rect, x, y) {
+                    continue;
+                }
+                skewed_outside += 1;
+                let ray = frame.ray_to_object(&cam.ray(x, y, w, h));
+                assert!(
+                    bounds.clip(&ray, 0.0, f64::INFINITY).is_none(),
+                    "({x}, {y}) is outside {rect:?} but its ray meets {cell:?}"
+                );
+            }
         }
         assert!(
-            outside > 10_000,
-            "the rectangles leave out most points: {outside}"
+            outside > 10_000 && skewed_outside > 10_000,
+            "the rectangles leave out most points: {outside}, {skewed_outside}"
         );
         // A box around or behind the eye has no rectangle; an empty one holds nothing.
         let cam = Camera::new(DVec3::ZERO, DVec3::X, DVec3::Z, 40.0).unwrap();

@@ -62,6 +62,15 @@ impl SolidEllipsoid {
     }
 }
 
+/// A convex solid, the hull of its eight corners: an object-space box carried to the world
+/// by a [`Frame`] (a parallelepiped), one of the cells some shapes give besides their box
+/// (see [`crate::shapes::Shape::enclosing_cells`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hexahedron {
+    /// The corners, in any order.
+    pub corners: [DVec3; 8],
+}
+
 impl Aabb {
     /// The box that contains nothing; the identity for [`Aabb::union`].
     pub const EMPTY: Aabb = Aabb {
@@ -93,6 +102,18 @@ impl Aabb {
     /// The smallest box holding both boxes.
     pub fn union(self, other: Aabb) -> Self {
         Self::new(self.min.min(other.min), self.max.max(other.max))
+    }
+
+    /// The eight corners; corner `i` takes `max` along x when bit 0 of `i` is set, along y
+    /// bit 1, along z bit 2, else `min`.
+    pub fn corners(&self) -> [DVec3; 8] {
+        std::array::from_fn(|i| {
+            DVec3::new(
+                if i & 1 == 0 { self.min.x } else { self.max.x },
+                if i & 2 == 0 { self.min.y } else { self.max.y },
+                if i & 4 == 0 { self.min.z } else { self.max.z },
+            )
+        })
     }
 
     /// True when every coordinate of both corners is finite.
@@ -293,14 +314,14 @@ impl Frame {
         if !b.is_finite() {
             return Aabb::EVERYTHING;
         }
-        Aabb::from_points((0..8).map(|i| {
-            let c = DVec3::new(
-                if i & 1 == 0 { b.min.x } else { b.max.x },
-                if i & 2 == 0 { b.min.y } else { b.max.y },
-                if i & 4 == 0 { b.min.z } else { b.max.z },
-            );
-            self.point_to_world(c)
-        }))
+        Aabb::from_points(self.box_to_world(b).corners)
+    }
+
+    /// The object-space box `b` in world space: the same points, mapped (a parallelepiped).
+    pub fn box_to_world(&self, b: &Aabb) -> Hexahedron {
+        Hexahedron {
+            corners: b.corners().map(|c| self.point_to_world(c)),
+        }
     }
 }
 

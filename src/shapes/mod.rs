@@ -2,7 +2,7 @@
 //! primitive is one new file here plus one keyword in `scene::parser`.
 
 pub use crate::geometry::LANES;
-use crate::geometry::{Aabb, DVec3, Ray, SolidEllipsoid};
+use crate::geometry::{Aabb, DVec3, Hexahedron, Ray, SolidEllipsoid};
 
 mod boxes;
 mod ellipsoid;
@@ -88,6 +88,12 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
     /// report the surface (tighter than [`Shape::bounds`] somewhere, to be of use; the
     /// renderer leaves out the pixels that see none of them). Empty (the default): none known.
     fn enclosing_ellipsoids(&self) -> Vec<SolidEllipsoid> {
+        Vec::new()
+    }
+    /// World-space convex cells whose union holds every point at which `intersect` may
+    /// report the surface (many small ones along it, to be of use; the renderer leaves out
+    /// the pixels that see none of them). Empty (the default): none known.
+    fn enclosing_cells(&self) -> Vec<Hexahedron> {
         Vec::new()
     }
     /// For a surface found by a polynomial root finder: what the root finder did for this

@@ -6,7 +6,7 @@
 //! ([`ObjectShape`]) together with the placement, which also maps normals and boxes back.
 
 use super::{Shape, ShapeError, SolverReport, LANES};
-use crate::geometry::{Aabb, DVec3, Frame, FrameError, Ray, SolidEllipsoid};
+use crate::geometry::{Aabb, DVec3, Frame, FrameError, Hexahedron, Ray, SolidEllipsoid};
 
 /// A validated object frame (`p_world = M·p_object + position`) and `‖M⁻¹‖∞`, which bounds how
 /// much the rounding of a world point grows on its way into object space.
@@ -163,6 +163,10 @@ pub trait ObjectShape: Send + Sync + std::fmt::Debug {
     fn enclosing_ellipsoids(&self) -> Vec<SolidEllipsoid> {
         Vec::new()
     }
+    /// See [`Shape::enclosing_cells`]: object-space boxes.
+    fn enclosing_cells(&self) -> Vec<Aabb> {
+        Vec::new()
+    }
     /// See [`Shape::solver_report`]; the rays as for `intersect`.
     fn solver_report(
         &self,
@@ -264,6 +268,15 @@ impl<S: ObjectShape> Shape for Placed<S> {
             .enclosing_ellipsoids()
             .iter()
             .map(|e| frame.ellipsoid_to_world(e))
+            .collect()
+    }
+
+    fn enclosing_cells(&self) -> Vec<Hexahedron> {
+        let frame = self.at.frame();
+        self.shape
+            .enclosing_cells()
+            .iter()
+            .map(|b| frame.box_to_world(b))
             .collect()
     }
 

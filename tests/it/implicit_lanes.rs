@@ -5,7 +5,7 @@
 //! short lanes and lanes of their own `t_min`, with both solvers; the double-double re-solve
 //! is among the cases checked.
 
-use kardia::geometry::{DVec3, Frame, Ray};
+use kardia::geometry::{DMat3, DVec3, Frame, Hexahedron, Ray};
 use kardia::roots::Solver;
 use kardia::shapes::implicit::Implicit;
 use kardia::shapes::{SettledBy, Shape, LANES};
@@ -127,4 +127,65 @@ fn typed_surfaces_give_the_same_hits_in_lanes_as_alone() {
         }
     }
     assert!(recentred_total > 100, "{recentred_total} rays re-solved");
+}
+
+/// Whether `p` lies in the parallelepiped `cell` (corner 0 its origin, corners 1, 2 and 4
+/// the ends of its three edges from there), up to a relative `1e-9` of its edges.
+fn in_cell(cell: &Hexahedron, p: DVec3) -> bool {
+    let o = cell.corners[0];
+    let edges = DMat3::from_cols(
+        cell.corners[1] - o,
+        cell.corners[2] - o,
+        cell.corners[4] - o,
+    );
+    let a = edges.inverse() * (p - o);
+    a.cmpge(DVec3::splat(-1e-9)).all() && a.cmple(DVec3::splat(1.0 + 1e-9)).all()
+}
+
+#[test]
+fn every_hit_of_a_typed_surface_lies_in_one_of_its_cells() {
+    // Placed off the origin by a skewed basis, so the cells are parallelepipeds in the world.
+    let frame = Frame::new(
+        DVec3::new(0.4, -0.2, 0.3),
+        DVec3::new(0.9, 0.2, -0.1),
+        DVec3::new(-0.3, 1.1, 0.2),
+        DVec3::new(0.1, 0.25, 0.8),
+    )
+    .unwrap();
+    let mut with_cells = 0;
+    for (name, _) in surfaces() {
+        let shape = match name.split_once(' ') {
+            Some((preset, params)) if !name.starts_with('(') => {
+                let params: Vec<f64> = params
+                    .trim_matches(|c| c == '[' || c == ']')
+                    .split(',')
+                    .filter(|s| !s.trim().is_empty())
+                    .map(|s| s.trim().parse().unwrap())
+                    .collect();
+                Implicit::from_preset(preset, &params, frame, None).unwrap()
+            }
+            _ => Implicit::new(&name, frame, None).unwrap(),
+        };
+        let cells = shape.enclosing_cells();
+        if cells.is_empty() {
+            continue;
+        }
+        with_cells += 1;
+        let (camera, secondary) = rays(&shape);
+        let mut hits = 0;
+        let starts = camera.iter().map(|r| (r, 0.0));
+        for (ray, t_min) in starts.chain(secondary.iter().map(|r| (r, 1e-9))) {
+            if let Some(t) = shape.intersect(ray, t_min, f64::INFINITY) {
+                hits += 1;
+                let p = ray.at(t);
+                assert!(
+                    cells.iter().any(|c| in_cell(c, p)),
+                    "{name}: hit {p} in none of {} cells",
+                    cells.len()
+                );
+            }
+        }
+        assert!(hits > 50, "{name}: {hits} hits");
+    }
+    assert!(with_cells >= 6, "{with_cells} surfaces gave cells");
 }

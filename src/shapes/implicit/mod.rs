@@ -108,8 +108,11 @@ struct Surface {
     /// The same three partials, evaluated together (for the normal).
     gradient: Gradient,
     /// Object-space box holding the surface's part inside the clip sphere
-    /// ([`extent::zero_set_box`]); `None` when there is none.
+    /// ([`extent::zero_set`]); `None` when there is none.
     object_box: Option<Aabb>,
+    /// Object-space boxes whose union holds the surface's part inside the clip sphere
+    /// ([`extent::ZeroSet::cells`]); empty when not known.
+    cells: Vec<Aabb>,
 }
 
 impl Surface {
@@ -367,8 +370,12 @@ impl Implicit {
             })?,
         };
         let grad = [0, 1, 2].map(|v| Compiled::new(&poly.derivative(v)));
-        let object_box = extent::zero_set_box(&f, bound)
-            .map(|(lo, hi)| Aabb::new(DVec3::from_array(lo), DVec3::from_array(hi)));
+        let zero_set = extent::zero_set(&f, bound);
+        let to_box = |(lo, hi): ([f64; 3], [f64; 3])| {
+            Aabb::new(DVec3::from_array(lo), DVec3::from_array(hi))
+        };
+        let object_box = zero_set.as_ref().map(|z| to_box(z.bounds));
+        let cells = zero_set.map_or_else(Vec::new, |z| z.cells.into_iter().map(to_box).collect());
         Ok(Placed::place(
             Placement::new(frame),
             ImplicitShape {
@@ -379,6 +386,7 @@ impl Implicit {
                     gradient: Gradient::new(&grad),
                     grad,
                     object_box,
+                    cells,
                 })),
             },
         ))
@@ -1017,6 +1025,14 @@ impl ObjectShape for ImplicitShape {
                 DVec3::ZERO,
                 DVec3::splat(self.bound * (1.0 + 1e-9)),
             )],
+        }
+    }
+
+    fn enclosing_cells(&self) -> Vec<Aabb> {
+        match &self.kind {
+            // Every hit lies in the box (the chord is clipped to it) and on a zero of `f`.
+            Kind::Generic(s) => s.cells.clone(),
+            Kind::Heart(_) => Vec::new(),
         }
     }
 }
