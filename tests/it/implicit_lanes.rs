@@ -167,6 +167,14 @@ fn every_hit_of_a_typed_surface_lies_in_one_of_its_cells() {
             _ => Implicit::new(&name, frame, None).unwrap(),
         };
         let cells = shape.enclosing_cells();
+        // Chmutov's octics and the degree-16 sphere: cells that fill their box are not given.
+        let fill_their_box = name.starts_with("chmutov") || name.contains(")^8");
+        assert_eq!(
+            cells.is_empty(),
+            fill_their_box,
+            "{name}: {} cells",
+            cells.len()
+        );
         if cells.is_empty() {
             continue;
         }
@@ -187,5 +195,5 @@ fn every_hit_of_a_typed_surface_lies_in_one_of_its_cells() {
         }
         assert!(hits > 50, "{name}: {hits} hits");
     }
-    assert!(with_cells >= 6, "{with_cells} surfaces gave cells");
+    assert_eq!(with_cells, 6, "surfaces that gave cells");
 }

@@ -100,6 +100,11 @@ fn is_root(c: &[f64], s: f64) -> bool {
     v.abs() <= MAX_ROOT_RESIDUAL * m
 }
 
+/// The largest share of its box's volume the surface's cells may fill to be used for
+/// culling (Chmutov's octic and the degree-16 sphere fill all of it; the torus about half,
+/// Barth's sextic a fifth).
+const MAX_CELL_SHARE: f64 = 0.75;
+
 /// The expanded surface with its derivatives, compiled for evaluation.
 #[derive(Debug, Clone)]
 struct Surface {
@@ -111,7 +116,8 @@ struct Surface {
     /// ([`extent::zero_set`]); `None` when there is none.
     object_box: Option<Aabb>,
     /// Object-space boxes whose union holds the surface's part inside the clip sphere
-    /// ([`extent::ZeroSet::cells`]); empty when not known.
+    /// ([`extent::ZeroSet::cells`]); empty when not known, or when together they take more
+    /// than [`MAX_CELL_SHARE`] of `object_box`'s volume.
     cells: Vec<Aabb>,
 }
 
@@ -375,7 +381,14 @@ impl Implicit {
             Aabb::new(DVec3::from_array(lo), DVec3::from_array(hi))
         };
         let object_box = zero_set.as_ref().map(|z| to_box(z.bounds));
-        let cells = zero_set.map_or_else(Vec::new, |z| z.cells.into_iter().map(to_box).collect());
+        let mut cells: Vec<Aabb> =
+            zero_set.map_or_else(Vec::new, |z| z.cells.into_iter().map(to_box).collect());
+        // Cells that fill most of their hull would leave out few pixels for their cost.
+        let volume = |b: &Aabb| (b.max - b.min).max(DVec3::ZERO).element_product();
+        let filled: f64 = cells.iter().map(volume).sum();
+        if object_box.is_none_or(|b| filled > MAX_CELL_SHARE * volume(&b)) {
+            cells.clear();
+        }
         Ok(Placed::place(
             Placement::new(frame),
             ImplicitShape {
