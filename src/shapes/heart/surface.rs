@@ -126,11 +126,56 @@ pub fn scaled_gradient_g(p: DVec3) -> DVec3 {
     )
 }
 
+/// Largest rounding of [`gradient_f`], per unit of its largest component, with which
+/// [`resolved_gradient_f`] takes it for the normal: its direction is then that of `∇g` to
+/// far below what an 8-bit (or `f32`) pixel can show.
+const GRADIENT_F_TOLERANCE: f64 = 1.0 / (1u64 << 42) as f64;
+
+/// `∇f` at `p`, when its rounding is below [`GRADIENT_F_TOLERANCE`] of its size: away from
+/// the equator curve and the Z axis (where `∇f = Q·∇g` fades with `Q`, and `A`'s rounding
+/// dominates), it points along `∇g` and needs no cube root. `None` elsewhere.
+///
+/// The bound: every component is a difference of two products, each rounded a few times
+/// (`8ε` of their magnitudes), plus twice what `A`'s own rounding `da = 4ε·(2X² + Y² + Z² +
+/// 1)` does to the `A²` in `(12X, 6Y, 6Z)·A²`.
+#[inline]
+fn resolved_gradient_f(p: DVec3) -> Option<DVec3> {
+    let a = a_of(p);
+    let a2 = a * a;
+    let b = b_of(p);
+    let z2 = p.z * p.z;
+    let z3 = z2 * p.z;
+    let terms = [
+        12.0 * p.x * a2,
+        0.2 * p.x * z3,
+        6.0 * p.y * a2,
+        2.0 * p.y * z3,
+        6.0 * p.z * a2,
+        3.0 * z2 * b,
+    ];
+    let n = DVec3::new(
+        terms[0] - terms[1],
+        terms[2] - terms[3],
+        terms[4] - terms[5],
+    );
+    let size = terms.iter().map(|t| t.abs()).sum::<f64>();
+    // A's rounding `da` moves `A²` by up to `(2|A| + da)·da`.
+    let da = 4.0 * f64::EPSILON * (2.0 * p.x * p.x + p.y * p.y + z2 + 1.0);
+    let through_a =
+        (2.0 * a.abs() + da) * da * (12.0 * p.x.abs() + 6.0 * p.y.abs() + 6.0 * p.z.abs());
+    let error = 8.0 * f64::EPSILON * size + 2.0 * through_a;
+    (n.is_finite() && error < GRADIENT_F_TOLERANCE * n.abs().max_element()).then_some(n)
+}
+
 /// The outward direction (any positive length, finite, non-zero) of the object-space surface
-/// at `p`: `∇g` (scaled); on the Z axis, where that vanishes, `∇f`; at the singular points
-/// `(0, 0, ±1)`, where both vanish, the axis direction `(0, 0, ±1)` pointing out of the heart
+/// at `p`: `∇f` where its rounding is far below what a pixel shows (most of the surface; no
+/// cube root), else `∇g` (scaled); on the Z axis, where that vanishes, `∇f`; at the singular
+/// points `(0, 0, ±1)`, where both vanish, the axis direction `(0, 0, ±1)` pointing out of the heart
 /// (down at the tip, up at the dip). Non-finite input gives `+Z`.
 pub fn outward_direction(p: DVec3) -> DVec3 {
+    if let Some(n) = resolved_gradient_f(p) {
+        return n;
+    }
     let n = scaled_gradient_g(p);
     if let Some(n) = rescaled(n) {
         return n;
@@ -210,6 +255,102 @@ pub const BOUNDS: Aabb = Aabb {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_gradient_of_f_is_taken_only_where_it_points_along_that_of_g() {
+        // Surface points (sign changes of g bisected along rays from the centre in every
+        // direction): where `resolved_gradient_f` answers, its direction is ∇g's to 1e-12;
+        // it declines on the equator curve and at the singular points, and answers on most
+        // of the surface.
+        let (mut taken, mut declined) = (0, 0);
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut uniform = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut points: Vec<DVec3> = Vec::new();
+        for _ in 0..20_000 {
+            let z = 2.0 * uniform() - 1.0;
+            let phi = std::f64::consts::TAU * uniform();
+            let r = (1.0 - z * z).sqrt();
+            points.push(DVec3::new(r * phi.cos(), r * phi.sin(), z));
+        }
+        // And the hard places: the equator curve (Z = 0, 2X² + Y² = 1) and the axis.
+        for k in 0..200 {
+            let phi = std::f64::consts::TAU * f64::from(k) / 200.0;
+            points.push(DVec3::new(
+                phi.cos() * std::f64::consts::FRAC_1_SQRT_2,
+                phi.sin(),
+                0.0,
+            ));
+        }
+        points.push(DVec3::Z);
+        points.push(DVec3::NEG_Z);
+        // Just off the equator curve, where ∇f is all rounding (a point a solver found there).
+        let mut near_equator = vec![DVec3::new(
+            -0.6783746196706304,
+            0.2821626317807784,
+            -1.3877787807814457e-17,
+        )];
+        for k in 0..200 {
+            let phi = std::f64::consts::TAU * (f64::from(k) + 0.5) / 200.0;
+            let z = 1e-17 * 10f64.powi(k % 12) * if k % 2 == 0 { 1.0 } else { -1.0 };
+            // On the surface: A = ∛B·Z along the ray from the axis at height z.
+            let (cx, cy) = (phi.cos() * std::f64::consts::FRAC_1_SQRT_2, phi.sin());
+            let mut r = 1.0f64;
+            for _ in 0..4 {
+                let b = 0.1 * (r * cx).powi(2) + (r * cy).powi(2);
+                r = ((1.0 + b.cbrt() * z - z * z) / (2.0 * cx * cx + cy * cy)).sqrt();
+            }
+            near_equator.push(DVec3::new(r * cx, r * cy, z));
+        }
+        for q in near_equator {
+            if let Some(n) = resolved_gradient_f(q) {
+                let (n, m) = (n.normalize(), scaled_gradient_g(q).normalize());
+                assert!((n - m).length() < 1e-12, "{q}: {n} against {m}");
+            }
+        }
+        let mut hard = 0;
+        for dir in points {
+            let on_equator = dir.z == 0.0;
+            let on_axis = dir.x == 0.0 && dir.y == 0.0;
+            let q = if on_equator || on_axis {
+                dir
+            } else {
+                // Bisect g from the centre (inside) outwards to 2 units (outside).
+                let (mut a, mut b) = (0.0f64, 2.0f64);
+                if factor_g(dir * b) <= 0.0 {
+                    continue;
+                }
+                for _ in 0..80 {
+                    let m = 0.5 * (a + b);
+                    if factor_g(dir * m) <= 0.0 {
+                        a = m;
+                    } else {
+                        b = m;
+                    }
+                }
+                dir * a
+            };
+            match resolved_gradient_f(q) {
+                Some(n) => {
+                    taken += 1;
+                    assert!(!on_equator && !on_axis, "{q}");
+                    let (n, m) = (n.normalize(), scaled_gradient_g(q).normalize());
+                    assert!((n - m).length() < 1e-12, "{q}: {n} against {m}");
+                }
+                None => {
+                    declined += 1;
+                    hard += usize::from(on_equator || on_axis);
+                }
+            }
+        }
+        assert_eq!(hard, 202, "declined {declined} of which hard {hard}");
+        // 18 294 of 20 202 taken when written.
+        assert!(taken > 8 * declined, "{taken} taken, {declined} declined");
+    }
 
     #[test]
     fn cube_root_within_one_ulp() {
@@ -332,8 +473,11 @@ mod tests {
         assert_eq!(outward_direction(DVec3::new(0.0, 0.0, 1.0)), DVec3::Z);
         assert_eq!(outward_direction(DVec3::ZERO), DVec3::Z);
         assert_eq!(outward_direction(DVec3::splat(f64::NAN)), DVec3::Z);
-        // On the axis but off the surface: ∇f.
-        assert_eq!(outward_direction(DVec3::new(0.0, 0.0, 2.0)), DVec3::Z);
+        // On the axis but off the surface: ∇f (of any length).
+        assert_eq!(
+            outward_direction(DVec3::new(0.0, 0.0, 2.0)).normalize(),
+            DVec3::Z
+        );
         // Equator point (∇f = 0 there): ∇g ∝ (4X, 2Y, −∛B).
         let p = DVec3::new(0.0, 1.0, 0.0);
         assert_eq!(gradient_f(p), DVec3::ZERO);
