@@ -22,9 +22,10 @@
 //!    from `g`; a root at or before the ray's own origin (a ray leaving the surface) is
 //!    skipped. The search then resumes past the skipped root.
 //!
-//! The normal ([`super::Shape::normal`]) is `∇g` (parallel to `∇f` on the surface, but well-defined
-//! and well-conditioned on the equator curve), with `∇f` and then the axis as fallbacks at the
-//! two singular points, mapped to world space by `(M⁻¹)ᵀ`.
+//! The normal ([`super::Shape::normal`]) is `∇f` where its rounding is far below what a pixel
+//! shows (most of the surface: no cube root), else `∇g` (parallel to `∇f` on the surface, but
+//! well-defined and well-conditioned on the equator curve), with `∇f` and then the axis as
+//! fallbacks at the two singular points, mapped to world space by `(M⁻¹)ᵀ`.
 
 mod corpus;
 mod lanes;
