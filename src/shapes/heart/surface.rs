@@ -101,15 +101,32 @@ pub fn factor_g_with_slope(p: DVec3, d: DVec3) -> (f64, f64) {
 /// whole equator curve and at the two singular points `(0, 0, ±1)`.
 #[inline]
 pub fn gradient_f(p: DVec3) -> DVec3 {
+    gradient_f_terms(p).1
+}
+
+/// [`gradient_f`] with what its rounding depends on: `A`, and the six products whose
+/// pairwise differences are its components (`12X·A²`, `0.2X·Z³`, `6Y·A²`, `2Y·Z³`, `6Z·A²`,
+/// `3Z²·B`).
+#[inline]
+fn gradient_f_terms(p: DVec3) -> (f64, DVec3, [f64; 6]) {
     let a = a_of(p);
     let a2 = a * a;
     let z2 = p.z * p.z;
     let z3 = z2 * p.z;
-    DVec3::new(
-        12.0 * p.x * a2 - 0.2 * p.x * z3,
-        6.0 * p.y * a2 - 2.0 * p.y * z3,
-        6.0 * p.z * a2 - 3.0 * z2 * b_of(p),
-    )
+    let terms = [
+        12.0 * p.x * a2,
+        0.2 * p.x * z3,
+        6.0 * p.y * a2,
+        2.0 * p.y * z3,
+        6.0 * p.z * a2,
+        3.0 * z2 * b_of(p),
+    ];
+    let n = DVec3::new(
+        terms[0] - terms[1],
+        terms[2] - terms[3],
+        terms[4] - terms[5],
+    );
+    (a, n, terms)
 }
 
 /// A positive multiple of `∇g`, namely `3∛B²·∇g = (X(12s² − 0.2Z), Y(6s² − 2Z), 3s²(2Z − s))`
@@ -140,27 +157,10 @@ const GRADIENT_F_TOLERANCE: f64 = 1.0 / (1u64 << 42) as f64;
 /// 1)` does to the `A²` in `(12X, 6Y, 6Z)·A²`.
 #[inline]
 fn resolved_gradient_f(p: DVec3) -> Option<DVec3> {
-    let a = a_of(p);
-    let a2 = a * a;
-    let b = b_of(p);
-    let z2 = p.z * p.z;
-    let z3 = z2 * p.z;
-    let terms = [
-        12.0 * p.x * a2,
-        0.2 * p.x * z3,
-        6.0 * p.y * a2,
-        2.0 * p.y * z3,
-        6.0 * p.z * a2,
-        3.0 * z2 * b,
-    ];
-    let n = DVec3::new(
-        terms[0] - terms[1],
-        terms[2] - terms[3],
-        terms[4] - terms[5],
-    );
+    let (a, n, terms) = gradient_f_terms(p);
     let size = terms.iter().map(|t| t.abs()).sum::<f64>();
     // A's rounding `da` moves `A²` by up to `(2|A| + da)·da`.
-    let da = 4.0 * f64::EPSILON * (2.0 * p.x * p.x + p.y * p.y + z2 + 1.0);
+    let da = 4.0 * f64::EPSILON * (2.0 * p.x * p.x + p.y * p.y + p.z * p.z + 1.0);
     let through_a =
         (2.0 * a.abs() + da) * da * (12.0 * p.x.abs() + 6.0 * p.y.abs() + 6.0 * p.z.abs());
     let error = 8.0 * f64::EPSILON * size + 2.0 * through_a;
@@ -170,8 +170,8 @@ fn resolved_gradient_f(p: DVec3) -> Option<DVec3> {
 /// The outward direction (any positive length, finite, non-zero) of the object-space surface
 /// at `p`: `∇f` where its rounding is far below what a pixel shows (most of the surface; no
 /// cube root), else `∇g` (scaled); on the Z axis, where that vanishes, `∇f`; at the singular
-/// points `(0, 0, ±1)`, where both vanish, the axis direction `(0, 0, ±1)` pointing out of the heart
-/// (down at the tip, up at the dip). Non-finite input gives `+Z`.
+/// points `(0, 0, ±1)`, where both vanish, the axis direction `(0, 0, ±1)` pointing out of
+/// the heart (down at the tip, up at the dip). Non-finite input gives `+Z`.
 pub fn outward_direction(p: DVec3) -> DVec3 {
     if let Some(n) = resolved_gradient_f(p) {
         return n;
@@ -263,13 +263,7 @@ mod tests {
         // it declines on the equator curve and at the singular points, and answers on most
         // of the surface.
         let (mut taken, mut declined) = (0, 0);
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut uniform = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut uniform = crate::testing::uniform_stream(0x2545_f491_4f6c_dd1d);
         let mut points: Vec<DVec3> = Vec::new();
         for _ in 0..20_000 {
             let z = 2.0 * uniform() - 1.0;
