@@ -637,10 +637,28 @@ impl ImplicitShape {
         let es = spans.map(|sp| sp.map_or([0.0; 3], |sp| sp.e));
         let mut cs = [[0.0; MAX_DEGREE + 1]; LANES];
         s.f.compose_lanes(mids, es, &mut cs);
+        let queries: [Option<Query>; LANES] = std::array::from_fn(|i| {
+            let span = spans[i].as_ref()?;
+            span.query(s, &mut cs[i])
+        });
+        // The lanes' first queries at once where all four have one of the surface's degree.
+        let mut ahead = first_roots_ahead(solver, s.f.degree, &cs, &queries);
         std::array::from_fn(|i| {
             let span = spans[i].as_ref()?;
-            let q = span.query(s, &mut cs[i])?;
-            self.solve(s, span, &cs[i], q, t_max[i], &mut first_root, &mut false)
+            let q = queries[i]?;
+            let mut answer = ahead[i].take();
+            self.solve(
+                s,
+                span,
+                &cs[i],
+                q,
+                t_max[i],
+                &mut |c: &[f64], lo: f64, hi: f64| match answer.take() {
+                    Some(root) => root,
+                    None => first_root(c, lo, hi),
+                },
+                &mut false,
+            )
         })
     }
 
@@ -776,6 +794,40 @@ struct Query {
     inv: f64,
     s_lo: f64,
     s_hi: f64,
+}
+
+/// The first query of every lane by [`Solver::first_root_lanes`] (`Some(answer)`: the scalar
+/// query's bits) when all [`LANES`] lanes have one that keeps the full `degree`; otherwise
+/// `None` for every lane (with a lane idle, four at once measured no faster than one at a
+/// time on the torus). Later queries are always asked one at a time.
+#[inline(always)]
+fn first_roots_ahead(
+    solver: Solver,
+    degree: usize,
+    cs: &[Uni; LANES],
+    queries: &[Option<Query>; LANES],
+) -> [Option<Option<f64>>; LANES] {
+    let active = queries.map(|q| q.is_some_and(|q| q.deg == degree));
+    if active.iter().filter(|&&a| a).count() < LANES {
+        return [None; LANES];
+    }
+    let lo = queries.map(|q| q.map_or(0.0, |q| q.s_lo));
+    let hi = queries.map(|q| q.map_or(1.0, |q| q.s_hi));
+    macro_rules! by_length {
+        ($($d:literal)*) => {
+            match degree + 1 {
+                $($d => solver.first_root_lanes::<$d>(
+                    &cs.map(|c| std::array::from_fn(|j| c[j])),
+                    lo,
+                    hi,
+                    active,
+                ),)*
+                _ => return [None; LANES],
+            }
+        };
+    }
+    let roots = by_length!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17);
+    std::array::from_fn(|i| active[i].then_some(roots[i]))
 }
 
 /// Scales `c[..=n]` by a power of two (exact) so its largest coefficient is in `[1, 2)` and
