@@ -9,7 +9,7 @@
 //! searching outward for the nearest sign change of `g`, and the root is finished by Newton
 //! safeguarded by bisection.
 
-use super::surface::factor_g_with_slope;
+use super::surface::{factor_g_with_slope, resolved_f_with_slope};
 use crate::geometry::DVec3;
 
 /// A polished root of `g` along the ray.
@@ -40,6 +40,15 @@ fn step_tolerance(o: DVec3, d: DVec3) -> f64 {
 #[inline]
 pub(super) fn polish(o: DVec3, d: DVec3, s0: f64, window: f64) -> Option<Polished> {
     let tol = step_tolerance(o, d);
+    match newton_on_f(o, d, s0, tol) {
+        Some(done) => Some(done),
+        None => polish_on_g(o, d, s0, window, tol),
+    }
+}
+
+/// [`polish`] by `g` alone: Newton on `g` while it converges as at a simple root, else a
+/// bracket searched outward from `s0` and solved.
+fn polish_on_g(o: DVec3, d: DVec3, s0: f64, window: f64, tol: f64) -> Option<Polished> {
     let (mut s, (mut g, mut slope)) = (s0, g_at(o, d, s0));
     if g == 0.0 {
         return Some(Polished {
@@ -97,6 +106,35 @@ pub(super) fn polish(o: DVec3, d: DVec3, s0: f64, window: f64) -> Option<Polishe
         }
     };
     Some(solve_bracket(o, d, bracket, tol))
+}
+
+/// Steps of the solver's root beyond which Newton on `f` is not tried a second time: far
+/// above the error of a simple root (~1e-13 at worst, the exit of a ray from inside), far
+/// below the ~1e-5 of the equator's triple root.
+const F_STEP_LIMIT: f64 = 1e-9;
+
+/// The root near `s0` by Newton on `f` itself (no cube root), where
+/// [`resolved_f_with_slope`] says it places the root as well as Newton on `g` would: at most
+/// two steps, the second only after a first below [`F_STEP_LIMIT`]; `None` (polish on `g`)
+/// wherever that does not hold or the steps do not fall below `tol`.
+#[inline]
+fn newton_on_f(o: DVec3, d: DVec3, s0: f64, tol: f64) -> Option<Polished> {
+    let mut s = s0;
+    for _ in 0..2 {
+        let (f, slope) = resolved_f_with_slope(o + s * d, d)?;
+        let step = f / slope;
+        if step.abs() <= tol {
+            return Some(Polished {
+                s: s - step,
+                rising: crossing(slope),
+            });
+        }
+        if step.abs() > F_STEP_LIMIT {
+            return None;
+        }
+        s -= step;
+    }
+    None
 }
 
 /// `Some(true)` for a rising `g`, `Some(false)` for a falling one, `None` when flat or NaN.
@@ -215,5 +253,131 @@ pub(super) fn earlier_crossing(
         }
         inner = x;
         h *= 2.0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rays from outside through random points near the heart's centre, and the roots of `g`
+    /// along them (bisected to adjacent floats), with the ray's chord as `o + s·d`.
+    fn crossings(seed: u64, count: usize) -> Vec<(DVec3, DVec3, f64)> {
+        let mut uniform = crate::testing::uniform_stream(seed);
+        let mut out = Vec::new();
+        while out.len() < count {
+            let mut v = || 2.0 * uniform() - 1.0;
+            let from = DVec3::new(v(), v(), v()).normalize() * 3.0;
+            let to = DVec3::new(0.5 * v(), 0.8 * v(), 0.9 * v());
+            let (o, d) = (from, (to - from) * 2.0);
+            // Sign changes of g on a fine grid, each bisected.
+            let mut prev = (0.0, factor_g(o));
+            for k in 1..=4000 {
+                let s = f64::from(k) / 4000.0;
+                let g = factor_g(o + s * d);
+                if (g > 0.0) != (prev.1 > 0.0) {
+                    let (mut a, mut b) = (prev.0, s);
+                    while b - a > 2.0 * f64::EPSILON * b {
+                        let m = 0.5 * (a + b);
+                        if (factor_g(o + m * d) > 0.0) == (prev.1 > 0.0) {
+                            a = m;
+                        } else {
+                            b = m;
+                        }
+                    }
+                    out.push((o, d, a));
+                }
+                prev = (s, g);
+            }
+        }
+        out
+    }
+
+    use super::super::surface::factor_g;
+
+    #[test]
+    fn newton_on_f_places_roots_where_polish_on_g_does_and_declines_at_the_equator() {
+        let (mut taken, mut declined) = (0, 0);
+        for (o, d, root) in crossings(0x9e37_79b9_7f4a_7c15, 3000) {
+            let tol = step_tolerance(o, d);
+            // Starts as the solver gives them: good to the last bits, or to ~1e-13 (the exit
+            // of a ray from inside), or far off (the equator's triple root, ~1e-5).
+            for start in [root, root + 3e-14, root - 1e-13, root + 1e-6] {
+                let Some(by_f) = newton_on_f(o, d, start, tol) else {
+                    declined += 1;
+                    continue;
+                };
+                taken += 1;
+                assert!(
+                    start != root + 1e-6,
+                    "took a start 1e-6 off at {}",
+                    o + root * d
+                );
+                let by_g = polish_on_g(o, d, start, 1e-2, tol).expect("a root of g");
+                assert!(
+                    (by_f.s - by_g.s).abs() <= 4.0 * tol,
+                    "{}: f {} g {} ({} tol)",
+                    o + root * d,
+                    by_f.s,
+                    by_g.s,
+                    (by_f.s - by_g.s).abs() / tol
+                );
+                // The same crossing direction, where g's noise lets it tell one.
+                assert!(
+                    by_g.rising.is_none() || by_f.rising == by_g.rising,
+                    "{}: {:?} against {:?}",
+                    o + root * d,
+                    by_f.rising,
+                    by_g.rising
+                );
+                assert!(by_f.rising.is_some());
+            }
+        }
+        // Most of the surface is taken; far-off starts and the equator curve are not.
+        eprintln!("{taken} taken, {declined} declined");
+        assert!(
+            taken > 6 * declined / 5,
+            "{taken} taken, {declined} declined"
+        );
+        // On the equator curve (a triple root of f: A = 0) never; beside it, on the surface
+        // at heights from 1e-17 up, only where it agrees with g (A there is about ∛B·Z, at
+        // or far below its own rounding up to Z ≈ 1e-14).
+        let mut uniform = crate::testing::uniform_stream(0x2545_f491_4f6c_dd1d);
+        let (mut near_taken, mut near_declined) = (0, 0);
+        for k in 0..2000 {
+            let phi = std::f64::consts::TAU * uniform();
+            let (cx, cy) = (phi.cos() * std::f64::consts::FRAC_1_SQRT_2, phi.sin());
+            let z = if k % 4 == 0 {
+                0.0
+            } else {
+                1e-17 * 10f64.powi(k % 13) * if k % 2 == 0 { 1.0 } else { -1.0 }
+            };
+            let mut r = 1.0f64;
+            for _ in 0..4 {
+                let b = 0.1 * (r * cx).powi(2) + (r * cy).powi(2);
+                r = ((1.0 + b.cbrt() * z - z * z) / (2.0 * cx * cx + cy * cy)).sqrt();
+            }
+            let p = DVec3::new(r * cx, r * cy, z);
+            // A ray through p from outside, entering at s = 1/2.
+            let d = DVec3::new(-cx, -cy, 0.3 * (uniform() - 0.5)) * 2.0;
+            let o = p - 0.5 * d;
+            let tol = step_tolerance(o, d);
+            let Some(by_f) = newton_on_f(o, d, 0.5, tol) else {
+                near_declined += 1;
+                continue;
+            };
+            near_taken += 1;
+            assert!(z != 0.0, "took the equator point {p}");
+            let by_g = polish_on_g(o, d, 0.5, 1e-2, tol).expect("a root of g");
+            assert!(
+                (by_f.s - by_g.s).abs() <= 4.0 * tol,
+                "{p}: f {} g {}",
+                by_f.s,
+                by_g.s
+            );
+            assert!(by_g.rising.is_none() || by_f.rising == by_g.rising, "{p}");
+        }
+        eprintln!("near the equator: {near_taken} taken, {near_declined} declined");
+        assert!(near_taken > 0 && near_declined > 500);
     }
 }

@@ -97,6 +97,39 @@ pub fn factor_g_with_slope(p: DVec3, d: DVec3) -> (f64, f64) {
     (g, da - cusp - s * d.z)
 }
 
+/// `f` at `p` and its slope along `d` (`∂f(p + s·d)/∂s`), where `A` and the slope are
+/// resolved: `A` at least 2¹⁰ times its rounding (away from the equator curve, where `f`
+/// has a triple root and only `g` can place it) and the slope's rounding below 1/16 of its
+/// size (a clear crossing, not a near-tangency). Newton on `f` then places a root as well as
+/// Newton on `g` does: on the surface `f = g·Q` with `Q ≈ 3A²`, and `f`'s rounding is `3A²`
+/// times `g`'s. `None` elsewhere.
+///
+/// The bounds: `A`'s rounding `da = 4ε·(2X² + Y² + Z² + 1)` moves `A³` by up to
+/// `(3A² + 3|A|·da + da²)·da` and `3A²` by `3(2|A| + da)·da`; every product and sum adds `8ε`
+/// of its magnitude.
+#[inline]
+pub fn resolved_f_with_slope(p: DVec3, d: DVec3) -> Option<(f64, f64)> {
+    let a = a_of(p);
+    let da = 4.0 * f64::EPSILON * (2.0 * p.x * p.x + p.y * p.y + p.z * p.z + 1.0);
+    // (A NaN `a` passes here and fails the finiteness test below.)
+    if a.abs() < 1024.0 * da {
+        return None;
+    }
+    let b = b_of(p);
+    let z2 = p.z * p.z;
+    let z3 = z2 * p.z;
+    let a2 = a * a;
+    let f = a2 * a - b * z3;
+    let slope_a = 4.0 * p.x * d.x + 2.0 * p.y * d.y + 2.0 * p.z * d.z;
+    let slope_b = 0.2 * p.x * d.x + 2.0 * p.y * d.y;
+    let terms = [3.0 * a2 * slope_a, slope_b * z3, 3.0 * b * z2 * d.z];
+    let slope = terms[0] - terms[1] - terms[2];
+    let size_a = 4.0 * (p.x * d.x).abs() + 2.0 * (p.y * d.y).abs() + 2.0 * (p.z * d.z).abs();
+    let slope_error = 3.0 * (2.0 * a.abs() + da) * da * size_a
+        + 8.0 * f64::EPSILON * (terms.iter().map(|t| t.abs()).sum::<f64>() + 3.0 * a2 * size_a);
+    (slope.is_finite() && f.is_finite() && 16.0 * slope_error < slope.abs()).then_some((f, slope))
+}
+
 /// `∇f`, the paper's normal: `(12X·A² − 0.2X·Z³, 6Y·A² − 2Y·Z³, 6Z·A² − 3Z²·B)`. Zero on the
 /// whole equator curve and at the two singular points `(0, 0, ±1)`.
 #[inline]
