@@ -52,13 +52,33 @@ pub struct Image {
     pub alpha: Option<Vec<f32>>,
 }
 
+/// `count` black pixels, in memory the allocator hands out already zeroed: no page of it is
+/// written here, so the render's threads fault their own rows in, in parallel (`vec!` of a
+/// `Vec3` writes every pixel first, on one thread: 14 ms at the start of a 1600×1600 render).
+fn zeroed_pixels(count: usize) -> Vec<Vec3> {
+    let layout = std::alloc::Layout::array::<Vec3>(count).expect("image too large");
+    if layout.size() == 0 {
+        return Vec::new();
+    }
+    // SAFETY: the layout is non-empty and is the one `Vec<Vec3>` uses for `count` elements;
+    // all-zero bytes are a valid `Vec3` (three `f32` zeros), so the `count` elements are
+    // initialised; a null pointer (allocation failure) is handled before use.
+    unsafe {
+        let ptr = std::alloc::alloc_zeroed(layout).cast::<Vec3>();
+        if ptr.is_null() {
+            std::alloc::handle_alloc_error(layout);
+        }
+        Vec::from_raw_parts(ptr, count, count)
+    }
+}
+
 impl Image {
     /// A black image of the given size.
     pub fn new(width: u32, height: u32) -> Self {
         Self {
             width,
             height,
-            pixels: vec![Vec3::ZERO; width as usize * height as usize],
+            pixels: zeroed_pixels(width as usize * height as usize),
             alpha: None,
         }
     }
@@ -69,7 +89,7 @@ impl Image {
         Self {
             width,
             height,
-            pixels: vec![Vec3::ZERO; count],
+            pixels: zeroed_pixels(count),
             alpha: Some(vec![0.0; count]),
         }
     }
