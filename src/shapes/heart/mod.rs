@@ -15,7 +15,9 @@
 //!    where they come in lanes, the same answers);
 //! 5. that root polished by a few safeguarded Newton steps on the well-conditioned factor
 //!    `g = A − ∛B·Z` ([`factor_g`]): where `f` has a triple root (the equator curve) its root
-//!    is only good to ~1e-5, where `g`'s is good to the last bit;
+//!    is only good to ~1e-5, where `g`'s is good to the last bit (away from that curve, where
+//!    `f = g·3A²` with `A` resolved, one or two Newton steps on `f` itself do the same without
+//!    a cube root);
 //! 6. checked: a root with no root of `g` near it (a near-tangency or rounding noise of `f`)
 //!    is skipped; a root where `g` crosses the wrong way (leaving the heart although the ray
 //!    started outside) means the solver merged an earlier root into it, which is recovered

@@ -4,7 +4,10 @@
 //! simple, but only to about `∛ε ≈ 1e-5` on the equator curve (a triple root of `f`) and
 //! beside the singular points (where `f`'s terms are far below its rounding); there a solver
 //! may also merge two nearby roots into one or report a near-tangency as a root. `g` has
-//! simple roots there. Newton on `g` finishes a good root in one evaluation; when Newton
+//! simple roots there. Where `A` is resolved (away from the equator curve) `f = g·Q` with
+//! `Q = 3A²` on the surface, so Newton on `f` places the root as well and needs no cube root:
+//! one or two steps of it finish a good root. Elsewhere Newton on `g` finishes a good root in
+//! one evaluation; when Newton
 //! misbehaves (the cusp of `∛B` beside the Z axis, a poor start), a bracket is found by
 //! searching outward for the nearest sign change of `g`, and the root is finished by Newton
 //! safeguarded by bisection.
