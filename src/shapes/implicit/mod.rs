@@ -606,6 +606,108 @@ impl ImplicitShape {
         })
     }
 
+    /// [`ImplicitShape::span`] of each lane's ray (`None` too where `t_max[i] ≤ t_min[i]`):
+    /// the same spans bit for bit, computed lane by lane without branches (compiled for AVX2
+    /// when the processor has it, for the baseline otherwise).
+    #[inline]
+    fn spans_lanes(
+        &self,
+        s: &Surface,
+        local: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [Option<Span>; LANES] {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2, checked just above.
+            return unsafe { self.spans_lanes_avx2(s, local, t_min, t_max) };
+        }
+        self.spans_lanes_in(s, local, t_min, t_max)
+    }
+
+    /// [`ImplicitShape::spans_lanes`] compiled for AVX2.
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn spans_lanes_avx2(
+        &self,
+        s: &Surface,
+        local: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [Option<Span>; LANES] {
+        self.spans_lanes_in(s, local, t_min, t_max)
+    }
+
+    /// The body of [`ImplicitShape::spans_lanes`] (and, called directly, its baseline copy):
+    /// [`ImplicitShape::chord`], [`ImplicitShape::span`] and [`Aabb::clip`] in their order,
+    /// each `if` a choice between computed values (a lane the scalar code leaves early is
+    /// computed on with meaningless values and dropped at the end).
+    #[inline(always)]
+    fn spans_lanes_in(
+        &self,
+        s: &Surface,
+        local: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [Option<Span>; LANES] {
+        let Some(object_box) = s.object_box else {
+            return [None; LANES];
+        };
+        let (mut o, mut d) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+        for (i, r) in local.iter().enumerate() {
+            for axis in 0..3 {
+                o[axis][i] = r.origin[axis];
+                d[axis][i] = r.dir[axis];
+            }
+        }
+        let mut alive = [false; LANES];
+        let (mut t_mid, mut t_half, mut guard) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
+        let (mut mid, mut e) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+        let (mut lo_t, mut hi_t) = ([0.0; LANES], [0.0; LANES]);
+        for i in 0..LANES {
+            // The chord through the clip sphere.
+            let dd = d[0][i] * d[0][i] + d[1][i] * d[1][i] + d[2][i] * d[2][i];
+            let od = o[0][i] * d[0][i] + o[1][i] * d[1][i] + o[2][i] * d[2][i];
+            t_mid[i] = -od / dd;
+            for axis in 0..3 {
+                mid[axis][i] = o[axis][i] + t_mid[i] * d[axis][i];
+            }
+            let mm = mid[0][i] * mid[0][i] + mid[1][i] * mid[1][i] + mid[2][i] * mid[2][i];
+            let h2 = self.bound * self.bound - mm;
+            t_half[i] = (h2 / dd).sqrt();
+            for axis in 0..3 {
+                e[axis][i] = d[axis][i] * t_half[i];
+            }
+            let chord = (dd > 0.0) & dd.is_finite() & !h2.is_nan() & (h2 > 0.0);
+            // The span to search.
+            let g = SELF_HIT_GUARD * t_half[i];
+            let above = if g > t_min[i] { g } else { t_min[i] };
+            guard[i] = if t_min[i] >= 0.0 { above } else { t_min[i] };
+            lo_t[i] = guard[i].max(t_mid[i] - t_half[i]);
+            hi_t[i] = t_max[i].min(t_mid[i] + t_half[i]);
+            alive[i] = (t_max[i] > t_min[i])
+                & chord
+                & !lo_t[i].is_nan()
+                & !hi_t[i].is_nan()
+                & (lo_t[i] < hi_t[i]);
+        }
+        object_box.clip_lanes(&o, &d, &mut lo_t, &mut hi_t, &mut alive);
+        std::array::from_fn(|i| {
+            (alive[i] & (lo_t[i] < hi_t[i])).then(|| Span {
+                t_mid: t_mid[i],
+                t_half: t_half[i],
+                guard: guard[i],
+                mid: [mid[0][i], mid[1][i], mid[2][i]],
+                e: [e[0][i], e[1][i], e[2][i]],
+                lo_t: lo_t[i],
+                hi_t: hi_t[i],
+            })
+        })
+    }
+
     /// [`Shape::intersect_lanes`](crate::shapes::Shape::intersect_lanes) on the generic path
     /// (camera rays, and through `occludes_lanes` shadow rays): the rays that reach the
     /// composition are composed together, then each is solved as
@@ -617,11 +719,7 @@ impl ImplicitShape {
         t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [Option<f64>; LANES] {
-        let spans: [Option<Span>; LANES] = std::array::from_fn(|i| {
-            (t_max[i] > t_min[i])
-                .then(|| self.span(s, &local[i], t_min[i], t_max[i]))
-                .flatten()
-        });
+        let spans = self.spans_lanes(s, local, t_min, t_max);
         let solver = self.solver;
         let mut first_root = |c: &[f64], lo: f64, hi: f64| solver.first_root(c, lo, hi);
         if spans.iter().filter(|sp| sp.is_some()).count() < 2 {
@@ -1098,6 +1196,78 @@ impl ObjectShape for ImplicitShape {
             // Every hit lies in the box (the chord is clipped to it) and on a zero of `f`.
             Kind::Generic(s) => s.cells.clone(),
             Kind::Heart(_) => Vec::new(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A span's bits, field by field.
+    fn bits(span: Option<Span>) -> Option<Vec<u64>> {
+        span.map(|s| {
+            let mut v = vec![s.t_mid, s.t_half, s.guard, s.lo_t, s.hi_t];
+            v.extend(s.mid);
+            v.extend(s.e);
+            v.into_iter().map(f64::to_bits).collect()
+        })
+    }
+
+    #[test]
+    fn spans_in_lanes_are_the_scalar_spans_bit_for_bit_in_both_copies() {
+        for (name, params) in [
+            ("torus", vec![1.0, 0.3]),
+            ("barth_sextic", vec![]),
+            ("taubin_heart", vec![]),
+        ] {
+            let shape = Implicit::from_preset(name, &params, Frame::identity(), None).unwrap();
+            let object = shape.object();
+            let Kind::Generic(s) = &object.kind else {
+                panic!("{name} is generic");
+            };
+            let r = object.bound;
+            let mut uniform = crate::testing::uniform_stream(0x7f4a_7c15_9e37_79b9);
+            let mut counts = [0usize; 2];
+            for k in 0..4000usize {
+                let rays: [Ray; LANES] = std::array::from_fn(|l| {
+                    let mut v = || 2.0 * uniform() - 1.0;
+                    let origin = DVec3::new(v(), v(), v()) * 4.0 * r;
+                    let target = DVec3::new(v(), v(), v()) * r;
+                    let mut dir = (target - origin) * (0.1 + 10.0 * uniform());
+                    match (k + l) % 11 {
+                        0 => dir.x = 0.0, // parallel to a slab
+                        1 => dir = DVec3::ZERO,
+                        2 => dir.y = f64::NAN,
+                        _ => {}
+                    }
+                    // Secondary rays start inside the sphere.
+                    let origin = if (k + l) % 3 == 0 { target } else { origin };
+                    Ray::new(origin, dir)
+                });
+                let t_min: [f64; LANES] = std::array::from_fn(|l| match (k + l) % 5 {
+                    0 => -1.0,
+                    1 => 1e-3,
+                    2 => 0.3,
+                    _ => 0.0,
+                });
+                let t_max: [f64; LANES] = std::array::from_fn(|l| match (k + l) % 7 {
+                    0 => f64::NEG_INFINITY,
+                    1 => 0.5,
+                    _ => f64::INFINITY,
+                });
+                let baseline = object.spans_lanes_in(s, &rays, t_min, t_max);
+                let detected = object.spans_lanes(s, &rays, t_min, t_max);
+                for i in 0..LANES {
+                    let want = (t_max[i] > t_min[i])
+                        .then(|| object.span(s, &rays[i], t_min[i], t_max[i]))
+                        .flatten();
+                    assert_eq!(bits(baseline[i]), bits(want), "{name}: {:?}", rays[i]);
+                    assert_eq!(bits(detected[i]), bits(want), "{name}: {:?}", rays[i]);
+                    counts[usize::from(want.is_some())] += 1;
+                }
+            }
+            assert!(counts[0] > 2000 && counts[1] > 2000, "{name}: {counts:?}");
         }
     }
 }
