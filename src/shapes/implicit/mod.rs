@@ -610,19 +610,13 @@ impl ImplicitShape {
     /// the same spans bit for bit, computed lane by lane without branches (compiled for AVX2
     /// when the processor has it, for the baseline otherwise).
     #[inline]
-    fn spans_lanes(
-        &self,
-        s: &Surface,
-        local: &[Ray; LANES],
-        t_min: [f64; LANES],
-        t_max: [f64; LANES],
-    ) -> [Option<Span>; LANES] {
+    fn spans_lanes(&self, s: &Surface, rays: LaneRays) -> [Option<Span>; LANES] {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2, checked just above.
-            return unsafe { self.spans_lanes_avx2(s, local, t_min, t_max) };
+            return unsafe { self.spans_lanes_avx2(s, rays) };
         }
-        self.spans_lanes_in(s, local, t_min, t_max)
+        self.spans_lanes_in(s, rays)
     }
 
     /// [`ImplicitShape::spans_lanes`] compiled for AVX2.
@@ -631,14 +625,8 @@ impl ImplicitShape {
     /// The processor must have AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn spans_lanes_avx2(
-        &self,
-        s: &Surface,
-        local: &[Ray; LANES],
-        t_min: [f64; LANES],
-        t_max: [f64; LANES],
-    ) -> [Option<Span>; LANES] {
-        self.spans_lanes_in(s, local, t_min, t_max)
+    unsafe fn spans_lanes_avx2(&self, s: &Surface, rays: LaneRays) -> [Option<Span>; LANES] {
+        self.spans_lanes_in(s, rays)
     }
 
     /// The body of [`ImplicitShape::spans_lanes`] (and, called directly, its baseline copy):
@@ -646,13 +634,12 @@ impl ImplicitShape {
     /// each `if` a choice between computed values (a lane the scalar code leaves early is
     /// computed on with meaningless values and dropped at the end).
     #[inline(always)]
-    fn spans_lanes_in(
-        &self,
-        s: &Surface,
-        local: &[Ray; LANES],
-        t_min: [f64; LANES],
-        t_max: [f64; LANES],
-    ) -> [Option<Span>; LANES] {
+    fn spans_lanes_in(&self, s: &Surface, rays: LaneRays) -> [Option<Span>; LANES] {
+        let LaneRays {
+            local,
+            t_min,
+            t_max,
+        } = rays;
         let Some(object_box) = s.object_box else {
             return [None; LANES];
         };
@@ -719,7 +706,14 @@ impl ImplicitShape {
         t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [Option<f64>; LANES] {
-        let spans = self.spans_lanes(s, local, t_min, t_max);
+        let spans = self.spans_lanes(
+            s,
+            LaneRays {
+                local,
+                t_min,
+                t_max,
+            },
+        );
         let solver = self.solver;
         let mut first_root = |c: &[f64], lo: f64, hi: f64| solver.first_root(c, lo, hi);
         if spans.iter().filter(|sp| sp.is_some()).count() < 2 {
@@ -843,6 +837,15 @@ impl ImplicitShape {
         }
         None
     }
+}
+
+/// [`LANES`] object-space rays with their ranges `(t_min[i], t_max[i])`, as
+/// [`ObjectShape::intersect_lanes`] receives them.
+#[derive(Clone, Copy)]
+struct LaneRays<'a> {
+    local: &'a [Ray; LANES],
+    t_min: [f64; LANES],
+    t_max: [f64; LANES],
 }
 
 /// The chord of one ray through the clip sphere (`t = t_mid + s·t_half`, object-space
@@ -1256,8 +1259,13 @@ mod tests {
                     1 => 0.5,
                     _ => f64::INFINITY,
                 });
-                let baseline = object.spans_lanes_in(s, &rays, t_min, t_max);
-                let detected = object.spans_lanes(s, &rays, t_min, t_max);
+                let lanes = LaneRays {
+                    local: &rays,
+                    t_min,
+                    t_max,
+                };
+                let baseline = object.spans_lanes_in(s, lanes);
+                let detected = object.spans_lanes(s, lanes);
                 for i in 0..LANES {
                     let want = (t_max[i] > t_min[i])
                         .then(|| object.span(s, &rays[i], t_min[i], t_max[i]))
