@@ -69,13 +69,13 @@ rays_of() { # NAME LOG
 timed() {
   local name=$1 log="$work/$1.log" tf="$work/$1.time" start end
   start=$(date +%s%N)
-  if ! /usr/bin/time -f "%e %M %U %S" -o "$tf" "${cmd[@]}" >"$log" 2>&1; then
+  if ! /usr/bin/time -f "%M %U %S" -o "$tf" "${cmd[@]}" >"$log" 2>&1; then
     echo "failed: ${cmd[*]}" >&2
     tail -n 20 "$log" >&2
     exit 1
   fi
   end=$(date +%s%N)
-  read -r _ peak user sys <"$tf"
+  read -r peak user sys <"$tf"
   echo "$(awk -v a="$start" -v b="$end" 'BEGIN {printf "%.4f", (b - a) / 1e9}') $peak $(rays_of "$name" "$log") $(awk -v u="$user" -v s="$sys" 'BEGIN {print u + s}')" >>"$work/$name.times"
 }
 

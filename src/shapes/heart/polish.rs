@@ -303,19 +303,21 @@ mod tests {
         let (mut taken, mut declined) = (0, 0);
         for (o, d, root) in crossings(0x9e37_79b9_7f4a_7c15, 3000) {
             let tol = step_tolerance(o, d);
+            // A start far off (as at the equator's triple root, ~1e-5) is never taken.
+            let far = root + 1e-6;
+            assert!(
+                newton_on_f(o, d, far, tol).is_none(),
+                "took {far} at {}",
+                o + root * d
+            );
             // Starts as the solver gives them: good to the last bits, or to ~1e-13 (the exit
-            // of a ray from inside), or far off (the equator's triple root, ~1e-5).
-            for start in [root, root + 3e-14, root - 1e-13, root + 1e-6] {
+            // of a ray from inside).
+            for start in [root, root + 3e-14, root - 1e-13] {
                 let Some(by_f) = newton_on_f(o, d, start, tol) else {
                     declined += 1;
                     continue;
                 };
                 taken += 1;
-                assert!(
-                    start != root + 1e-6,
-                    "took a start 1e-6 off at {}",
-                    o + root * d
-                );
                 let by_g = polish_on_g(o, d, start, 1e-2, tol).expect("a root of g");
                 assert!(
                     (by_f.s - by_g.s).abs() <= 4.0 * tol,
@@ -336,12 +338,9 @@ mod tests {
                 assert!(by_f.rising.is_some());
             }
         }
-        // Most of the surface is taken; far-off starts and the equator curve are not.
-        eprintln!("{taken} taken, {declined} declined");
-        assert!(
-            taken > 6 * declined / 5,
-            "{taken} taken, {declined} declined"
-        );
+        // Nearly every good start away from the equator curve is taken (8 982 of 9 000 when
+        // written).
+        assert!(taken > 99 * declined, "{taken} taken, {declined} declined");
         // On the equator curve (a triple root of f: A = 0) never; beside it, on the surface
         // at heights from 1e-17 up, only where it agrees with g (A there is about ∛B·Z, at
         // or far below its own rounding up to Z ≈ 1e-14).
@@ -380,7 +379,11 @@ mod tests {
             );
             assert!(by_g.rising.is_none() || by_f.rising == by_g.rising, "{p}");
         }
-        eprintln!("near the equator: {near_taken} taken, {near_declined} declined");
-        assert!(near_taken > 0 && near_declined > 500);
+        // The equator curve's points (a quarter) and those within ~1e-14 of it are declined;
+        // farther ones are taken (807 taken, 1 193 declined when written).
+        assert!(
+            near_taken > 500 && near_declined > 500,
+            "{near_taken} taken, {near_declined} declined"
+        );
     }
 }

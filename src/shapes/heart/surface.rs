@@ -41,6 +41,12 @@ fn a_of(p: DVec3) -> f64 {
     2.0 * p.x * p.x + p.y * p.y + p.z * p.z - 1.0
 }
 
+/// A bound on the rounding of [`a_of`] at `p`: `4ε·(2X² + Y² + Z² + 1)`.
+#[inline]
+fn a_rounding(p: DVec3) -> f64 {
+    4.0 * f64::EPSILON * (2.0 * p.x * p.x + p.y * p.y + p.z * p.z + 1.0)
+}
+
 /// `B = 0.1X² + Y² ≥ 0`.
 #[inline]
 fn b_of(p: DVec3) -> f64 {
@@ -110,7 +116,7 @@ pub fn factor_g_with_slope(p: DVec3, d: DVec3) -> (f64, f64) {
 #[inline]
 pub fn resolved_f_with_slope(p: DVec3, d: DVec3) -> Option<(f64, f64)> {
     let a = a_of(p);
-    let da = 4.0 * f64::EPSILON * (2.0 * p.x * p.x + p.y * p.y + p.z * p.z + 1.0);
+    let da = a_rounding(p);
     // (A NaN `a` passes here and fails the finiteness test below.)
     if a.abs() < 1024.0 * da {
         return None;
@@ -119,6 +125,7 @@ pub fn resolved_f_with_slope(p: DVec3, d: DVec3) -> Option<(f64, f64)> {
     let z2 = p.z * p.z;
     let z3 = z2 * p.z;
     let a2 = a * a;
+    // `heart_fn`, from the powers already at hand.
     let f = a2 * a - b * z3;
     let slope_a = 4.0 * p.x * d.x + 2.0 * p.y * d.y + 2.0 * p.z * d.z;
     let slope_b = 0.2 * p.x * d.x + 2.0 * p.y * d.y;
@@ -193,7 +200,7 @@ fn resolved_gradient_f(p: DVec3) -> Option<DVec3> {
     let (a, n, terms) = gradient_f_terms(p);
     let size = terms.iter().map(|t| t.abs()).sum::<f64>();
     // A's rounding `da` moves `A²` by up to `(2|A| + da)·da`.
-    let da = 4.0 * f64::EPSILON * (2.0 * p.x * p.x + p.y * p.y + p.z * p.z + 1.0);
+    let da = a_rounding(p);
     let through_a =
         (2.0 * a.abs() + da) * da * (12.0 * p.x.abs() + 6.0 * p.y.abs() + 6.0 * p.z.abs());
     let error = 8.0 * f64::EPSILON * size + 2.0 * through_a;

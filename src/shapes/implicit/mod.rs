@@ -734,11 +734,11 @@ impl ImplicitShape {
             span.query(s, &mut cs[i])
         });
         // The lanes' first queries at once where all four have one of the surface's degree.
-        let mut ahead = first_roots_ahead(solver, s.f.degree, &cs, &queries);
+        let ahead = first_roots_ahead(solver, s.f.degree, &cs, &queries);
         std::array::from_fn(|i| {
             let span = spans[i].as_ref()?;
             let q = queries[i]?;
-            let mut answer = ahead[i].take();
+            let mut answer = ahead[i];
             self.solve(
                 s,
                 span,
@@ -908,12 +908,11 @@ fn first_roots_ahead(
     cs: &[Uni; LANES],
     queries: &[Option<Query>; LANES],
 ) -> [Option<Option<f64>>; LANES] {
-    let active = queries.map(|q| q.is_some_and(|q| q.deg == degree));
-    if active.iter().filter(|&&a| a).count() < LANES {
+    if !queries.iter().all(|q| q.is_some_and(|q| q.deg == degree)) {
         return [None; LANES];
     }
-    let lo = queries.map(|q| q.map_or(0.0, |q| q.s_lo));
-    let hi = queries.map(|q| q.map_or(1.0, |q| q.s_hi));
+    let queries = queries.map(|q| q.expect("every lane has a query"));
+    let (lo, hi) = (queries.map(|q| q.s_lo), queries.map(|q| q.s_hi));
     macro_rules! by_length {
         ($($d:literal)*) => {
             match degree + 1 {
@@ -921,14 +920,13 @@ fn first_roots_ahead(
                     &cs.map(|c| std::array::from_fn(|j| c[j])),
                     lo,
                     hi,
-                    active,
+                    [true; LANES],
                 ),)*
                 _ => return [None; LANES],
             }
         };
     }
-    let roots = by_length!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17);
-    std::array::from_fn(|i| active[i].then_some(roots[i]))
+    by_length!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17).map(Some)
 }
 
 /// Scales `c[..=n]` by a power of two (exact) so its largest coefficient is in `[1, 2)` and
