@@ -176,7 +176,7 @@ typed_main() {
     awk -v l="$name" -v pw="$(col "pov-$name" 1)" -v kw="$(col "kardia-$name" 1)" \
       -v pc="$(col "pov-$name" 4)" -v kc="$(col "kardia-$name" 4)" \
       -v pm="$(col "pov-$name" 2)" -v km="$(col "kardia-$name" 2)" -v f="$framing" \
-      'BEGIN {printf "| %s | %.3f | %.3f | %.2f× | %.2f | %.2f | %.2f× | %.1f / %.1f | %s |\n", l, pw, kw, pw / kw, pc, kc, pc / kc, pm / 1024, km / 1024, f}'
+      'BEGIN {cpu = (kc > 0) ? sprintf("%.2f×", pc / kc) : "–"; printf "| %s | %.3f | %.3f | %.2f× | %.2f | %.2f | %s | %.1f / %.1f | %s |\n", l, pw, kw, pw / kw, pc, kc, cpu, pm / 1024, km / 1024, f}'
   done
   echo
   echo "Target (issue 13): each typed surface ≥ 15× POV-Ray on one thread (reported, not enforced)."
