@@ -164,12 +164,12 @@ fn gradient_matches_finite_differences() {
 fn heart_preset_gradient_and_value_agree_with_the_generic_expansion() {
     let heart = Implicit::from_preset("heart", &[], Frame::identity(), None).unwrap();
     assert!(heart.is_heart());
-    let generic = Implicit::new(
-        "(2x^2 + y^2 + z^2 - 1)^3 = (0.1x^2 + y^2) z^3",
-        Frame::identity(),
-        None,
-    )
-    .unwrap();
+    // Typed otherwise, the heart is still recognised; the generic path is asked for.
+    let typed = "(2x^2 + y^2 + z^2 - 1)^3 = (0.1x^2 + y^2) z^3";
+    assert!(Implicit::new(typed, Frame::identity(), None)
+        .unwrap()
+        .is_heart());
+    let generic = Implicit::new_generic(typed, Frame::identity(), 2.0).unwrap();
     assert!(!generic.is_heart());
     let mut r = rng();
     for _ in 0..100 {

@@ -76,12 +76,8 @@ fn heart_preset_is_identical_to_heart() {
 fn generic_heart_matches_heart_closely() {
     let f = tilted_frame();
     let heart = Heart::new(f.position, f.m.x_axis, f.m.y_axis, f.m.z_axis).unwrap();
-    let generic = Implicit::new(
-        "(2x^2 + y^2 + z^2 - 1)^3 = (0.1x^2 + y^2)*z^3",
-        f,
-        Some(2.0),
-    )
-    .unwrap();
+    let generic =
+        Implicit::new_generic("(2x^2 + y^2 + z^2 - 1)^3 = (0.1x^2 + y^2)*z^3", f, 2.0).unwrap();
     assert!(!generic.is_heart());
     for eye in eyes() {
         let cam = camera(eye);
@@ -98,6 +94,77 @@ fn generic_heart_matches_heart_closely() {
         // (measured over 4 × 400² rays): f's roots are ill-conditioned near the equator curve,
         // which HEART handles specially and the generic path does not.
         assert!(mismatched <= 2, "{mismatched} pixels differ from {eye}");
+    }
+}
+
+/// Taubin's heart is the paper's heart with `x = Y`, `y = √(8/9)·X`: its preset (and the
+/// equation typed otherwise, or scaled) takes the heart's path, and gives the hits and normals
+/// of `HEART` placed by the frame composed with that map (to the rounding of the two frames);
+/// the generic path agrees to the accuracy of its roots.
+#[test]
+fn taubin_heart_takes_the_heart_s_path_and_matches_the_generic_one() {
+    let f = tilted_frame();
+    let alpha = (8.0f64 / 9.0).sqrt();
+    let (u, v, w) = (f.m * DVec3::new(0.0, alpha, 0.0), f.m.x_axis, f.m.z_axis);
+    let heart = Heart::new(f.position, u, v, w).unwrap();
+    let equation = preset_equation("taubin_heart", &[]).unwrap();
+    let preset = Implicit::from_preset("taubin_heart", &[], f, None).unwrap();
+    let retyped = Implicit::new(
+        "2*(x^2 + 2.25y^2 + z^2 - 1)^3 = 2*(x^2 + 0.1125y^2)*z^3",
+        f,
+        Some(2.0),
+    )
+    .unwrap();
+    let generic = Implicit::new_generic(&equation, f, 2.0).unwrap();
+    assert!(preset.is_heart() && retyped.is_heart() && !generic.is_heart());
+    for eye in eyes() {
+        let cam = camera(eye);
+        let a = cast(&heart, &cam);
+        assert!(a.iter().filter(|t| t.is_some()).count() > 500, "from {eye}");
+        for shape in [&preset, &retyped] {
+            let b = cast(shape, &cam);
+            for (i, (ta, tb)) in a.iter().zip(&b).enumerate() {
+                // The two frames differ by the rounding of √(8/9)·u: depths to ~1e-15.
+                match (ta, tb) {
+                    (Some(x), Some(y)) => assert!((x - y).abs() < 1e-12 * x, "{x} vs {y}"),
+                    (None, None) => {}
+                    _ => panic!("pixel {i} from {eye}: HEART {ta:?}, preset {tb:?}"),
+                }
+                if let Some(t) = tb {
+                    let ray = cam.ray(
+                        (i as u32 % N) as f64 + 0.5,
+                        (i as u32 / N) as f64 + 0.5,
+                        N,
+                        N,
+                    );
+                    let p = ray.at(*t);
+                    assert!((heart.normal(p) - shape.normal(p)).length() < 1e-9, "{p}");
+                }
+            }
+        }
+        let b = cast(&generic, &cam);
+        let mut mismatched = 0;
+        for (ta, tb) in a.iter().zip(&b) {
+            match (ta, tb) {
+                (Some(x), Some(y)) => assert!((x - y).abs() < 1e-5 * x, "{x} vs {y} from {eye}"),
+                (None, None) => {}
+                _ => mismatched += 1,
+            }
+        }
+        assert!(mismatched <= 2, "{mismatched} pixels differ from {eye}");
+    }
+    // The equation's value and gradient, through the map: those of the expansion.
+    for p in [
+        DVec3::new(0.3, -0.2, 0.5),
+        DVec3::new(-0.7, 0.1, -0.4),
+        DVec3::new(0.05, 0.4, 1.1),
+    ] {
+        let q = f.m_inv * (p - f.position);
+        let (vp, vg) = (retyped.value(q), 2.0 * generic.value(q));
+        assert!((vp - vg).abs() < 1e-12, "{vp} vs {vg}");
+        let (gp, gg) = (retyped.gradient(q), 2.0 * generic.gradient(q));
+        assert!((gp - gg).length() < 1e-11, "{gp} vs {gg}");
+        assert!((preset.value(q) - generic.value(q)).abs() < 1e-12);
     }
 }
 

@@ -18,13 +18,17 @@
 //! The `heart` preset (and an equation written exactly as that preset writes it) is the
 //! paper's heart: it builds and delegates to [`crate::shapes::Heart`] with the same frame and
 //! solver, so it renders pixel-identical to `HEART`, including the heart's own accuracy work
-//! at its equator curve. Any other way of typing the heart goes through the generic path.
+//! at its equator curve. An equation that expands to the heart stretched along x and y, with
+//! or without x and y swapped ([`heart_form`]: Taubin's heart, the heart typed otherwise), is
+//! traced through the heart's path too, in heart space (the shape's frame composed with the
+//! stretch); [`Implicit::new_generic`] asks for the generic path instead.
 
 pub mod coef;
 mod corpus;
 pub mod dd;
 pub mod equation;
 pub mod extent;
+pub mod heart_form;
 pub mod poly;
 pub mod presets;
 
@@ -32,7 +36,7 @@ use super::heart::HeartShape;
 use super::placed::{ObjectShape, Placed, Placement};
 use super::report::Recorder;
 use super::{SolverReport, LANES};
-use crate::geometry::{Aabb, DVec3, Frame, Ray, SolidEllipsoid};
+use crate::geometry::{Aabb, DMat3, DVec3, Frame, Ray, SolidEllipsoid};
 use crate::roots::Solver;
 use dd::Dd;
 use poly::{Compiled, Gradient, Poly, Powers, Uni};
@@ -274,6 +278,59 @@ impl Surface {
 enum Kind {
     Generic(Box<Surface>),
     Heart(HeartShape),
+    MappedHeart(Box<MappedHeart>),
+}
+
+/// The paper's heart in other coordinates ([`heart_form`]: Taubin's heart, stretched
+/// hearts), traced through the heart's own path in heart space.
+#[derive(Debug, Clone)]
+struct MappedHeart {
+    heart: HeartShape,
+    /// The heart-space point of an object-space point.
+    to_heart: DMat3,
+    /// The object-space point of a heart-space point.
+    to_object: DMat3,
+    /// The equation's polynomial is `scale · f_heart(to_heart · p)`.
+    scale: f64,
+    /// World space to heart space: the shape's placement followed by `to_heart`.
+    at: Placement,
+    /// A radius about the object-space origin that holds the whole surface.
+    radius: f64,
+}
+
+impl MappedHeart {
+    /// The heart of `form` placed by `frame` (the shape's own placement).
+    fn new(form: heart_form::HeartForm, frame: &Frame) -> Result<Self, EquationError> {
+        let to_object = form.to_object;
+        let m = frame.m * to_object;
+        let at = Frame::new(frame.position, m.x_axis, m.y_axis, m.z_axis)
+            .map(Placement::new)
+            .map_err(|e| EquationError {
+                offset: 0,
+                len: 1,
+                message: format!("the heart's frame in heart space: {e}"),
+            })?;
+        let b = super::heart::BOUNDS;
+        let radius = (0..8)
+            .map(|i| {
+                let corner = DVec3::new(
+                    if i & 1 == 0 { b.min.x } else { b.max.x },
+                    if i & 2 == 0 { b.min.y } else { b.max.y },
+                    if i & 4 == 0 { b.min.z } else { b.max.z },
+                );
+                (to_object * corner).length()
+            })
+            .fold(0.0, f64::max)
+            * (1.0 + 1e-9);
+        Ok(Self {
+            heart: HeartShape::default(),
+            to_heart: to_object.inverse(),
+            to_object,
+            scale: form.scale,
+            at,
+            radius,
+        })
+    }
 }
 
 /// An implicit polynomial surface `p(x, y, z) = 0` in object space, placed by a [`Frame`],
@@ -375,6 +432,40 @@ impl Implicit {
                 )
             })?,
         };
+        if let Some(form) = heart_form::recognise(&poly) {
+            if form.is_identity() {
+                return Ok(Self::heart(frame, bound));
+            }
+            let mapped = MappedHeart::new(form, &frame)?;
+            return Ok(Placed::place(
+                Placement::new(frame),
+                ImplicitShape {
+                    solver: Solver::default(),
+                    bound,
+                    kind: Kind::MappedHeart(Box::new(mapped)),
+                },
+            ));
+        }
+        Self::generic(poly, f, frame, bound)
+    }
+
+    /// As [`Implicit::new`] with the bound given, always through the generic path, even for an
+    /// equation that is the paper's heart ([`Implicit::is_heart`]): for comparing the two.
+    pub fn new_generic(equation: &str, frame: Frame, bound: f64) -> Result<Self, EquationError> {
+        let poly = expand(equation)?;
+        let f = Compiled::new(&poly);
+        Self::generic(poly, f, frame, bound)
+    }
+
+    /// The generic path's shape of the expanded `poly` (compiled to `f`), clipped to `bound`.
+    fn generic(poly: Poly, f: Compiled, frame: Frame, bound: f64) -> Result<Self, EquationError> {
+        if !(bound > 0.0 && bound.is_finite()) {
+            return Err(EquationError {
+                offset: 0,
+                len: 1,
+                message: format!("BOUND must be a finite number greater than 0, not {bound}"),
+            });
+        }
         let grad = [0, 1, 2].map(|v| Compiled::new(&poly.derivative(v)));
         let zero_set = extent::zero_set(&f, bound);
         let to_box = |(lo, hi): ([f64; 3], [f64; 3])| {
@@ -432,8 +523,10 @@ impl Implicit {
     pub fn with_solver(mut self, solver: Solver) -> Self {
         let shape = self.object_mut();
         shape.solver = solver;
-        if let Kind::Heart(h) = &mut shape.kind {
-            *h = HeartShape::with_solver(solver);
+        match &mut shape.kind {
+            Kind::Heart(h) => *h = HeartShape::with_solver(solver),
+            Kind::MappedHeart(m) => m.heart = HeartShape::with_solver(solver),
+            Kind::Generic(_) => {}
         }
         self
     }
@@ -443,16 +536,18 @@ impl Implicit {
         self.object().bound
     }
 
-    /// True when this is the `heart` preset, delegated to [`super::Heart`]'s object space.
+    /// True when the equation is the paper's heart, possibly stretched along x and y or with
+    /// them swapped (Taubin's heart; see [`heart_form`]), and is traced through
+    /// [`super::Heart`]'s path rather than the generic one.
     pub fn is_heart(&self) -> bool {
-        matches!(self.object().kind, Kind::Heart(_))
+        matches!(self.object().kind, Kind::Heart(_) | Kind::MappedHeart(_))
     }
 
     /// Total degree of the polynomial.
     pub fn degree(&self) -> usize {
         match &self.object().kind {
             Kind::Generic(s) => s.f.degree,
-            Kind::Heart(_) => 6,
+            Kind::Heart(_) | Kind::MappedHeart(_) => 6,
         }
     }
 
@@ -461,6 +556,7 @@ impl Implicit {
         match &self.object().kind {
             Kind::Generic(s) => s.f.eval(p.to_array()),
             Kind::Heart(_) => super::heart::heart_fn(p),
+            Kind::MappedHeart(m) => m.scale * super::heart::heart_fn(m.to_heart * p),
         }
     }
 
@@ -469,6 +565,9 @@ impl Implicit {
         match &self.object().kind {
             Kind::Generic(s) => s.gradient(p),
             Kind::Heart(_) => super::heart::gradient_f(p),
+            Kind::MappedHeart(m) => {
+                m.scale * (m.to_heart.transpose() * super::heart::gradient_f(m.to_heart * p))
+            }
         }
     }
 
@@ -513,11 +612,12 @@ impl ImplicitShape {
         Some((t_mid, t_half, mid, r.dir * t_half))
     }
 
-    /// The span of `(t_min, t_max)` the `heart` preset searches: all of it when the clip
-    /// sphere holds the whole heart, else its part inside the sphere; `None` when empty.
+    /// The span of `(t_min, t_max)` a heart (plain or mapped) searches: all of it when the
+    /// clip sphere holds the whole surface (whose radius is `radius`), else its part inside
+    /// the sphere; `None` when empty.
     #[inline]
-    fn heart_span(&self, local: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
-        if self.bound >= presets::HEART_RADIUS {
+    fn heart_span(&self, radius: f64, local: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
+        if self.bound >= radius {
             return Some((t_min, t_max));
         }
         let (t_mid, t_half, _, _) = self.chord(local)?;
@@ -533,7 +633,7 @@ impl ImplicitShape {
                 let (_, c, q) = self.first_query(s, ray, 0.0, f64::INFINITY)?;
                 Some((c[..=q.deg].to_vec(), q.s_lo, q.s_hi))
             }
-            Kind::Heart(_) => None,
+            Kind::Heart(_) | Kind::MappedHeart(_) => None,
         }
     }
 
@@ -543,6 +643,11 @@ impl ImplicitShape {
         let coeffs: Vec<f64> = match &self.kind {
             Kind::Generic(s) => s.f.compose(mid.to_array(), e.to_array())[..=s.f.degree].to_vec(),
             Kind::Heart(_) => super::heart::sextic_coefficients(mid, e).to_vec(),
+            Kind::MappedHeart(m) => {
+                super::heart::sextic_coefficients(m.to_heart * mid, m.to_heart * e)
+                    .map(|c| m.scale * c)
+                    .to_vec()
+            }
         };
         Some(RayPolynomial {
             coeffs,
@@ -1076,8 +1181,13 @@ impl ObjectShape for ImplicitShape {
                 )
             }
             Kind::Heart(h) => {
-                let (lo, hi) = self.heart_span(local, t_min, t_max)?;
+                let (lo, hi) = self.heart_span(presets::HEART_RADIUS, local, t_min, t_max)?;
                 h.intersect(at, world, local, lo, hi)
+            }
+            Kind::MappedHeart(m) => {
+                let (lo, hi) = self.heart_span(m.radius, local, t_min, t_max)?;
+                m.heart
+                    .intersect(&m.at, world, &m.at.ray_to_object(world), lo, hi)
             }
         }
     }
@@ -1095,6 +1205,22 @@ impl ObjectShape for ImplicitShape {
             Kind::Heart(_) => super::each_lane(t_min, t_max, |i| {
                 self.intersect(at, &world[i], &local[i], t_min[i], t_max[i])
             }),
+            Kind::MappedHeart(m) => {
+                // The lanes' spans, then the heart's own lanes (the scalar answers bit for
+                // bit) in heart space; a lane with no span searches nothing.
+                let spans: [Option<(f64, f64)>; LANES] = std::array::from_fn(|i| {
+                    if t_max[i] > t_min[i] {
+                        self.heart_span(m.radius, &local[i], t_min[i], t_max[i])
+                    } else {
+                        None
+                    }
+                });
+                let lo = spans.map(|s| s.map_or(0.0, |s| s.0));
+                let hi = spans.map(|s| s.map_or(0.0, |s| s.1));
+                let heart_local = world.each_ref().map(|r| m.at.ray_to_object(r));
+                let hits = m.heart.intersect_lanes(&m.at, world, &heart_local, lo, hi);
+                std::array::from_fn(|i| spans[i].and(hits[i]))
+            }
         }
     }
 
@@ -1108,8 +1234,13 @@ impl ObjectShape for ImplicitShape {
     ) -> Option<SolverReport> {
         let s = match &self.kind {
             Kind::Heart(h) => {
-                let (lo, hi) = self.heart_span(local, t_min, t_max)?;
+                let (lo, hi) = self.heart_span(presets::HEART_RADIUS, local, t_min, t_max)?;
                 return h.solver_report(at, world, local, lo, hi);
+            }
+            Kind::MappedHeart(m) => {
+                let (lo, hi) = self.heart_span(m.radius, local, t_min, t_max)?;
+                let heart_local = m.at.ray_to_object(world);
+                return m.heart.solver_report(&m.at, world, &heart_local, lo, hi);
             }
             Kind::Generic(s) => s,
         };
@@ -1133,6 +1264,7 @@ impl ObjectShape for ImplicitShape {
     fn normal(&self, at: &Placement, q: DVec3) -> DVec3 {
         let s = match &self.kind {
             Kind::Heart(h) => return h.normal(at, q),
+            Kind::MappedHeart(m) => return m.heart.normal(&m.at, m.to_heart * q),
             Kind::Generic(s) => s,
         };
         let g = s.normal_direction(q, SIGN_SPHERE * self.bound);
@@ -1171,6 +1303,10 @@ impl ObjectShape for ImplicitShape {
                 let hb = h.bounds(at);
                 Aabb::new(hb.min.max(sphere.min), hb.max.min(sphere.max))
             }
+            Kind::MappedHeart(m) => {
+                let hb = m.heart.bounds(&m.at);
+                Aabb::new(hb.min.max(sphere.min), hb.max.min(sphere.max))
+            }
             Kind::Generic(s) => match &s.object_box {
                 Some(b) => {
                     let wb = at.bounds_to_world(b).padded(1e-9);
@@ -1185,6 +1321,17 @@ impl ObjectShape for ImplicitShape {
         match &self.kind {
             // The whole heart without a clip, else the clip sphere (see `heart_span`).
             Kind::Heart(h) if self.bound >= presets::HEART_RADIUS => h.enclosing_ellipsoids(),
+            // The heart's, carried to object space: they hold every point of the surface,
+            // clipped or not.
+            Kind::MappedHeart(m) => m
+                .heart
+                .enclosing_ellipsoids()
+                .into_iter()
+                .map(|e| SolidEllipsoid {
+                    centre: m.to_object * e.centre,
+                    axes: m.to_object * e.axes,
+                })
+                .collect(),
             _ => vec![SolidEllipsoid::axis_aligned(
                 DVec3::ZERO,
                 DVec3::splat(self.bound * (1.0 + 1e-9)),
@@ -1196,7 +1343,7 @@ impl ObjectShape for ImplicitShape {
         match &self.kind {
             // Every hit lies in the box (the chord is clipped to it) and on a zero of `f`.
             Kind::Generic(s) => s.cells.clone(),
-            Kind::Heart(_) => Vec::new(),
+            Kind::Heart(_) | Kind::MappedHeart(_) => Vec::new(),
         }
     }
 }
@@ -1222,7 +1369,9 @@ mod tests {
             ("barth_sextic", vec![]),
             ("taubin_heart", vec![]),
         ] {
-            let shape = Implicit::from_preset(name, &params, Frame::identity(), None).unwrap();
+            // Taubin's heart through the generic path (its preset takes the heart's).
+            let p = presets::preset(name, &params).unwrap();
+            let shape = Implicit::new_generic(&p.equation, Frame::identity(), p.bound).unwrap();
             let object = shape.object();
             let Kind::Generic(s) = &object.kind else {
                 panic!("{name} is generic");

@@ -68,7 +68,7 @@ impl Poly {
     }
 
     /// `self + sign·o`.
-    fn add(mut self, o: &Poly, negate: bool) -> Poly {
+    pub(super) fn add(mut self, o: &Poly, negate: bool) -> Poly {
         for (&e, &c) in &o.terms {
             self.add_term(e, if negate { c.negated() } else { c });
         }
@@ -76,7 +76,7 @@ impl Poly {
     }
 
     /// `self · o` (the caller checks the degree first).
-    fn mul(&self, o: &Poly) -> Poly {
+    pub(super) fn mul(&self, o: &Poly) -> Poly {
         let mut r = Poly::default();
         for (a, &ca) in &self.terms {
             for (b, &cb) in &o.terms {
