@@ -138,34 +138,24 @@ fn variations<const D: usize>(b: &[f64; D], margin: f64) -> Option<u32> {
     (!uncertain).then_some(count)
 }
 
-/// De Casteljau in place: `b` (a piece `[0, 1]`) becomes the Bernstein coefficients of its
-/// part `[0, λ]`.
+/// De Casteljau in place, both parts at once: `b` (a piece `[0, 1]`) becomes the Bernstein
+/// coefficients of its part `[0, λ]` (the first entries of the triangle's rows), and those of
+/// its part `[λ, 1]` are returned (the last entries).
 #[inline(always)]
-fn keep_left<const D: usize>(b: &mut [f64; D], lambda: f64) {
-    // Row k of the triangle shrinks by one each level; its first entry is the left part's
-    // k-th coefficient. Working on a copy with fixed bounds lets the loops unroll into
-    // registers.
+fn split_at<const D: usize>(b: &mut [f64; D], lambda: f64) -> [f64; D] {
+    // Row k of the triangle shrinks by one each level. Working on a copy with fixed bounds
+    // lets the loops unroll into registers.
     let mut row = *b;
-    for (k, out) in b.iter_mut().enumerate().skip(1) {
-        for j in 0..D - k {
-            row[j] += lambda * (row[j + 1] - row[j]);
-        }
-        *out = row[0];
-    }
-}
-
-/// De Casteljau in place: `b` (a piece `[0, 1]`) becomes the Bernstein coefficients of its
-/// part `[λ, 1]`.
-#[inline(always)]
-fn keep_right<const D: usize>(b: &mut [f64; D], lambda: f64) {
-    // On a copy with fixed bounds, as `keep_left` (the in-place loops did not unroll).
-    let mut row = *b;
+    let mut right = [0.0; D];
+    right[D - 1] = row[D - 1];
     for k in 1..D {
         for j in 0..D - k {
             row[j] += lambda * (row[j + 1] - row[j]);
         }
+        b[k] = row[0];
+        right[D - 1 - k] = row[D - 1 - k];
     }
-    *b = row;
+    right
 }
 
 /// See the module documentation.
@@ -338,12 +328,14 @@ pub(crate) fn bracket_from<const D: usize, O: Observer>(
     }
     // Depth-first over pieces `[s0, s1]` of `[0, 1]`, left first. The piece at depth `d` was
     // reached from its parent by the left or the right half; bit `d` of `pending` is set
-    // when it was the left one, its right sibling still to search. The next pending piece is
-    // the deepest one, and its range is found again by repeating the same halvings from
-    // `[0, 1]` (the same operations, so the same bits); its coefficients are cut from the
-    // root's.
+    // when it was the left one, its right sibling still to search, whose coefficients the
+    // same split computed (`right[d]`). The next pending piece is the deepest one, and its
+    // range is found again by repeating the same halvings from `[0, 1]` (the same
+    // operations, so the same bits). Either half of a split carries the rounding of one more
+    // level than its parent, which the margin's `2·depth` allows for.
     let mut pending = 0u64;
     let mut b = root;
+    let mut right = [const { std::mem::MaybeUninit::<[f64; D]>::uninit() }; MAX_DEPTH];
     let (mut s0, mut s1, mut depth) = (0.0f64, 1.0f64, 0u32);
     for _ in 0..MAX_NODES {
         let margin = (64.0 + 2.0 * depth as f64) * unit;
@@ -368,11 +360,8 @@ pub(crate) fn bracket_from<const D: usize, O: Observer>(
                         s0 = sm;
                     }
                 }
-                b = root;
-                if s1 < 1.0 {
-                    keep_left(&mut b, s1);
-                }
-                keep_right(&mut b, s0 / s1);
+                // SAFETY: written when bit `depth` of `pending` was set (by the split below).
+                b = unsafe { right[depth as usize].assume_init() };
                 continue;
             }
             Some(1) => return bracket_of_piece(p, &b, (s0, s1), size),
@@ -383,11 +372,12 @@ pub(crate) fn bracket_from<const D: usize, O: Observer>(
         }
         obs.split();
         let sm = s0 + SPLIT * (s1 - s0);
-        keep_left(&mut b, SPLIT);
+        let right_half = split_at(&mut b, SPLIT);
         if b[n].abs() <= margin || !(sm > s0 && sm < s1) {
             return Err(Fast::Undecided);
         }
         depth += 1;
+        right[depth as usize].write(right_half);
         pending |= 1 << depth;
         s1 = sm;
     }
@@ -431,6 +421,41 @@ mod tests {
             Fast::Root(t) => assert!((t + 2.0).abs() <= 1e-12, "{t}"),
             Fast::NoRoot => panic!("expected a root"),
             Fast::Undecided => {}
+        }
+    }
+
+    /// The value at `s` of the Bernstein coefficients `b` on `[0, 1]` (de Casteljau).
+    fn bernstein_value<const D: usize>(b: &[f64; D], s: f64) -> f64 {
+        let mut row = *b;
+        for k in 1..D {
+            for j in 0..D - k {
+                row[j] += s * (row[j + 1] - row[j]);
+            }
+        }
+        row[0]
+    }
+
+    #[test]
+    fn a_split_gives_both_halves_of_the_piece() {
+        let b = [0.7, -1.3, 2.1, 0.4, -0.9, 1.6, -0.2];
+        let mut left = b;
+        let right = split_at(&mut left, SPLIT);
+        assert_eq!(
+            left[6].to_bits(),
+            right[0].to_bits(),
+            "they meet at the split"
+        );
+        assert_eq!(
+            (left[0], right[6]),
+            (b[0], b[6]),
+            "the ends are the piece's"
+        );
+        for k in 0..=20 {
+            let u = f64::from(k) / 20.0;
+            let on_left = bernstein_value(&b, SPLIT * u);
+            let on_right = bernstein_value(&b, SPLIT + (1.0 - SPLIT) * u);
+            assert!((bernstein_value(&left, u) - on_left).abs() < 1e-14, "{u}");
+            assert!((bernstein_value(&right, u) - on_right).abs() < 1e-14, "{u}");
         }
     }
 
