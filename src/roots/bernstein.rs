@@ -142,20 +142,25 @@ fn variations<const D: usize>(b: &[f64; D], margin: f64) -> Option<u32> {
 /// coefficients of its part `[0, λ]` (the first entries of the triangle's rows), and those of
 /// its part `[λ, 1]` are returned (the last entries).
 #[inline(always)]
-fn split_at<const D: usize>(b: &mut [f64; D], lambda: f64) -> [f64; D] {
+fn split_at<const D: usize>(
+    b: &mut [f64; D],
+    lambda: f64,
+    right: &mut std::mem::MaybeUninit<[f64; D]>,
+) {
     // Row k of the triangle shrinks by one each level. Working on a copy with fixed bounds
     // lets the loops unroll into registers.
     let mut row = *b;
-    let mut right = [0.0; D];
-    right[D - 1] = row[D - 1];
+    let out = right.as_mut_ptr().cast::<f64>();
+    // SAFETY: `out` points to `D` writable `f64`s (the slot); each index below is < D.
+    unsafe { out.add(D - 1).write(row[D - 1]) };
     for k in 1..D {
         for j in 0..D - k {
             row[j] += lambda * (row[j + 1] - row[j]);
         }
         b[k] = row[0];
-        right[D - 1 - k] = row[D - 1 - k];
+        // SAFETY: as above.
+        unsafe { out.add(D - 1 - k).write(row[D - 1 - k]) };
     }
-    right
 }
 
 /// See the module documentation.
@@ -372,12 +377,11 @@ pub(crate) fn bracket_from<const D: usize, O: Observer>(
         }
         obs.split();
         let sm = s0 + SPLIT * (s1 - s0);
-        let right_half = split_at(&mut b, SPLIT);
+        split_at(&mut b, SPLIT, &mut right[depth as usize + 1]);
         if b[n].abs() <= margin || !(sm > s0 && sm < s1) {
             return Err(Fast::Undecided);
         }
         depth += 1;
-        right[depth as usize].write(right_half);
         pending |= 1 << depth;
         s1 = sm;
     }
@@ -439,7 +443,10 @@ mod tests {
     fn a_split_gives_both_halves_of_the_piece() {
         let b = [0.7, -1.3, 2.1, 0.4, -0.9, 1.6, -0.2];
         let mut left = b;
-        let right = split_at(&mut left, SPLIT);
+        let mut slot = std::mem::MaybeUninit::uninit();
+        split_at(&mut left, SPLIT, &mut slot);
+        // SAFETY: `split_at` writes every entry.
+        let right = unsafe { slot.assume_init() };
         assert_eq!(
             left[6].to_bits(),
             right[0].to_bits(),
