@@ -23,6 +23,42 @@ fn cast(shape: &dyn Shape, cam: &Camera) -> Vec<Option<f64>> {
         .collect()
 }
 
+/// Asserts that `b` sees from `cam` what `a` sees: the same pixels hit, with depths within
+/// `depth` (relative) and unit normals within `normal` of `a`'s; returns `a`'s hits.
+fn assert_same_view(
+    a: &dyn Shape,
+    b: &dyn Shape,
+    cam: &Camera,
+    depth: f64,
+    normal: f64,
+    what: &str,
+) -> usize {
+    let (ta, tb) = (cast(a, cam), cast(b, cam));
+    for (i, (x, y)) in ta.iter().zip(&tb).enumerate() {
+        match (x, y) {
+            (Some(x), Some(y)) => {
+                assert!((x - y).abs() < depth * x, "{what}, pixel {i}: {x} vs {y}")
+            }
+            (None, None) => {}
+            _ => panic!("{what}, pixel {i}: {x:?} against {y:?}"),
+        }
+        if let Some(t) = y {
+            let ray = cam.ray(
+                (i as u32 % N) as f64 + 0.5,
+                (i as u32 / N) as f64 + 0.5,
+                N,
+                N,
+            );
+            let p = ray.at(*t);
+            assert!(
+                (a.normal(p) - b.normal(p)).length() < normal,
+                "{what}, pixel {i} at {p}"
+            );
+        }
+    }
+    ta.iter().filter(|t| t.is_some()).count()
+}
+
 fn tilted_frame() -> Frame {
     Frame::new(
         DVec3::new(0.3, -0.2, 0.1),
@@ -80,21 +116,26 @@ fn generic_heart_matches_heart_closely() {
         Implicit::new_generic("(2x^2 + y^2 + z^2 - 1)^3 = (0.1x^2 + y^2)*z^3", f, 2.0).unwrap();
     assert!(!generic.is_heart());
     for eye in eyes() {
-        let cam = camera(eye);
-        let (a, b) = (cast(&heart, &cam), cast(&generic, &cam));
-        let mut mismatched = 0;
-        for (ta, tb) in a.iter().zip(&b) {
-            match (ta, tb) {
-                (Some(x), Some(y)) => assert!((x - y).abs() < 1e-5 * x, "{x} vs {y} from {eye}"),
-                (None, None) => {}
-                _ => mismatched += 1,
-            }
-        }
         // Only rays grazing the silhouette may disagree. Depths agree to ~2e-6 at worst
         // (measured over 4 × 400² rays): f's roots are ill-conditioned near the equator curve,
         // which HEART handles specially and the generic path does not.
-        assert!(mismatched <= 2, "{mismatched} pixels differ from {eye}");
+        assert_close_to_heart(&heart, &generic, &camera(eye), &format!("from {eye}"));
     }
+}
+
+/// Asserts that the generic path's `generic` sees from `cam` nearly what `heart` sees:
+/// depths within 1e-5 (relative) where both hit, at most two (grazing) pixels hit by one only.
+fn assert_close_to_heart(heart: &dyn Shape, generic: &dyn Shape, cam: &Camera, what: &str) {
+    let (a, b) = (cast(heart, cam), cast(generic, cam));
+    let mut mismatched = 0;
+    for (ta, tb) in a.iter().zip(&b) {
+        match (ta, tb) {
+            (Some(x), Some(y)) => assert!((x - y).abs() < 1e-5 * x, "{x} vs {y} {what}"),
+            (None, None) => {}
+            _ => mismatched += 1,
+        }
+    }
+    assert!(mismatched <= 2, "{mismatched} pixels differ {what}");
 }
 
 /// Taubin's heart is the paper's heart with `x = Y`, `y = √(8/9)·X`: its preset (and the
@@ -119,39 +160,12 @@ fn taubin_heart_takes_the_heart_s_path_and_matches_the_generic_one() {
     assert!(preset.is_heart() && retyped.is_heart() && !generic.is_heart());
     for eye in eyes() {
         let cam = camera(eye);
-        let a = cast(&heart, &cam);
-        assert!(a.iter().filter(|t| t.is_some()).count() > 500, "from {eye}");
         for shape in [&preset, &retyped] {
-            let b = cast(shape, &cam);
-            for (i, (ta, tb)) in a.iter().zip(&b).enumerate() {
-                // The two frames differ by the rounding of √(8/9)·u: depths to ~1e-15.
-                match (ta, tb) {
-                    (Some(x), Some(y)) => assert!((x - y).abs() < 1e-12 * x, "{x} vs {y}"),
-                    (None, None) => {}
-                    _ => panic!("pixel {i} from {eye}: HEART {ta:?}, preset {tb:?}"),
-                }
-                if let Some(t) = tb {
-                    let ray = cam.ray(
-                        (i as u32 % N) as f64 + 0.5,
-                        (i as u32 / N) as f64 + 0.5,
-                        N,
-                        N,
-                    );
-                    let p = ray.at(*t);
-                    assert!((heart.normal(p) - shape.normal(p)).length() < 1e-9, "{p}");
-                }
-            }
+            // The two frames differ by the rounding of √(8/9)·u: depths to ~1e-15.
+            let hits = assert_same_view(&heart, shape, &cam, 1e-12, 1e-9, &format!("from {eye}"));
+            assert!(hits > 500, "from {eye}");
         }
-        let b = cast(&generic, &cam);
-        let mut mismatched = 0;
-        for (ta, tb) in a.iter().zip(&b) {
-            match (ta, tb) {
-                (Some(x), Some(y)) => assert!((x - y).abs() < 1e-5 * x, "{x} vs {y} from {eye}"),
-                (None, None) => {}
-                _ => mismatched += 1,
-            }
-        }
-        assert!(mismatched <= 2, "{mismatched} pixels differ from {eye}");
+        assert_close_to_heart(&heart, &generic, &cam, &format!("from {eye}"));
     }
     // The equation's value and gradient, through the map: those of the expansion.
     for p in [
@@ -179,26 +193,7 @@ fn degree_16_sphere_has_exactly_the_unit_sphere_silhouette() {
         (DVec3::new(3000.0, 200.0, -100.0), 0.05),
     ] {
         let cam = Camera::new(eye, DVec3::ZERO, DVec3::new(0.0, 1.0, 0.3), fov).unwrap();
-        let (a, b) = (cast(&unit, &cam), cast(&s16, &cam));
-        for (i, (ta, tb)) in a.iter().zip(&b).enumerate() {
-            match (ta, tb) {
-                (Some(x), Some(y)) => {
-                    assert!((x - y).abs() < 1e-9 * x, "pixel {i}: {x} vs {y} from {eye}")
-                }
-                (None, None) => {}
-                _ => panic!("pixel {i} from {eye}: sphere {ta:?}, degree-16 sphere {tb:?}"),
-            }
-            if let Some(t) = tb {
-                let ray = cam.ray(
-                    (i as u32 % N) as f64 + 0.5,
-                    (i as u32 / N) as f64 + 0.5,
-                    N,
-                    N,
-                );
-                let p = ray.at(*t);
-                assert!((s16.normal(p) - unit.normal(p)).length() < 1e-9);
-            }
-        }
+        assert_same_view(&unit, &s16, &cam, 1e-9, 1e-9, &format!("from {eye}"));
     }
 }
 
