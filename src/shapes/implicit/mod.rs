@@ -6,7 +6,8 @@
 //! result is compiled to `f64` terms plus its three symbolic partial derivatives. Per ray,
 //! the ray is re-parametrised over the chord it cuts from the clip sphere (`s ∈ [−1, 1]`,
 //! origin at the chord's midpoint), the univariate polynomial in `s` is formed by nested
-//! Horner composition (O(terms × degree), no allocation) over the ray's span inside a box
+//! Horner composition (O(terms × degree), no allocation; for a torus about the z axis by its
+//! closed form, [`torus_form`], which also gives its gradient) over the ray's span inside a box
 //! that holds the surface ([`extent`], found once at load time), its first root is found by
 //! the scene's [`Solver`], and `s` is mapped back to the caller's `t`. A root that `f64`
 //! cannot resolve (a multiple root or a cluster: `N/|p′|` large, `N` the rounding of `p`) is
@@ -31,6 +32,7 @@ pub mod extent;
 pub mod heart_form;
 pub mod poly;
 pub mod presets;
+pub mod torus_form;
 
 use super::heart::HeartShape;
 use super::placed::{ObjectShape, Placed, Placement};
@@ -116,6 +118,9 @@ struct Surface {
     grad: [Compiled; 3],
     /// The same three partials, evaluated together (for the normal).
     gradient: Gradient,
+    /// The closed form of the ray polynomial when the surface is a torus about the z axis
+    /// ([`torus_form`]); the general composition otherwise.
+    torus: Option<torus_form::TorusForm>,
     /// Object-space box holding the surface's part inside the clip sphere
     /// ([`extent::zero_set`]); `None` when there is none.
     object_box: Option<Aabb>,
@@ -126,6 +131,35 @@ struct Surface {
 }
 
 impl Surface {
+    /// The ray polynomial along `mid + s·e` (object space) into `out` (entries above the
+    /// degree zero, as `out` had them): the closed form where there is one, else the
+    /// general composition.
+    #[inline]
+    fn compose(&self, mid: [f64; 3], e: [f64; 3], out: &mut Uni) {
+        match &self.torus {
+            Some(t) => t.compose(mid, e, out),
+            None => self.f.compose_into(mid, e, out),
+        }
+    }
+
+    /// [`Surface::compose`] for [`LANES`] rays (the same bits as one at a time).
+    #[inline]
+    fn compose_lanes(
+        &self,
+        mids: [[f64; 3]; LANES],
+        es: [[f64; 3]; LANES],
+        out: &mut [Uni; LANES],
+    ) {
+        match &self.torus {
+            Some(t) => {
+                for ((m, e), c) in mids.into_iter().zip(es).zip(out.iter_mut()) {
+                    t.compose(m, e, c);
+                }
+            }
+            None => self.f.compose_lanes(mids, es, out),
+        }
+    }
+
     /// `∇f` at the object-space point `p`, in `f64` (zero at singular points).
     fn gradient(&self, p: DVec3) -> DVec3 {
         let q = p.to_array();
@@ -143,10 +177,15 @@ impl Surface {
     /// fallback where the signs are not split by a plane.
     fn normal_direction(&self, q: DVec3, h: f64) -> DVec3 {
         let p = q.to_array();
-        // One table of powers and one pass for the three partial derivatives (the same
-        // values each would compute alone).
-        let powers = Powers::new(p, self.gradient.degree);
-        let (values, magnitudes) = self.gradient.eval_with_bound_on(&powers);
+        let (values, magnitudes) = match &self.torus {
+            Some(t) => t.gradient_with_bound(p),
+            None => {
+                // One table of powers and one pass for the three partial derivatives (the
+                // same values each would compute alone).
+                let powers = Powers::new(p, self.gradient.degree);
+                self.gradient.eval_with_bound_on(&powers)
+            }
+        };
         let g = DVec3::from_array(values);
         let scale = magnitudes.iter().fold(0.0f64, |m, &v| m.max(v));
         let terms = self.gradient.most_terms as f64;
@@ -486,6 +525,7 @@ impl Implicit {
                 solver: Solver::default(),
                 bound,
                 kind: Kind::Generic(Box::new(Surface {
+                    torus: torus_form::recognise(&poly),
                     f,
                     gradient: Gradient::new(&grad),
                     grad,
@@ -669,7 +709,7 @@ impl ImplicitShape {
     ) -> Option<(Span, Uni, Query)> {
         let span = self.span(s, ray, t_min, t_max)?;
         let mut c: Uni = [0.0; MAX_DEGREE + 1];
-        s.f.compose_into(span.mid, span.e, &mut c);
+        s.compose(span.mid, span.e, &mut c);
         let q = span.query(s, &mut c)?;
         Some((span, c, q))
     }
@@ -825,7 +865,7 @@ impl ImplicitShape {
             return std::array::from_fn(|i| {
                 let span = spans[i].as_ref()?;
                 let mut c: Uni = [0.0; MAX_DEGREE + 1];
-                s.f.compose_into(span.mid, span.e, &mut c);
+                s.compose(span.mid, span.e, &mut c);
                 let q = span.query(s, &mut c)?;
                 self.solve(s, span, &c, q, t_max[i], &mut first_root, &mut false)
             });
@@ -833,7 +873,7 @@ impl ImplicitShape {
         let mids = spans.map(|sp| sp.map_or([0.0; 3], |sp| sp.mid));
         let es = spans.map(|sp| sp.map_or([0.0; 3], |sp| sp.e));
         let mut cs = [[0.0; MAX_DEGREE + 1]; LANES];
-        s.f.compose_lanes(mids, es, &mut cs);
+        s.compose_lanes(mids, es, &mut cs);
         let queries: [Option<Query>; LANES] = std::array::from_fn(|i| {
             let span = spans[i].as_ref()?;
             span.query(s, &mut cs[i])
