@@ -48,27 +48,17 @@ pub fn recognise(poly: &Poly) -> Option<HeartForm> {
     if coef([0, 0, 2])?.over(k3) != Coef::ONE || ![a, b, p, q].into_iter().all(positive) {
         return None;
     }
-    let term = |e: Exps, c: Coef| {
-        let mut t = Poly::default();
-        t.terms.insert(e, c);
-        t
-    };
-    let sum = |parts: &[Poly]| {
-        parts
-            .iter()
-            .fold(Poly::default(), |acc, part| acc.add(part, false))
-    };
-    let big_a = sum(&[
-        term([2, 0, 0], a),
-        term([0, 2, 0], b),
-        term([0, 0, 2], Coef::ONE),
-        term([0, 0, 0], Coef::int(-1)),
+    let big_a = Poly::sum(&[
+        Poly::monomial([2, 0, 0], a),
+        Poly::monomial([0, 2, 0], b),
+        Poly::monomial([0, 0, 2], Coef::ONE),
+        Poly::monomial([0, 0, 0], Coef::int(-1)),
     ]);
-    let big_b = sum(&[term([2, 0, 0], p), term([0, 2, 0], q)]);
+    let big_b = Poly::sum(&[Poly::monomial([2, 0, 0], p), Poly::monomial([0, 2, 0], q)]);
     let cubed = big_a.mul(&big_a).mul(&big_a);
     let candidate = cubed
-        .add(&big_b.mul(&term([0, 0, 3], Coef::ONE)), true)
-        .mul(&term([0, 0, 0], k));
+        .add(&big_b.mul(&Poly::monomial([0, 0, 3], Coef::ONE)), true)
+        .scale(k);
     if candidate != *poly {
         return None;
     }

@@ -16,13 +16,13 @@
 //! plane that separates the signs of `f` on a small sphere about the point (see
 //! docs/implicit-surfaces.md for why: the specks of Taubin's heart).
 //!
-//! The `heart` preset (and an equation written exactly as that preset writes it) is the
-//! paper's heart: it builds and delegates to [`crate::shapes::Heart`] with the same frame and
-//! solver, so it renders pixel-identical to `HEART`, including the heart's own accuracy work
-//! at its equator curve. An equation that expands to the heart stretched along x and y, with
-//! or without x and y swapped ([`heart_form`]: Taubin's heart, the heart typed otherwise), is
-//! traced through the heart's path too, in heart space (the shape's frame composed with the
-//! stretch); [`Implicit::new_generic`] asks for the generic path instead.
+//! An equation whose exact expansion is the paper's heart (the `heart` preset, or the heart
+//! typed in any form) builds and delegates to [`crate::shapes::Heart`] with the same frame
+//! and solver, so it renders pixel-identical to `HEART`, including the heart's own accuracy
+//! work at its equator curve. One that expands to the heart stretched along x and y, with or
+//! without x and y swapped ([`heart_form`]: Taubin's heart), is traced through the heart's
+//! path too, in heart space (the shape's frame composed with the stretch).
+//! [`Implicit::new_generic`] asks for the generic path instead.
 
 pub mod coef;
 mod corpus;
@@ -349,16 +349,11 @@ impl MappedHeart {
                 len: 1,
                 message: format!("the heart's frame in heart space: {e}"),
             })?;
-        let b = super::heart::BOUNDS;
-        let radius = (0..8)
-            .map(|i| {
-                let corner = DVec3::new(
-                    if i & 1 == 0 { b.min.x } else { b.max.x },
-                    if i & 2 == 0 { b.min.y } else { b.max.y },
-                    if i & 4 == 0 { b.min.z } else { b.max.z },
-                );
-                (to_object * corner).length()
-            })
+        // The farthest corner of the heart's box, carried to object space.
+        let radius = super::heart::BOUNDS
+            .corners()
+            .iter()
+            .map(|&corner| (to_object * corner).length())
             .fold(0.0, f64::max)
             * (1.0 + 1e-9);
         Ok(Self {
@@ -429,6 +424,17 @@ pub fn expand_with(equation: &str, constants: equation::Constants) -> Result<Pol
     Ok(poly)
 }
 
+/// `BOUND r`'s rule: a finite number greater than 0 (the error spans `whole`, the equation).
+fn check_bound(bound: f64, whole: equation::Span) -> Result<(), EquationError> {
+    if bound > 0.0 && bound.is_finite() {
+        Ok(())
+    } else {
+        Err(whole.error(format!(
+            "BOUND must be a finite number greater than 0, not {bound}"
+        )))
+    }
+}
+
 impl Implicit {
     /// Parses and expands `equation` (see docs/scene-format.md) and places it with `frame`.
     /// `bound` is the object-space clip radius (`BOUND r`); `None` takes the preset's default
@@ -451,14 +457,7 @@ impl Implicit {
             end: equation.len(),
         };
         if let Some(b) = bound {
-            if !(b > 0.0 && b.is_finite()) {
-                return Err(whole.error(format!(
-                    "BOUND must be a finite number greater than 0, not {b}"
-                )));
-            }
-        }
-        if equation.trim() == HEART_EQUATION {
-            return Ok(Self::heart(frame, bound.unwrap_or(2.0)));
+            check_bound(b, whole)?;
         }
         let poly = expand_with(equation, constants)?;
         let f = Compiled::new(&poly);
@@ -491,20 +490,21 @@ impl Implicit {
     /// As [`Implicit::new`] with the bound given, always through the generic path, even for an
     /// equation that is the paper's heart ([`Implicit::is_heart`]): for comparing the two.
     pub fn new_generic(equation: &str, frame: Frame, bound: f64) -> Result<Self, EquationError> {
+        check_bound(
+            bound,
+            equation::Span {
+                start: 0,
+                end: equation.len(),
+            },
+        )?;
         let poly = expand(equation)?;
         let f = Compiled::new(&poly);
         Self::generic(poly, f, frame, bound)
     }
 
-    /// The generic path's shape of the expanded `poly` (compiled to `f`), clipped to `bound`.
+    /// The generic path's shape of the expanded `poly` (compiled to `f`), clipped to `bound`
+    /// (already checked).
     fn generic(poly: Poly, f: Compiled, frame: Frame, bound: f64) -> Result<Self, EquationError> {
-        if !(bound > 0.0 && bound.is_finite()) {
-            return Err(EquationError {
-                offset: 0,
-                len: 1,
-                message: format!("BOUND must be a finite number greater than 0, not {bound}"),
-            });
-        }
         let grad = [0, 1, 2].map(|v| Compiled::new(&poly.derivative(v)));
         let zero_set = extent::zero_set(&f, bound);
         let to_box = |(lo, hi): ([f64; 3], [f64; 3])| {

@@ -32,6 +32,20 @@ impl Poly {
         p
     }
 
+    /// The monomial `c·xⁱ yʲ zᵏ` of exponents `e` (the zero polynomial when `c` is zero).
+    pub(super) fn monomial(e: Exps, c: Coef) -> Poly {
+        let mut p = Poly::default();
+        p.add_term(e, c);
+        p
+    }
+
+    /// The sum of `parts`.
+    pub(super) fn sum(parts: &[Poly]) -> Poly {
+        parts
+            .iter()
+            .fold(Poly::default(), |acc, part| acc.add(part, false))
+    }
+
     /// The variable with index `v` (0 = x, 1 = y, 2 = z).
     pub fn var(v: usize) -> Poly {
         let mut e = [0u8; 3];
@@ -86,7 +100,8 @@ impl Poly {
         r
     }
 
-    fn scale(&self, c: Coef) -> Poly {
+    /// `c·self`.
+    pub(super) fn scale(&self, c: Coef) -> Poly {
         let mut r = Poly::default();
         for (&e, &v) in &self.terms {
             r.add_term(e, v.times(c));

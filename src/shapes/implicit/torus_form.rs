@@ -83,26 +83,14 @@ pub fn recognise(poly: &Poly) -> Option<TorusForm> {
     if !matches!(b, Coef::Exact(n, _) if n > 0) || !matches!(a, Coef::Exact(..)) {
         return None;
     }
-    let term = |e: Exps, c: Coef| {
-        let mut t = Poly::default();
-        if !c.is_zero() {
-            t.terms.insert(e, c);
-        }
-        t
-    };
-    let sum = |parts: &[Poly]| {
-        parts
-            .iter()
-            .fold(Poly::default(), |acc, part| acc.add(part, false))
-    };
-    let inner = sum(&[
-        term([2, 0, 0], Coef::ONE),
-        term([0, 2, 0], Coef::ONE),
-        term([0, 0, 2], Coef::ONE),
-        term([0, 0, 0], a),
+    let inner = Poly::sum(&[
+        Poly::monomial([2, 0, 0], Coef::ONE),
+        Poly::monomial([0, 2, 0], Coef::ONE),
+        Poly::monomial([0, 0, 2], Coef::ONE),
+        Poly::monomial([0, 0, 0], a),
     ]);
-    let ring = sum(&[term([2, 0, 0], b), term([0, 2, 0], b)]);
-    let candidate = inner.mul(&inner).add(&ring, true).mul(&term([0, 0, 0], k));
+    let ring = Poly::sum(&[Poly::monomial([2, 0, 0], b), Poly::monomial([0, 2, 0], b)]);
+    let candidate = inner.mul(&inner).add(&ring, true).scale(k);
     if candidate != *poly {
         return None;
     }
