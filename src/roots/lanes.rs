@@ -78,18 +78,13 @@ fn choose(pick: bool, a: f64, b: f64) -> f64 {
 /// `bernstein::bernstein_fixed` and the first test of `bernstein::search`, lane by lane.
 #[inline(always)]
 fn front_in<const D: usize>(
-    coeffs: &[[f64; D]; LANES],
+    coeffs: &[Lanes; D],
     lo: Lanes,
     hi: Lanes,
     active: [bool; LANES],
 ) -> Front<D> {
     let n = D - 1;
-    let mut c = [[0.0; LANES]; D];
-    for (j, cj) in c.iter_mut().enumerate() {
-        for (l, x) in cj.iter_mut().enumerate() {
-            *x = coeffs[l][j];
-        }
-    }
+    let mut c = *coeffs;
     // The preparation's tests: valid, then the usual case (see `prepare_fixed`; its shortcut
     // for an interval reaching 1 tests the same as its general rule, which is used here for
     // every lane).
@@ -245,10 +240,24 @@ pub(super) fn first_roots<const D: usize>(
     active: [bool; LANES],
     code: Code,
 ) -> [Option<f64>; LANES] {
+    let by_power: [Lanes; D] = std::array::from_fn(|j| std::array::from_fn(|l| coeffs[l][j]));
+    first_roots_by_power(solver, &by_power, lo, hi, active, code)
+}
+
+/// See [`Solver::first_root_lanes_by_power`]; `code` picks the copy of the lanes' part.
+#[inline]
+pub(super) fn first_roots_by_power<const D: usize>(
+    solver: Solver,
+    coeffs: &[Lanes; D],
+    lo: Lanes,
+    hi: Lanes,
+    active: [bool; LANES],
+    code: Code,
+) -> [Option<f64>; LANES] {
     if !(2..=MAX_COEFFS).contains(&D) {
         return std::array::from_fn(|l| {
             active[l]
-                .then(|| solver.first_root(&coeffs[l], lo[l], hi[l]))
+                .then(|| solver.first_root(&lane(coeffs, l), lo[l], hi[l]))
                 .flatten()
         });
     }
@@ -267,6 +276,12 @@ pub(super) fn first_roots<const D: usize>(
     rest_in(solver, coeffs, lo, hi, &front_in(coeffs, lo, hi, active))
 }
 
+/// Lane `l`'s coefficients, ascending.
+#[inline(always)]
+fn lane<const D: usize>(coeffs: &[Lanes; D], l: usize) -> [f64; D] {
+    std::array::from_fn(|j| coeffs[j][l])
+}
+
 /// [`front_in`] compiled for AVX2.
 ///
 /// # Safety
@@ -274,7 +289,7 @@ pub(super) fn first_roots<const D: usize>(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn front_avx2<const D: usize>(
-    coeffs: &[[f64; D]; LANES],
+    coeffs: &[Lanes; D],
     lo: Lanes,
     hi: Lanes,
     active: [bool; LANES],
@@ -291,7 +306,7 @@ unsafe fn front_avx2<const D: usize>(
 #[target_feature(enable = "avx2")]
 unsafe fn rest_avx2<const D: usize>(
     solver: Solver,
-    coeffs: &[[f64; D]; LANES],
+    coeffs: &[Lanes; D],
     lo: Lanes,
     hi: Lanes,
     front: &Front<D>,
@@ -305,7 +320,7 @@ unsafe fn rest_avx2<const D: usize>(
 #[inline(always)]
 fn rest_in<const D: usize>(
     solver: Solver,
-    coeffs: &[[f64; D]; LANES],
+    coeffs: &[Lanes; D],
     lo: Lanes,
     hi: Lanes,
     front: &Front<D>,
@@ -322,7 +337,7 @@ fn rest_in<const D: usize>(
         let p = &fixed[l];
         answers[l] = match front.status[l] {
             Status::NoRoot => None,
-            Status::Other => solver.first_root(&coeffs[l], lo[l], hi[l]),
+            Status::Other => solver.first_root(&lane(coeffs, l), lo[l], hi[l]),
             Status::Undecided => settle(solver, Fast::Undecided, || p.to_prepared(), &mut ()),
             Status::Search(whole) => {
                 let b: [f64; D] = std::array::from_fn(|j| front.b[j][l]);
@@ -352,6 +367,11 @@ fn rest_in<const D: usize>(
 mod tests {
     use super::*;
     use crate::testing::uniform_stream;
+
+    /// The lanes' coefficients by power.
+    fn by_power<const D: usize>(coeffs: &[[f64; D]; LANES]) -> [Lanes; D] {
+        std::array::from_fn(|j| std::array::from_fn(|l| coeffs[l][j]))
+    }
 
     /// One random query of `D` coefficients: from real roots (some clustered or double, some
     /// at the interval's ends), or random coefficients of mixed sizes with zeros, negligible
@@ -423,6 +443,7 @@ mod tests {
             for &(solver, _) in Solver::ALL {
                 let detected = solver.first_root_lanes(&coeffs, lo, hi, active);
                 let baseline = solver.first_root_lanes_baseline(&coeffs, lo, hi, active);
+                let by_power = solver.first_root_lanes_by_power(&by_power(&coeffs), lo, hi, active);
                 for l in 0..LANES {
                     let want = active[l]
                         .then(|| solver.first_root(&coeffs[l], lo[l], hi[l]))
@@ -431,6 +452,7 @@ mod tests {
                     let what = (solver, coeffs[l], lo[l], hi[l]);
                     assert_eq!(bits(detected[l]), bits(want), "{what:?}");
                     assert_eq!(bits(baseline[l]), bits(want), "{what:?}");
+                    assert_eq!(bits(by_power[l]), bits(want), "{what:?}");
                     if active[l] {
                         if want.is_some() {
                             found.0 += 1;
@@ -469,7 +491,7 @@ mod tests {
             [2.0, -3.0, f64::NAN], // refused
         ];
         let (lo, hi) = ([0.0; LANES], [1.5, 3.0, 3.0, 3.0]);
-        let front = front_in(&coeffs, lo, hi, [true; LANES]);
+        let front = front_in(&by_power(&coeffs), lo, hi, [true; LANES]);
         assert_eq!(front.status[0], Status::Search(Some(1)));
         assert_eq!(front.status[1], Status::NoRoot);
         assert!(matches!(
@@ -485,7 +507,7 @@ mod tests {
         // The unusual case (a zero leading coefficient) and the end of an interval at a root.
         let coeffs = [[2.0, -3.0, 0.0], [2.0, -3.0, 1.0], [1.0; 3], [1.0; 3]];
         let (lo, hi) = ([0.0, 1.0, 0.0, 0.0], [3.0; LANES]);
-        let front = front_in(&coeffs, lo, hi, [true, true, false, false]);
+        let front = front_in(&by_power(&coeffs), lo, hi, [true, true, false, false]);
         assert_eq!(front.status[0], Status::Other);
         assert_eq!(front.status[1], Status::Undecided);
         assert_eq!(front.status[2], Status::NoRoot);

@@ -200,6 +200,19 @@ impl Solver {
         lanes::first_roots(self, coeffs, lo, hi, active, lanes::Code::Detected)
     }
 
+    /// [`Solver::first_root_lanes`] with the coefficients given by power: `coeffs[j][i]` is
+    /// lane `i`'s coefficient of `tʲ` (the same answers, without rearranging them first).
+    #[inline]
+    pub fn first_root_lanes_by_power<const D: usize>(
+        self,
+        coeffs: &[[f64; crate::geometry::LANES]; D],
+        lo: [f64; crate::geometry::LANES],
+        hi: [f64; crate::geometry::LANES],
+        active: [bool; crate::geometry::LANES],
+    ) -> [Option<f64>; crate::geometry::LANES] {
+        lanes::first_roots_by_power(self, coeffs, lo, hi, active, lanes::Code::Detected)
+    }
+
     /// [`Solver::first_root_lanes`] (the same answers) by the code that processors without
     /// AVX2 run, whatever this one has: for tests and benchmarks.
     pub fn first_root_lanes_baseline<const D: usize>(

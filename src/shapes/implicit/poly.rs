@@ -429,6 +429,10 @@ fn powers_into<const D: usize>(row: &mut [f64; MAX_DEGREE + 1], x: f64) {
 /// Univariate coefficients (ascending) in fixed storage.
 pub type Uni = [f64; MAX_DEGREE + 1];
 
+/// The univariate coefficients of [`LANES`] polynomials by power: `[k][i]` is polynomial
+/// `i`'s coefficient of `sᵏ`.
+pub type UniLanes = [[f64; LANES]; MAX_DEGREE + 1];
+
 /// The arithmetic a ray composition runs in: `f64`, or [`Dd`] where `f64` cannot resolve
 /// the polynomial.
 pub trait Scalar: Copy + Add<Output = Self> + Mul<Output = Self> {
@@ -633,16 +637,11 @@ impl Compiled {
         out
     }
 
-    /// [`Compiled::compose`] of [`LANES`] rays at once (ray `i` is `o[i] + s·e[i]`) into `out`:
-    /// `out[i][..=degree]` becomes exactly `self.compose(o[i], e[i])[..=degree]`, bit for bit
-    /// (the entries above the degree, zero in `compose`, are left as they are).
-    /// Compiled for AVX2 as well, chosen at run time.
-    pub fn compose_lanes(
-        &self,
-        o: [[f64; 3]; LANES],
-        e: [[f64; 3]; LANES],
-        out: &mut [Uni; LANES],
-    ) {
+    /// [`Compiled::compose`] of [`LANES`] rays at once (ray `i` is `o[axis][i] + s·e[axis][i]`)
+    /// into `out` by power: `out[k][i]` for `k ≤ degree` becomes exactly
+    /// `self.compose(…)[k]` of ray `i`, bit for bit (the entries above the degree, zero in
+    /// `compose`, are left as they are). Compiled for AVX2 as well, chosen at run time.
+    pub fn compose_lanes(&self, o: &[[f64; LANES]; 3], e: &[[f64; LANES]; 3], out: &mut UniLanes) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2, checked just above.
@@ -659,9 +658,9 @@ impl Compiled {
     #[target_feature(enable = "avx2")]
     unsafe fn compose_lanes_avx2(
         &self,
-        o: [[f64; 3]; LANES],
-        e: [[f64; 3]; LANES],
-        out: &mut [Uni; LANES],
+        o: &[[f64; LANES]; 3],
+        e: &[[f64; LANES]; 3],
+        out: &mut UniLanes,
     ) {
         self.compose_lanes_in(o, e, out)
     }
@@ -669,16 +668,12 @@ impl Compiled {
     /// [`Compiled::compose_lanes`] for the baseline instruction set (and inlined into the
     /// AVX2 version).
     #[inline(always)]
-    fn compose_lanes_in(&self, o: [[f64; 3]; LANES], e: [[f64; 3]; LANES], out: &mut [Uni; LANES]) {
-        let o = std::array::from_fn(|v| Lanes(std::array::from_fn(|i| o[i][v])));
-        let e = std::array::from_fn(|v| Lanes(std::array::from_fn(|i| e[i][v])));
+    fn compose_lanes_in(&self, o: &[[f64; LANES]; 3], e: &[[f64; LANES]; 3], out: &mut UniLanes) {
         let mut lanes = [Lanes::ZERO; MAX_DEGREE + 1];
-        self.compose_in(o, e, &mut lanes);
+        self.compose_in(o.map(Lanes), e.map(Lanes), &mut lanes);
         // Only the coefficients up to the degree: the rest are zero, and left as they are.
-        for (k, c) in lanes[..=self.degree].iter().enumerate() {
-            for (ray, v) in out.iter_mut().zip(c.0) {
-                ray[k] = v;
-            }
+        for (o, c) in out.iter_mut().zip(&lanes).take(self.degree + 1) {
+            *o = c.0;
         }
     }
 
@@ -1137,22 +1132,23 @@ mod tests {
         };
         for c in composition_surfaces() {
             for _ in 0..100 {
-                let o: [[f64; 3]; LANES] = std::array::from_fn(|_| [0; 3].map(|_| coordinate()));
-                let e: [[f64; 3]; LANES] = std::array::from_fn(|_| [0; 3].map(|_| coordinate()));
-                let alone: [Uni; LANES] = std::array::from_fn(|i| c.compose(o[i], e[i]));
-                let bits = |v: [Uni; LANES]| v.map(|u| u.map(f64::to_bits));
+                let o: [[f64; LANES]; 3] = [0; 3].map(|_| [0; LANES].map(|_| coordinate()));
+                let e: [[f64; LANES]; 3] = [0; 3].map(|_| [0; LANES].map(|_| coordinate()));
+                let ray = |v: &[[f64; LANES]; 3], i: usize| [v[0][i], v[1][i], v[2][i]];
+                let alone: [Uni; LANES] =
+                    std::array::from_fn(|i| c.compose(ray(&o, i), ray(&e, i)));
+                let bits = |v: UniLanes| v.map(|u| u.map(f64::to_bits));
                 // The baseline code path, whatever the processor, and the one chosen at run
                 // time, into a buffer that holds something else before.
                 // Up to the degree; the entries above it are left as they were.
-                let mut want = alone;
-                for w in &mut want {
-                    w[c.degree + 1..].fill(f64::NAN);
-                }
-                let mut out = [[f64::NAN; MAX_DEGREE + 1]; LANES];
-                c.compose_lanes_in(o, e, &mut out);
+                let want: UniLanes = std::array::from_fn(|k| {
+                    std::array::from_fn(|i| if k <= c.degree { alone[i][k] } else { f64::NAN })
+                });
+                let mut out = [[f64::NAN; LANES]; MAX_DEGREE + 1];
+                c.compose_lanes_in(&o, &e, &mut out);
                 assert_eq!(bits(out), bits(want));
-                let mut out = [[f64::NAN; MAX_DEGREE + 1]; LANES];
-                c.compose_lanes(o, e, &mut out);
+                let mut out = [[f64::NAN; LANES]; MAX_DEGREE + 1];
+                c.compose_lanes(&o, &e, &mut out);
                 assert_eq!(bits(out), bits(want));
             }
         }

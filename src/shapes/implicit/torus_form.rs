@@ -11,7 +11,7 @@
 //! y²)`), so the solver's and the re-solve's bounds hold unchanged.
 
 use super::coef::Coef;
-use super::poly::{Exps, Poly, Uni};
+use super::poly::{Exps, Poly, Uni, UniLanes, LANES};
 
 /// The torus of an equation: its polynomial is `k·((x² + y² + z² + a)² − b·(x² + y²))`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -29,17 +29,38 @@ impl TorusForm {
     /// (entries above are left as they are).
     #[inline(always)]
     pub fn compose(&self, m: [f64; 3], e: [f64; 3], out: &mut Uni) {
+        out[..5].copy_from_slice(&self.coefficients(m, e));
+    }
+
+    /// [`TorusForm::compose`] of [`LANES`] rays (ray `i` is `m[axis][i] + s·e[axis][i]`)
+    /// into `out[..=4]` by power (the same bits as one at a time; entries above are left as
+    /// they are).
+    #[inline(always)]
+    pub fn compose_lanes(&self, m: &[[f64; LANES]; 3], e: &[[f64; LANES]; 3], out: &mut UniLanes) {
+        for i in 0..LANES {
+            let c = self.coefficients([m[0][i], m[1][i], m[2][i]], [e[0][i], e[1][i], e[2][i]]);
+            for (o, c) in out.iter_mut().zip(c) {
+                o[i] = c;
+            }
+        }
+    }
+
+    /// The ray polynomial's five coefficients along `m + s·e`, ascending.
+    #[inline(always)]
+    fn coefficients(&self, m: [f64; 3], e: [f64; 3]) -> [f64; 5] {
         let q0 = m[0] * m[0] + m[1] * m[1] + m[2] * m[2] + self.a;
         let q1 = 2.0 * (m[0] * e[0] + m[1] * e[1] + m[2] * e[2]);
         let q2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
         let w0 = m[0] * m[0] + m[1] * m[1];
         let w1 = 2.0 * (m[0] * e[0] + m[1] * e[1]);
         let w2 = e[0] * e[0] + e[1] * e[1];
-        out[0] = self.k * (q0 * q0 - self.b * w0);
-        out[1] = self.k * (2.0 * q0 * q1 - self.b * w1);
-        out[2] = self.k * (q1 * q1 + 2.0 * q0 * q2 - self.b * w2);
-        out[3] = self.k * (2.0 * q1 * q2);
-        out[4] = self.k * (q2 * q2);
+        [
+            self.k * (q0 * q0 - self.b * w0),
+            self.k * (2.0 * q0 * q1 - self.b * w1),
+            self.k * (q1 * q1 + 2.0 * q0 * q2 - self.b * w2),
+            self.k * (2.0 * q1 * q2),
+            self.k * (q2 * q2),
+        ]
     }
 }
 
