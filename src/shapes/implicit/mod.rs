@@ -880,8 +880,13 @@ impl ImplicitShape {
                 self.solve(s, &span, &c, q, t_max[i], &mut first_root, &mut false)
             });
         };
-        let ahead = queries.first_roots(solver, &cs, n);
+        let settled = queries.first_hits(s, solver, &spans, &cs, t_max);
         std::array::from_fn(|i| {
+            let ahead = match settled[i] {
+                FirstHit::Answer(hit) => return hit,
+                FirstHit::GoOn(root) => Some(Some(root)),
+                FirstHit::Alone => None,
+            };
             let span = spans.get(i)?;
             let c = lane(&cs, i);
             let q = Query {
@@ -890,7 +895,7 @@ impl ImplicitShape {
                 s_lo: queries.s_lo[i],
                 s_hi: queries.s_hi[i],
             };
-            let mut answer = ahead.map(|a| a[i]);
+            let mut answer = ahead;
             self.solve(
                 s,
                 &span,
@@ -1097,6 +1102,18 @@ struct Query {
     s_hi: f64,
 }
 
+/// What a lane's first query, asked with the other lanes', settled of
+/// [`ImplicitShape::solve`].
+#[derive(Clone, Copy)]
+enum FirstHit {
+    /// `solve`'s answer: no root, or a simple root in range (no doubt about its conditioning).
+    Answer(Option<f64>),
+    /// `solve` goes on from this first root the query found.
+    GoOn(f64),
+    /// Not asked (a degree the lanes' query is not compiled for): `solve` asks it alone.
+    Alone,
+}
+
 /// [`Span::query`] of all [`LANES`] lanes at once, when every lane has a span and a
 /// polynomial that keeps the full degree: the coefficients normalised in place (the same
 /// bits as lane by lane) and each lane's scale and interval.
@@ -1147,23 +1164,74 @@ impl LaneQueries {
         Some(LaneQueries { inv, s_lo, s_hi })
     }
 
-    /// Every lane's first query on the normalised `cs[..=n]` by
-    /// [`Solver::first_root_lanes_by_power`] (the scalar query's bits), or `None` for a
-    /// degree it is not compiled for.
+    /// Every lane's first query on the normalised `cs[..=n]` (`n` the surface's degree) by
+    /// [`Solver::first_root_lanes_by_power`], and the hits that first root settles the way
+    /// [`ImplicitShape::solve`] would settle them.
     #[inline(always)]
-    fn first_roots(&self, solver: Solver, cs: &UniLanes, n: usize) -> Option<[Option<f64>; LANES]> {
+    fn first_hits(
+        &self,
+        s: &Surface,
+        solver: Solver,
+        spans: &LaneSpans,
+        cs: &UniLanes,
+        t_max: [f64; LANES],
+    ) -> [FirstHit; LANES] {
         macro_rules! by_length {
             ($($d:literal)*) => {
-                match n + 1 {
-                    $($d => {
-                        let c: &[[f64; LANES]; $d] = cs[..$d].try_into().expect("length");
-                        solver.first_root_lanes_by_power(c, self.s_lo, self.s_hi, [true; LANES])
-                    })*
-                    _ => return None,
+                match s.f.degree + 1 {
+                    $($d => self.first_hits_fixed::<$d>(s, solver, spans, cs, t_max),)*
+                    _ => [FirstHit::Alone; LANES],
                 }
             };
         }
-        Some(by_length!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17))
+        by_length!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17)
+    }
+
+    /// [`LaneQueries::first_hits`] for polynomials of `D` coefficients.
+    #[inline(always)]
+    fn first_hits_fixed<const D: usize>(
+        &self,
+        s: &Surface,
+        solver: Solver,
+        spans: &LaneSpans,
+        cs: &UniLanes,
+        t_max: [f64; LANES],
+    ) -> [FirstHit; LANES] {
+        let c: &[[f64; LANES]; D] = cs[..D].try_into().expect("D coefficients");
+        let roots = solver.first_root_lanes_by_power(c, self.s_lo, self.s_hi, [true; LANES]);
+        // `ill_conditioned`'s first test and `is_root`, lane by lane in the same operations;
+        // a lane without a root computes on at 0 and is answered by its `None`.
+        let at = roots.map(|r| r.unwrap_or(0.0));
+        let (mut p, mut dp) = ([0.0f64; LANES], [0.0f64; LANES]);
+        let (mut v, mut m) = ([0.0f64; LANES], [0.0f64; LANES]);
+        for k in c.iter().rev() {
+            for i in 0..LANES {
+                dp[i] = dp[i] * at[i] + p[i];
+                p[i] = p[i] * at[i] + k[i];
+                v[i] = v[i] * at[i] + k[i];
+                m[i] = m[i] * at[i].abs() + k[i].abs();
+            }
+        }
+        let point: [[f64; LANES]; 3] =
+            std::array::from_fn(|axis| lanes(|i| spans.mid[axis][i] + at[i] * spans.e[axis][i]));
+        let bound = s.f.magnitude_bound_lanes::<D>(&point);
+        std::array::from_fn(|i| {
+            let Some(root) = roots[i] else {
+                return FirstHit::Answer(None);
+            };
+            let threshold = SIMPLE_ROOT_RADIUS * dp[i].abs();
+            let simple = ROUNDING * (D as f64) * self.inv[i] * bound[i] <= threshold;
+            let t = spans.t_mid[i] + root * spans.t_half[i];
+            let hit = simple
+                && t > spans.guard[i]
+                && t < t_max[i]
+                && v[i].abs() <= MAX_ROOT_RESIDUAL * m[i];
+            if hit {
+                FirstHit::Answer(Some(t))
+            } else {
+                FirstHit::GoOn(root)
+            }
+        })
     }
 }
 

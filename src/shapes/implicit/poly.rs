@@ -569,6 +569,21 @@ impl Compiled {
         b * (1.0 + 1e-9)
     }
 
+    /// [`Compiled::magnitude_bound`] at [`LANES`] points (`p[axis][i]`), for a polynomial of
+    /// `D` coefficients (`D = degree + 1`): the same bits as one at a time.
+    #[inline(always)]
+    pub fn magnitude_bound_lanes<const D: usize>(&self, p: &[[f64; LANES]; 3]) -> [f64; LANES] {
+        debug_assert_eq!(D, self.degree + 1);
+        let by_degree: &[f64; D] = self.magnitude_by_degree[..D]
+            .try_into()
+            .expect("D is the degree plus one");
+        std::array::from_fn(|i| {
+            let r = p[0][i].abs().max(p[1][i].abs()).max(p[2][i].abs());
+            let b = by_degree.iter().rev().fold(0.0f64, |b, &a| b * r + a);
+            b * (1.0 + 1e-9)
+        })
+    }
+
     /// [`Compiled::eval_with_bound`] from a table of the point's coordinate powers (at least
     /// up to this polynomial's degree), so that several polynomials at one point share it.
     #[inline]
