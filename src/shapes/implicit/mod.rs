@@ -41,7 +41,7 @@ use super::{SolverReport, LANES};
 use crate::geometry::{Aabb, DMat3, DVec3, Frame, Ray, SolidEllipsoid};
 use crate::roots::Solver;
 use dd::Dd;
-use poly::{Compiled, Gradient, Poly, Powers, Uni, UniLanes};
+use poly::{Compiled, Gradient, Poly, Powers, Uni};
 pub use presets::{Preset, HEART_EQUATION};
 
 #[doc(hidden)]
@@ -145,7 +145,12 @@ impl Surface {
     /// [`Surface::compose`] for [`LANES`] rays (ray `i` along `mid[axis][i] + s·e[axis][i]`),
     /// by power into `out[..=degree]` (the same bits as one at a time).
     #[inline]
-    fn compose_lanes(&self, mid: &[[f64; LANES]; 3], e: &[[f64; LANES]; 3], out: &mut UniLanes) {
+    fn compose_lanes(
+        &self,
+        mid: &[[f64; LANES]; 3],
+        e: &[[f64; LANES]; 3],
+        out: &mut [[f64; LANES]],
+    ) {
         match &self.torus {
             Some(t) => t.compose_lanes(mid, e, out),
             None => self.f.compose_lanes(mid, e, out),
@@ -858,20 +863,45 @@ impl ImplicitShape {
         if alive == 0 {
             return [None; LANES];
         }
-        if alive < 2 {
-            return std::array::from_fn(|i| {
-                let span = spans.get(i)?;
-                let mut c: Uni = [0.0; MAX_DEGREE + 1];
-                s.compose(span.mid, span.e, &mut c);
-                let q = span.query(s, &mut c)?;
-                self.solve(s, &span, &c, q, t_max[i], &mut first_root, &mut false)
-            });
+        if alive >= 2 {
+            macro_rules! by_length {
+                ($($d:literal)*) => {
+                    match s.f.degree + 1 {
+                        $($d => return self.intersect_lanes_fixed::<$d>(s, &spans, t_max),)*
+                        _ => {}
+                    }
+                };
+            }
+            by_length!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17);
         }
-        let mut cs: UniLanes = [[0.0; LANES]; MAX_DEGREE + 1];
+        // One lane (or a constant): each alone.
+        std::array::from_fn(|i| {
+            let span = spans.get(i)?;
+            let mut c: Uni = [0.0; MAX_DEGREE + 1];
+            s.compose(span.mid, span.e, &mut c);
+            let q = span.query(s, &mut c)?;
+            self.solve(s, &span, &c, q, t_max[i], &mut first_root, &mut false)
+        })
+    }
+
+    /// The part of [`ImplicitShape::intersect_lanes_generic`] from the composition on, for a
+    /// surface of degree `D − 1` and at least two lanes with a span.
+    #[inline(always)]
+    fn intersect_lanes_fixed<const D: usize>(
+        &self,
+        s: &Surface,
+        spans: &LaneSpans,
+        t_max: [f64; LANES],
+    ) -> [Option<f64>; LANES] {
+        let solver = self.solver;
+        let mut first_root = |c: &[f64], lo: f64, hi: f64| solver.first_root(c, lo, hi);
+        let mut cs = [[0.0; LANES]; D];
         s.compose_lanes(&spans.mid, &spans.e, &mut cs);
-        let n = s.f.degree;
-        let lane = |cs: &UniLanes, i: usize| -> Uni { std::array::from_fn(|k| cs[k][i]) };
-        let Some(queries) = LaneQueries::new(&spans, &mut cs, n) else {
+        // Lane `i`'s polynomial, ascending (zero above the degree).
+        let lane = |cs: &[[f64; LANES]; D], i: usize| -> Uni {
+            std::array::from_fn(|k| if k < D { cs[k][i] } else { 0.0 })
+        };
+        let Some(queries) = LaneQueries::new(spans, &mut cs) else {
             // Not all four keep the degree: each alone, from its composition.
             return std::array::from_fn(|i| {
                 let span = spans.get(i)?;
@@ -880,17 +910,16 @@ impl ImplicitShape {
                 self.solve(s, &span, &c, q, t_max[i], &mut first_root, &mut false)
             });
         };
-        let settled = queries.first_hits(s, solver, &spans, &cs, t_max);
+        let settled = queries.first_hits(s, solver, spans, &cs, t_max);
         std::array::from_fn(|i| {
             let ahead = match settled[i] {
                 FirstHit::Answer(hit) => return hit,
                 FirstHit::GoOn(root) => Some(Some(root)),
-                FirstHit::Alone => None,
             };
             let span = spans.get(i)?;
             let c = lane(&cs, i);
             let q = Query {
-                deg: n,
+                deg: D - 1,
                 inv: queries.inv[i],
                 s_lo: queries.s_lo[i],
                 s_hi: queries.s_hi[i],
@@ -1110,8 +1139,6 @@ enum FirstHit {
     Answer(Option<f64>),
     /// `solve` goes on from this first root the query found.
     GoOn(f64),
-    /// Not asked (a degree the lanes' query is not compiled for): `solve` asks it alone.
-    Alone,
 }
 
 /// [`Span::query`] of all [`LANES`] lanes at once, when every lane has a span and a
@@ -1124,13 +1151,14 @@ struct LaneQueries {
 }
 
 impl LaneQueries {
-    /// Normalises the lanes' ray polynomials `cs[..=n]` (of degree `n`, composed on
-    /// `spans`) as [`normalise`] does each; `None` (and `cs` unchanged) unless every lane is
-    /// alive, its polynomial non-zero and finite-sized and its degree kept.
+    /// Normalises the lanes' ray polynomials `cs` (of degree `D − 1`, composed on `spans`)
+    /// as [`normalise`] does each; `None` (and `cs` unchanged) unless every lane is alive,
+    /// its polynomial non-zero and finite-sized and its degree kept.
     #[inline(always)]
-    fn new(spans: &LaneSpans, cs: &mut UniLanes, n: usize) -> Option<LaneQueries> {
+    fn new<const D: usize>(spans: &LaneSpans, cs: &mut [[f64; LANES]; D]) -> Option<LaneQueries> {
+        let n = D - 1;
         let mut big = [0.0f64; LANES];
-        for c in &cs[..=n] {
+        for c in cs.iter() {
             for i in 0..LANES {
                 // `normalise`'s fold, lane by lane.
                 let a = c[i].abs();
@@ -1146,7 +1174,7 @@ impl LaneQueries {
             return None;
         }
         let inv = big.map(pow2_inverse);
-        for c in &mut cs[..=n] {
+        for c in cs.iter_mut() {
             for i in 0..LANES {
                 c[i] *= inv[i];
             }
@@ -1164,40 +1192,18 @@ impl LaneQueries {
         Some(LaneQueries { inv, s_lo, s_hi })
     }
 
-    /// Every lane's first query on the normalised `cs[..=n]` (`n` the surface's degree) by
+    /// Every lane's first query on the normalised `cs` (of the surface's degree `D − 1`) by
     /// [`Solver::first_root_lanes_by_power`], and the hits that first root settles the way
     /// [`ImplicitShape::solve`] would settle them.
     #[inline(always)]
-    fn first_hits(
+    fn first_hits<const D: usize>(
         &self,
         s: &Surface,
         solver: Solver,
         spans: &LaneSpans,
-        cs: &UniLanes,
+        c: &[[f64; LANES]; D],
         t_max: [f64; LANES],
     ) -> [FirstHit; LANES] {
-        macro_rules! by_length {
-            ($($d:literal)*) => {
-                match s.f.degree + 1 {
-                    $($d => self.first_hits_fixed::<$d>(s, solver, spans, cs, t_max),)*
-                    _ => [FirstHit::Alone; LANES],
-                }
-            };
-        }
-        by_length!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17)
-    }
-
-    /// [`LaneQueries::first_hits`] for polynomials of `D` coefficients.
-    #[inline(always)]
-    fn first_hits_fixed<const D: usize>(
-        &self,
-        s: &Surface,
-        solver: Solver,
-        spans: &LaneSpans,
-        cs: &UniLanes,
-        t_max: [f64; LANES],
-    ) -> [FirstHit; LANES] {
-        let c: &[[f64; LANES]; D] = cs[..D].try_into().expect("D coefficients");
         let roots = solver.first_root_lanes_by_power(c, self.s_lo, self.s_hi, [true; LANES]);
         // `ill_conditioned`'s first test and `is_root`, lane by lane in the same operations;
         // a lane without a root computes on at 0 and is answered by its `None`.

@@ -429,10 +429,6 @@ fn powers_into<const D: usize>(row: &mut [f64; MAX_DEGREE + 1], x: f64) {
 /// Univariate coefficients (ascending) in fixed storage.
 pub type Uni = [f64; MAX_DEGREE + 1];
 
-/// The univariate coefficients of [`LANES`] polynomials by power: `[k][i]` is polynomial
-/// `i`'s coefficient of `sᵏ`.
-pub type UniLanes = [[f64; LANES]; MAX_DEGREE + 1];
-
 /// The arithmetic a ray composition runs in: `f64`, or [`Dd`] where `f64` cannot resolve
 /// the polynomial.
 pub trait Scalar: Copy + Add<Output = Self> + Mul<Output = Self> {
@@ -653,10 +649,16 @@ impl Compiled {
     }
 
     /// [`Compiled::compose`] of [`LANES`] rays at once (ray `i` is `o[axis][i] + s·e[axis][i]`)
-    /// into `out` by power: `out[k][i]` for `k ≤ degree` becomes exactly
-    /// `self.compose(…)[k]` of ray `i`, bit for bit (the entries above the degree, zero in
-    /// `compose`, are left as they are). Compiled for AVX2 as well, chosen at run time.
-    pub fn compose_lanes(&self, o: &[[f64; LANES]; 3], e: &[[f64; LANES]; 3], out: &mut UniLanes) {
+    /// into `out` by power (at least `degree + 1` entries): `out[k][i]` for `k ≤ degree`
+    /// becomes exactly `self.compose(…)[k]` of ray `i`, bit for bit (the entries above the
+    /// degree, zero in `compose`, are left as they are). Compiled for AVX2 as well, chosen
+    /// at run time.
+    pub fn compose_lanes(
+        &self,
+        o: &[[f64; LANES]; 3],
+        e: &[[f64; LANES]; 3],
+        out: &mut [[f64; LANES]],
+    ) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2, checked just above.
@@ -675,7 +677,7 @@ impl Compiled {
         &self,
         o: &[[f64; LANES]; 3],
         e: &[[f64; LANES]; 3],
-        out: &mut UniLanes,
+        out: &mut [[f64; LANES]],
     ) {
         self.compose_lanes_in(o, e, out)
     }
@@ -683,7 +685,12 @@ impl Compiled {
     /// [`Compiled::compose_lanes`] for the baseline instruction set (and inlined into the
     /// AVX2 version).
     #[inline(always)]
-    fn compose_lanes_in(&self, o: &[[f64; LANES]; 3], e: &[[f64; LANES]; 3], out: &mut UniLanes) {
+    fn compose_lanes_in(
+        &self,
+        o: &[[f64; LANES]; 3],
+        e: &[[f64; LANES]; 3],
+        out: &mut [[f64; LANES]],
+    ) {
         let mut lanes = [Lanes::ZERO; MAX_DEGREE + 1];
         self.compose_in(o.map(Lanes), e.map(Lanes), &mut lanes);
         // Only the coefficients up to the degree: the rest are zero, and left as they are.
@@ -1152,11 +1159,11 @@ mod tests {
                 let ray = |v: &[[f64; LANES]; 3], i: usize| [v[0][i], v[1][i], v[2][i]];
                 let alone: [Uni; LANES] =
                     std::array::from_fn(|i| c.compose(ray(&o, i), ray(&e, i)));
-                let bits = |v: UniLanes| v.map(|u| u.map(f64::to_bits));
+                let bits = |v: [[f64; LANES]; MAX_DEGREE + 1]| v.map(|u| u.map(f64::to_bits));
                 // The baseline code path, whatever the processor, and the one chosen at run
                 // time, into a buffer that holds something else before.
                 // Up to the degree; the entries above it are left as they were.
-                let want: UniLanes = std::array::from_fn(|k| {
+                let want: [[f64; LANES]; MAX_DEGREE + 1] = std::array::from_fn(|k| {
                     std::array::from_fn(|i| if k <= c.degree { alone[i][k] } else { f64::NAN })
                 });
                 let mut out = [[f64::NAN; LANES]; MAX_DEGREE + 1];

@@ -11,7 +11,7 @@
 //! y²)`), so the solver's and the re-solve's bounds hold unchanged.
 
 use super::coef::Coef;
-use super::poly::{Exps, Poly, Uni, UniLanes, LANES};
+use super::poly::{Exps, Poly, Uni, LANES};
 
 /// The torus of an equation: its polynomial is `k·((x² + y² + z² + a)² − b·(x² + y²))`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -36,7 +36,12 @@ impl TorusForm {
     /// into `out[..=4]` by power (the same bits as one at a time; entries above are left as
     /// they are).
     #[inline(always)]
-    pub fn compose_lanes(&self, m: &[[f64; LANES]; 3], e: &[[f64; LANES]; 3], out: &mut UniLanes) {
+    pub fn compose_lanes(
+        &self,
+        m: &[[f64; LANES]; 3],
+        e: &[[f64; LANES]; 3],
+        out: &mut [[f64; LANES]],
+    ) {
         for i in 0..LANES {
             let c = self.coefficients([m[0][i], m[1][i], m[2][i]], [e[0][i], e[1][i], e[2][i]]);
             for (o, c) in out.iter_mut().zip(c) {
