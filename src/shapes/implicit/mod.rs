@@ -727,8 +727,8 @@ impl ImplicitShape {
         } else {
             t_min
         };
-        let lo_t = guard.max(t_mid - t_half);
-        let hi_t = t_max.min(t_mid + t_half);
+        let lo_t = max_or_first(guard, t_mid - t_half);
+        let hi_t = min_or_first(t_max, t_mid + t_half);
         if lo_t.is_nan() || hi_t.is_nan() || lo_t >= hi_t {
             return None;
         }
@@ -768,7 +768,127 @@ impl ImplicitShape {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn spans_lanes_avx2(&self, s: &Surface, rays: LaneRays) -> LaneSpans {
-        self.spans_lanes_in(s, rays)
+        use std::arch::x86_64::*;
+        let LaneRays {
+            local,
+            t_min,
+            t_max,
+        } = rays;
+        let Some(object_box) = s.object_box else {
+            return LaneSpans::NONE;
+        };
+        // Four lanes a register, each operation the IEEE operation of `spans_lanes_in` (so
+        // the same bits); a choice `if c {a} else {b}` is a blend on the comparison's mask.
+        let load = |v: [f64; LANES]| _mm256_loadu_pd(v.as_ptr());
+        let store = |v: __m256d| {
+            let mut out = [0.0; LANES];
+            _mm256_storeu_pd(out.as_mut_ptr(), v);
+            out
+        };
+        let pick = |c: __m256d, a: __m256d, b: __m256d| _mm256_blendv_pd(b, a, c);
+        let o: [__m256d; 3] =
+            std::array::from_fn(|axis| load(std::array::from_fn(|i| local[i].origin[axis])));
+        let d: [__m256d; 3] =
+            std::array::from_fn(|axis| load(std::array::from_fn(|i| local[i].dir[axis])));
+        let (t_min, t_max) = (load(t_min), load(t_max));
+        let dot = |a: &[__m256d; 3], b: &[__m256d; 3]| {
+            _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(a[0], b[0]), _mm256_mul_pd(a[1], b[1])),
+                _mm256_mul_pd(a[2], b[2]),
+            )
+        };
+        let zero = _mm256_setzero_pd();
+        let sign = _mm256_set1_pd(-0.0);
+        // The chord through the clip sphere.
+        let dd = dot(&d, &d);
+        let od = dot(&o, &d);
+        let t_mid = _mm256_div_pd(_mm256_xor_pd(od, sign), dd);
+        let mid = [0, 1, 2].map(|axis| _mm256_add_pd(o[axis], _mm256_mul_pd(t_mid, d[axis])));
+        let mm = dot(&mid, &mid);
+        let h2 = _mm256_sub_pd(_mm256_set1_pd(self.bound * self.bound), mm);
+        let t_half = _mm256_sqrt_pd(_mm256_div_pd(h2, dd));
+        let e = [0, 1, 2].map(|axis| _mm256_mul_pd(d[axis], t_half));
+        // The span to search.
+        let g = _mm256_mul_pd(_mm256_set1_pd(SELF_HIT_GUARD), t_half);
+        let above = pick(_mm256_cmp_pd::<_CMP_GT_OQ>(g, t_min), g, t_min);
+        let guard = pick(_mm256_cmp_pd::<_CMP_GE_OQ>(t_min, zero), above, t_min);
+        // `max_or_first` and `min_or_first`.
+        let low = _mm256_sub_pd(t_mid, t_half);
+        let high = _mm256_add_pd(t_mid, t_half);
+        let mut lo_t = pick(
+            _mm256_or_pd(
+                _mm256_cmp_pd::<_CMP_GT_OQ>(guard, low),
+                _mm256_cmp_pd::<_CMP_UNORD_Q>(low, low),
+            ),
+            guard,
+            low,
+        );
+        let mut hi_t = pick(
+            _mm256_or_pd(
+                _mm256_cmp_pd::<_CMP_LT_OQ>(t_max, high),
+                _mm256_cmp_pd::<_CMP_UNORD_Q>(high, high),
+            ),
+            t_max,
+            high,
+        );
+        let magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
+        let finite = |v: __m256d| {
+            _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_and_pd(v, magnitude), _mm256_set1_pd(f64::INFINITY))
+        };
+        let mut alive = _mm256_and_pd(
+            _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_GT_OQ>(t_max, t_min),
+                _mm256_and_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(dd, zero), finite(dd)),
+            ),
+            // `h2 > 0` is false for a NaN; neither end is NaN and `lo < hi` is `lo_t < hi_t`.
+            _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_GT_OQ>(h2, zero),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(lo_t, hi_t),
+            ),
+        );
+        // `Aabb::clip_lanes`.
+        let one = _mm256_set1_pd(1.0);
+        for axis in 0..3 {
+            let (lo, hi) = (
+                _mm256_set1_pd(object_box.min[axis]),
+                _mm256_set1_pd(object_box.max[axis]),
+            );
+            let (o, d) = (o[axis], d[axis]);
+            let moving = _mm256_cmp_pd::<_CMP_NEQ_UQ>(d, zero);
+            let inv = _mm256_div_pd(one, d);
+            let a = _mm256_mul_pd(_mm256_sub_pd(lo, o), inv);
+            let b = _mm256_mul_pd(_mm256_sub_pd(hi, o), inv);
+            let swap = _mm256_cmp_pd::<_CMP_GT_OQ>(a, b);
+            let (a, b) = (pick(swap, b, a), pick(swap, a, b));
+            let outside = _mm256_or_pd(
+                _mm256_cmp_pd::<_CMP_LT_OQ>(o, lo),
+                _mm256_cmp_pd::<_CMP_GT_OQ>(o, hi),
+            );
+            lo_t = pick(
+                _mm256_and_pd(moving, _mm256_cmp_pd::<_CMP_GT_OQ>(a, lo_t)),
+                a,
+                lo_t,
+            );
+            hi_t = pick(
+                _mm256_and_pd(moving, _mm256_cmp_pd::<_CMP_LT_OQ>(b, hi_t)),
+                b,
+                hi_t,
+            );
+            let empty = _mm256_cmp_pd::<_CMP_GT_OQ>(lo_t, hi_t);
+            alive = _mm256_andnot_pd(pick(moving, empty, outside), alive);
+        }
+        alive = _mm256_and_pd(alive, _mm256_cmp_pd::<_CMP_LT_OQ>(lo_t, hi_t));
+        let bits = _mm256_movemask_pd(alive);
+        LaneSpans {
+            alive: std::array::from_fn(|i| bits >> i & 1 == 1),
+            t_mid: store(t_mid),
+            t_half: store(t_half),
+            guard: store(guard),
+            mid: mid.map(store),
+            e: e.map(store),
+            lo_t: store(lo_t),
+            hi_t: store(hi_t),
+        }
     }
 
     /// The body of [`ImplicitShape::spans_lanes`] (and, called directly, its baseline copy):
@@ -809,8 +929,8 @@ impl ImplicitShape {
                 t_min[i]
             }
         });
-        let mut lo_t = lanes(|i| guard[i].max(t_mid[i] - t_half[i]));
-        let mut hi_t = lanes(|i| t_max[i].min(t_mid[i] + t_half[i]));
+        let mut lo_t = lanes(|i| max_or_first(guard[i], t_mid[i] - t_half[i]));
+        let mut hi_t = lanes(|i| min_or_first(t_max[i], t_mid[i] + t_half[i]));
         let mut alive: [bool; LANES] = std::array::from_fn(|i| {
             (t_max[i] > t_min[i])
                 & (dd[i] > 0.0)
@@ -1046,6 +1166,27 @@ struct Span {
     e: [f64; 3],
     lo_t: f64,
     hi_t: f64,
+}
+
+/// `a.max(b)` as the spans take it: `a` where `a > b` or `b` is NaN, else `b` (one
+/// definition for the scalar and the lanes' code, signed zeros included).
+#[inline(always)]
+fn max_or_first(a: f64, b: f64) -> f64 {
+    if a > b || b.is_nan() {
+        a
+    } else {
+        b
+    }
+}
+
+/// `a.min(b)` as the spans take it: `a` where `a < b` or `b` is NaN, else `b`.
+#[inline(always)]
+fn min_or_first(a: f64, b: f64) -> f64 {
+    if a < b || b.is_nan() {
+        a
+    } else {
+        b
+    }
 }
 
 /// One value per lane, lane `i`'s from `f(i)`.
