@@ -206,6 +206,59 @@ impl Aabb {
             }
         }
     }
+
+    /// [`Aabb::clip_lanes`] on AVX2 registers (lane `i` of each): the same operations, so
+    /// the same bits; `alive` is a mask (all ones or zero per lane). Tested through the
+    /// typed surfaces' spans, which clip with it.
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) unsafe fn clip_avx2(
+        &self,
+        o: &[std::arch::x86_64::__m256d; 3],
+        d: &[std::arch::x86_64::__m256d; 3],
+        t0: &mut std::arch::x86_64::__m256d,
+        t1: &mut std::arch::x86_64::__m256d,
+        alive: &mut std::arch::x86_64::__m256d,
+    ) {
+        use std::arch::x86_64::*;
+        // `if c {a} else {b}`.
+        let pick = |c: __m256d, a: __m256d, b: __m256d| _mm256_blendv_pd(b, a, c);
+        let (zero, one) = (_mm256_setzero_pd(), _mm256_set1_pd(1.0));
+        for axis in 0..3 {
+            let (lo, hi) = (
+                _mm256_set1_pd(self.min[axis]),
+                _mm256_set1_pd(self.max[axis]),
+            );
+            let (o, d) = (o[axis], d[axis]);
+            // `d != 0.0` (true for a NaN).
+            let moving = _mm256_cmp_pd::<_CMP_NEQ_UQ>(d, zero);
+            let inv = _mm256_div_pd(one, d);
+            let a = _mm256_mul_pd(_mm256_sub_pd(lo, o), inv);
+            let b = _mm256_mul_pd(_mm256_sub_pd(hi, o), inv);
+            let swap = _mm256_cmp_pd::<_CMP_GT_OQ>(a, b);
+            let (a, b) = (pick(swap, b, a), pick(swap, a, b));
+            let outside = _mm256_or_pd(
+                _mm256_cmp_pd::<_CMP_LT_OQ>(o, lo),
+                _mm256_cmp_pd::<_CMP_GT_OQ>(o, hi),
+            );
+            *t0 = pick(
+                _mm256_and_pd(moving, _mm256_cmp_pd::<_CMP_GT_OQ>(a, *t0)),
+                a,
+                *t0,
+            );
+            *t1 = pick(
+                _mm256_and_pd(moving, _mm256_cmp_pd::<_CMP_LT_OQ>(b, *t1)),
+                b,
+                *t1,
+            );
+            let empty = _mm256_cmp_pd::<_CMP_GT_OQ>(*t0, *t1);
+            *alive = _mm256_andnot_pd(pick(moving, empty, outside), *alive);
+        }
+    }
 }
 
 /// Why an object frame could not be built.

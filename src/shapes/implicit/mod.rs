@@ -846,37 +846,7 @@ impl ImplicitShape {
                 _mm256_cmp_pd::<_CMP_LT_OQ>(lo_t, hi_t),
             ),
         );
-        // `Aabb::clip_lanes`.
-        let one = _mm256_set1_pd(1.0);
-        for axis in 0..3 {
-            let (lo, hi) = (
-                _mm256_set1_pd(object_box.min[axis]),
-                _mm256_set1_pd(object_box.max[axis]),
-            );
-            let (o, d) = (o[axis], d[axis]);
-            let moving = _mm256_cmp_pd::<_CMP_NEQ_UQ>(d, zero);
-            let inv = _mm256_div_pd(one, d);
-            let a = _mm256_mul_pd(_mm256_sub_pd(lo, o), inv);
-            let b = _mm256_mul_pd(_mm256_sub_pd(hi, o), inv);
-            let swap = _mm256_cmp_pd::<_CMP_GT_OQ>(a, b);
-            let (a, b) = (pick(swap, b, a), pick(swap, a, b));
-            let outside = _mm256_or_pd(
-                _mm256_cmp_pd::<_CMP_LT_OQ>(o, lo),
-                _mm256_cmp_pd::<_CMP_GT_OQ>(o, hi),
-            );
-            lo_t = pick(
-                _mm256_and_pd(moving, _mm256_cmp_pd::<_CMP_GT_OQ>(a, lo_t)),
-                a,
-                lo_t,
-            );
-            hi_t = pick(
-                _mm256_and_pd(moving, _mm256_cmp_pd::<_CMP_LT_OQ>(b, hi_t)),
-                b,
-                hi_t,
-            );
-            let empty = _mm256_cmp_pd::<_CMP_GT_OQ>(lo_t, hi_t);
-            alive = _mm256_andnot_pd(pick(moving, empty, outside), alive);
-        }
+        object_box.clip_avx2(&o, &d, &mut lo_t, &mut hi_t, &mut alive);
         alive = _mm256_and_pd(alive, _mm256_cmp_pd::<_CMP_LT_OQ>(lo_t, hi_t));
         let bits = _mm256_movemask_pd(alive);
         LaneSpans {
