@@ -11,6 +11,7 @@
 //! y²)`), so the solver's and the re-solve's bounds hold unchanged.
 
 use super::coef::Coef;
+use super::lanes;
 use super::poly::{Exps, Poly, Uni, LANES};
 
 /// The torus of an equation: its polynomial is `k·((x² + y² + z² + a)² − b·(x² + y²))`.
@@ -34,7 +35,8 @@ impl TorusForm {
 
     /// [`TorusForm::compose`] of [`LANES`] rays (ray `i` is `m[axis][i] + s·e[axis][i]`)
     /// into `out[..=4]` by power (the same bits as one at a time; entries above are left as
-    /// they are).
+    /// they are). One operation across the lanes at a time, so that each coefficient is
+    /// stored whole.
     #[inline(always)]
     pub fn compose_lanes(
         &self,
@@ -42,12 +44,18 @@ impl TorusForm {
         e: &[[f64; LANES]; 3],
         out: &mut [[f64; LANES]],
     ) {
-        for i in 0..LANES {
-            let c = self.coefficients([m[0][i], m[1][i], m[2][i]], [e[0][i], e[1][i], e[2][i]]);
-            for (o, c) in out.iter_mut().zip(c) {
-                o[i] = c;
-            }
-        }
+        let q0 = lanes(|i| m[0][i] * m[0][i] + m[1][i] * m[1][i] + m[2][i] * m[2][i] + self.a);
+        let q1 = lanes(|i| 2.0 * (m[0][i] * e[0][i] + m[1][i] * e[1][i] + m[2][i] * e[2][i]));
+        let q2 = lanes(|i| e[0][i] * e[0][i] + e[1][i] * e[1][i] + e[2][i] * e[2][i]);
+        let w0 = lanes(|i| m[0][i] * m[0][i] + m[1][i] * m[1][i]);
+        let w1 = lanes(|i| 2.0 * (m[0][i] * e[0][i] + m[1][i] * e[1][i]));
+        let w2 = lanes(|i| e[0][i] * e[0][i] + e[1][i] * e[1][i]);
+        let (k, b) = (self.k, self.b);
+        out[0] = lanes(|i| k * (q0[i] * q0[i] - b * w0[i]));
+        out[1] = lanes(|i| k * (2.0 * q0[i] * q1[i] - b * w1[i]));
+        out[2] = lanes(|i| k * (q1[i] * q1[i] + 2.0 * q0[i] * q2[i] - b * w2[i]));
+        out[3] = lanes(|i| k * (2.0 * q1[i] * q2[i]));
+        out[4] = lanes(|i| k * (q2[i] * q2[i]));
     }
 
     /// The ray polynomial's five coefficients along `m + s·e`, ascending.
