@@ -753,12 +753,15 @@ impl ImplicitShape {
     /// when the processor has it, for the baseline otherwise).
     #[inline]
     fn spans_lanes(&self, s: &Surface, rays: LaneRays) -> LaneSpans {
+        let Some(object_box) = &s.object_box else {
+            return LaneSpans::NONE;
+        };
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2, checked just above.
-            return unsafe { self.spans_lanes_avx2(s, rays) };
+            return unsafe { self.spans_lanes_avx2(object_box, rays) };
         }
-        self.spans_lanes_in(s, rays)
+        self.spans_lanes_in(object_box, rays)
     }
 
     /// [`ImplicitShape::spans_lanes`] compiled for AVX2.
@@ -767,16 +770,16 @@ impl ImplicitShape {
     /// The processor must have AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn spans_lanes_avx2(&self, s: &Surface, rays: LaneRays) -> LaneSpans {
-        use std::arch::x86_64::*;
-        let LaneRays {
+    unsafe fn spans_lanes_avx2(
+        &self,
+        object_box: &Aabb,
+        LaneRays {
             local,
             t_min,
             t_max,
-        } = rays;
-        let Some(object_box) = s.object_box else {
-            return LaneSpans::NONE;
-        };
+        }: LaneRays,
+    ) -> LaneSpans {
+        use std::arch::x86_64::*;
         // Four lanes a register, each operation the IEEE operation of `spans_lanes_in` (so
         // the same bits); a choice `if c {a} else {b}` is a blend on the comparison's mask.
         let load = |v: [f64; LANES]| _mm256_loadu_pd(v.as_ptr());
@@ -867,15 +870,15 @@ impl ImplicitShape {
     /// (a lane the scalar code leaves early is computed on with meaningless values and
     /// marked dead at the end).
     #[inline(always)]
-    fn spans_lanes_in(&self, s: &Surface, rays: LaneRays) -> LaneSpans {
-        let LaneRays {
+    fn spans_lanes_in(
+        &self,
+        object_box: &Aabb,
+        LaneRays {
             local,
             t_min,
             t_max,
-        } = rays;
-        let Some(object_box) = s.object_box else {
-            return LaneSpans::NONE;
-        };
+        }: LaneRays,
+    ) -> LaneSpans {
         let o: [[f64; LANES]; 3] = std::array::from_fn(|axis| lanes(|i| local[i].origin[axis]));
         let d: [[f64; LANES]; 3] = std::array::from_fn(|axis| lanes(|i| local[i].dir[axis]));
         // The chord through the clip sphere.
@@ -1729,7 +1732,8 @@ mod tests {
                     t_min,
                     t_max,
                 };
-                let baseline = object.spans_lanes_in(s, lanes);
+                let object_box = s.object_box.as_ref().expect("a box");
+                let baseline = object.spans_lanes_in(object_box, lanes);
                 let detected = object.spans_lanes(s, lanes);
                 let (baseline, detected) = (
                     std::array::from_fn::<_, LANES, _>(|i| baseline.get(i)),
