@@ -240,8 +240,13 @@ pub(super) fn first_roots<const D: usize>(
     active: [bool; LANES],
     code: Code,
 ) -> [Option<f64>; LANES] {
-    let by_power: [Lanes; D] = std::array::from_fn(|j| std::array::from_fn(|l| coeffs[l][j]));
-    first_roots_by_power(solver, &by_power, lo, hi, active, code)
+    first_roots_by_power(solver, &by_power(coeffs), lo, hi, active, code)
+}
+
+/// The lanes' coefficients by power: `[j][l]` is lane `l`'s coefficient of `tʲ`.
+#[inline(always)]
+fn by_power<const D: usize>(coeffs: &[[f64; D]; LANES]) -> [Lanes; D] {
+    std::array::from_fn(|j| std::array::from_fn(|l| coeffs[l][j]))
 }
 
 /// See [`Solver::first_root_lanes_by_power`]; `code` picks the copy of the lanes' part.
@@ -367,11 +372,6 @@ fn rest_in<const D: usize>(
 mod tests {
     use super::*;
     use crate::testing::uniform_stream;
-
-    /// The lanes' coefficients by power.
-    fn by_power<const D: usize>(coeffs: &[[f64; D]; LANES]) -> [Lanes; D] {
-        std::array::from_fn(|j| std::array::from_fn(|l| coeffs[l][j]))
-    }
 
     /// One random query of `D` coefficients: from real roots (some clustered or double, some
     /// at the interval's ends), or random coefficients of mixed sizes with zeros, negligible

@@ -103,6 +103,12 @@ fn is_root(c: &[f64], s: f64) -> bool {
         v = v * s + k;
         m = m * a + k.abs();
     }
+    residual_is_rounding(v, m)
+}
+
+/// [`is_root`]'s test on the value `v = p(s)` and the magnitude sum `m = Σ |c_k|·|s|ᵏ`.
+#[inline(always)]
+fn residual_is_rounding(v: f64, m: f64) -> bool {
     v.abs() <= MAX_ROOT_RESIDUAL * m
 }
 
@@ -1216,21 +1222,23 @@ impl Span {
     #[inline(always)]
     fn query(&self, s: &Surface, c: &mut Uni) -> Option<Query> {
         let (deg, inv) = normalise(c, s.f.degree)?;
+        let (s_lo, s_hi) = search_interval(self.lo_t, self.hi_t, self.t_mid, self.t_half);
         Some(Query {
             deg,
             inv,
-            s_lo: (self.lo_t - self.t_mid) / self.t_half,
-            // `.min(1.0)` (1 for a NaN) in one comparison.
-            s_hi: {
-                let s_hi = (self.hi_t - self.t_mid) / self.t_half;
-                if s_hi < 1.0 {
-                    s_hi
-                } else {
-                    1.0
-                }
-            },
+            s_lo,
+            s_hi,
         })
     }
+}
+
+/// The span `(lo_t, hi_t)` of the chord `t = t_mid + s·t_half` in `s`, the upper end at most
+/// 1 (`.min(1.0)`, 1 for a NaN, in one comparison).
+#[inline(always)]
+fn search_interval(lo_t: f64, hi_t: f64, t_mid: f64, t_half: f64) -> (f64, f64) {
+    let s_lo = (lo_t - t_mid) / t_half;
+    let s_hi = (hi_t - t_mid) / t_half;
+    (s_lo, if s_hi < 1.0 { s_hi } else { 1.0 })
 }
 
 /// What the generic path hands the solver for one ray beside the normalised ray polynomial
@@ -1274,15 +1282,12 @@ impl LaneQueries {
         let mut big = [0.0f64; LANES];
         for c in cs.iter() {
             for i in 0..LANES {
-                // `normalise`'s fold, lane by lane.
-                let a = c[i].abs();
-                big[i] = if a > big[i] { a } else { big[i] };
+                big[i] = larger_magnitude(big[i], c[i]);
             }
         }
         let kept = (0..LANES).all(|i| {
-            // `normalise` drops the leading coefficient exactly when this holds.
-            let negligible = cs[n][i].abs() <= 1e-15 * big[i];
-            spans.alive[i] & (big[i] > 0.0) & big[i].is_finite() & ((n == 0) | !negligible)
+            let dropped = (n > 0) & negligible_beside(cs[n][i], big[i]);
+            spans.alive[i] & (big[i] > 0.0) & big[i].is_finite() & !dropped
         });
         if !kept {
             return None;
@@ -1293,17 +1298,19 @@ impl LaneQueries {
                 c[i] *= inv[i];
             }
         }
-        let s_lo = std::array::from_fn(|i| (spans.lo_t[i] - spans.t_mid[i]) / spans.t_half[i]);
-        let s_hi = std::array::from_fn(|i| {
-            // `Span::query`'s `.min(1.0)`.
-            let s_hi = (spans.hi_t[i] - spans.t_mid[i]) / spans.t_half[i];
-            if s_hi < 1.0 {
-                s_hi
-            } else {
-                1.0
-            }
+        let interval: [(f64, f64); LANES] = std::array::from_fn(|i| {
+            search_interval(
+                spans.lo_t[i],
+                spans.hi_t[i],
+                spans.t_mid[i],
+                spans.t_half[i],
+            )
         });
-        Some(LaneQueries { inv, s_lo, s_hi })
+        Some(LaneQueries {
+            inv,
+            s_lo: interval.map(|(lo, _)| lo),
+            s_hi: interval.map(|(_, hi)| hi),
+        })
     }
 
     /// Every lane's first query on the normalised `cs` (of the surface's degree `D − 1`) by
@@ -1322,13 +1329,12 @@ impl LaneQueries {
         // `ill_conditioned`'s first test and `is_root`, lane by lane in the same operations;
         // a lane without a root computes on at 0 and is answered by its `None`.
         let at = roots.map(|r| r.unwrap_or(0.0));
-        let (mut p, mut dp) = ([0.0f64; LANES], [0.0f64; LANES]);
-        let (mut v, mut m) = ([0.0f64; LANES], [0.0f64; LANES]);
+        // `p` is also `is_root`'s value: the same Horner steps.
+        let (mut p, mut dp, mut m) = ([0.0f64; LANES], [0.0f64; LANES], [0.0f64; LANES]);
         for k in c.iter().rev() {
             for i in 0..LANES {
                 dp[i] = dp[i] * at[i] + p[i];
                 p[i] = p[i] * at[i] + k[i];
-                v[i] = v[i] * at[i] + k[i];
                 m[i] = m[i] * at[i].abs() + k[i].abs();
             }
         }
@@ -1339,13 +1345,11 @@ impl LaneQueries {
             let Some(root) = roots[i] else {
                 return FirstHit::Answer(None);
             };
-            let threshold = SIMPLE_ROOT_RADIUS * dp[i].abs();
-            let simple = ROUNDING * (D as f64) * self.inv[i] * bound[i] <= threshold;
             let t = spans.t_mid[i] + root * spans.t_half[i];
-            let hit = simple
+            let hit = resolved(D, self.inv[i], bound[i], dp[i])
                 && t > spans.guard[i]
                 && t < t_max[i]
-                && v[i].abs() <= MAX_ROOT_RESIDUAL * m[i];
+                && residual_is_rounding(p[i], m[i]);
             if hit {
                 FirstHit::Answer(Some(t))
             } else {
@@ -1362,14 +1366,12 @@ impl LaneQueries {
 fn normalise(c: &mut Uni, n: usize) -> Option<(usize, f64)> {
     // `f64::max`'s answer (a NaN coefficient is passed over; `m` is never NaN or −0) in one
     // comparison.
-    let big = c[..=n]
-        .iter()
-        .fold(0.0f64, |m, v| if v.abs() > m { v.abs() } else { m });
+    let big = c[..=n].iter().fold(0.0f64, |m, &v| larger_magnitude(m, v));
     if !(big > 0.0 && big.is_finite()) {
         return None;
     }
     let mut deg = n;
-    while deg > 0 && c[deg].abs() <= 1e-15 * big {
+    while deg > 0 && negligible_beside(c[deg], big) {
         deg -= 1;
     }
     let inv = pow2_inverse(big);
@@ -1377,6 +1379,23 @@ fn normalise(c: &mut Uni, n: usize) -> Option<(usize, f64)> {
         *v *= inv;
     }
     Some((deg, inv))
+}
+
+/// `|v|` where it exceeds `m`, else `m` ([`normalise`]'s fold: a NaN `v` is passed over).
+#[inline(always)]
+fn larger_magnitude(m: f64, v: f64) -> f64 {
+    if v.abs() > m {
+        v.abs()
+    } else {
+        m
+    }
+}
+
+/// Whether a leading coefficient `c` is dropped beside the largest one, `big` (it cannot
+/// matter on `|s| ≤ 1`).
+#[inline(always)]
+fn negligible_beside(c: f64, big: f64) -> bool {
+    c.abs() <= 1e-15 * big
 }
 
 /// `2⁻ᵏ` with `2ᵏ ≤ x < 2ᵏ⁺¹` (`x` finite and positive), from the bits of `x` when `x` is a
@@ -1406,6 +1425,20 @@ const ROUNDING: f64 = 16.0 * f64::EPSILON;
 /// spurious roots next to its origin (self-shadowing specks).
 const SIMPLE_ROOT_RADIUS: f64 = 1e-11;
 
+/// The rounding of a normalised ray polynomial of `len` coefficients (scaled by `inv`) and
+/// of its evaluation, where the terms of `f` sum to `magnitude` in size.
+#[inline(always)]
+fn rounding_noise(len: usize, inv: f64, magnitude: f64) -> f64 {
+    ROUNDING * (len as f64) * inv * magnitude
+}
+
+/// [`ill_conditioned`]'s first test: a root where the polynomial's derivative is `dp` is
+/// resolved to [`SIMPLE_ROOT_RADIUS`] when its [`rounding_noise`] from `magnitude` allows.
+#[inline(always)]
+fn resolved(len: usize, inv: f64, magnitude: f64, dp: f64) -> bool {
+    rounding_noise(len, inv, magnitude) <= SIMPLE_ROOT_RADIUS * dp.abs()
+}
+
 /// Zero when `root` of the normalised ray polynomial `c` (scaled by `inv` from the
 /// composition of `s.f` with `mid + s·e`) is resolved by `f64` to [`SIMPLE_ROOT_RADIUS`];
 /// otherwise the half-width (a power of two, at most 2) of the interval around it within
@@ -1419,14 +1452,13 @@ fn ill_conditioned(s: &Surface, c: &[f64], inv: f64, mid: [f64; 3], e: [f64; 3],
         p = p * root + k;
     }
     let point = [0, 1, 2].map(|i| mid[i] + root * e[i]);
-    let threshold = SIMPLE_ROOT_RADIUS * dp.abs();
     // The noise below grows with the magnitude sum; its cheap upper bound settles most roots
     // (with the same answer: rounding keeps the order of the products).
-    if ROUNDING * (c.len() as f64) * inv * s.f.magnitude_bound(point) <= threshold {
+    if resolved(c.len(), inv, s.f.magnitude_bound(point), dp) {
         return 0.0;
     }
-    let noise = ROUNDING * (c.len() as f64) * inv * s.f.eval_with_bound(point).1;
-    if noise <= threshold {
+    let noise = rounding_noise(c.len(), inv, s.f.eval_with_bound(point).1);
+    if noise <= SIMPLE_ROOT_RADIUS * dp.abs() {
         return 0.0;
     }
     // The radius within which |p − p(root)| may stay below the noise: the smallest

@@ -6,7 +6,7 @@ use super::dd::Dd;
 use super::equation::{Expr, Node, Span};
 use super::{EquationError, MAX_DEGREE};
 use std::collections::BTreeMap;
-use std::ops::{Add, Mul};
+use std::ops::{Add, Mul, Sub};
 
 /// Exponents `[i, j, k]` of the monomial `xⁱ yʲ zᵏ`.
 pub type Exps = [u8; 3];
@@ -461,10 +461,37 @@ impl Scalar for Dd {
 /// How many rays [`Compiled::compose_lanes`] composes at once.
 pub const LANES: usize = crate::shapes::LANES;
 
-/// One `f64` per ray, with lane-wise `+` and `·`: each lane of a composition in this
+/// [`Compiled::magnitude_bound`] at `p` from the terms' magnitudes summed per degree,
+/// `by_degree[d]` for degree `d`.
+#[inline(always)]
+fn magnitude_bound_from(by_degree: &[f64], p: [f64; 3]) -> f64 {
+    let r = p[0].abs().max(p[1].abs()).max(p[2].abs());
+    let b = by_degree.iter().rev().fold(0.0f64, |b, &a| b * r + a);
+    // Every rounding of both sums is a factor within (1 ± ε); a thousand terms and degree 16
+    // stay far below this margin.
+    b * (1.0 + 1e-9)
+}
+
+/// One `f64` per ray, with lane-wise `+`, `−` and `·`: each lane of a composition in this
 /// arithmetic gets exactly the bits the `f64` composition of its ray alone gets.
 #[derive(Clone, Copy, Debug)]
-struct Lanes([f64; LANES]);
+pub(super) struct Lanes(pub(super) [f64; LANES]);
+
+impl Lanes {
+    /// `x` in every lane.
+    #[inline(always)]
+    pub(super) const fn splat(x: f64) -> Lanes {
+        Lanes([x; LANES])
+    }
+}
+
+impl Sub for Lanes {
+    type Output = Lanes;
+    #[inline(always)]
+    fn sub(self, o: Lanes) -> Lanes {
+        Lanes(std::array::from_fn(|i| self.0[i] - o.0[i]))
+    }
+}
 
 impl Add for Lanes {
     type Output = Lanes;
@@ -483,11 +510,11 @@ impl Mul for Lanes {
 }
 
 impl Scalar for Lanes {
-    const ZERO: Lanes = Lanes([0.0; LANES]);
-    const ONE: Lanes = Lanes([1.0; LANES]);
+    const ZERO: Lanes = Lanes::splat(0.0);
+    const ONE: Lanes = Lanes::splat(1.0);
     #[inline(always)]
     fn coef(t: &Term) -> Lanes {
-        Lanes([t.c; LANES])
+        Lanes::splat(t.c)
     }
 }
 
@@ -555,29 +582,19 @@ impl Compiled {
     /// (`+∞` or NaN where it overflows).
     #[inline]
     pub fn magnitude_bound(&self, p: [f64; 3]) -> f64 {
-        let r = p[0].abs().max(p[1].abs()).max(p[2].abs());
-        let b = self.magnitude_by_degree[..=self.degree]
-            .iter()
-            .rev()
-            .fold(0.0f64, |b, &a| b * r + a);
-        // Every rounding of both sums is a factor within (1 ± ε); a thousand terms and
-        // degree 16 stay far below this margin.
-        b * (1.0 + 1e-9)
+        magnitude_bound_from(&self.magnitude_by_degree[..=self.degree], p)
     }
 
     /// [`Compiled::magnitude_bound`] at [`LANES`] points (`p[axis][i]`), for a polynomial of
-    /// `D` coefficients (`D = degree + 1`): the same bits as one at a time.
+    /// `D` coefficients (`D = degree + 1`; the loop's length fixed): the same bits as one at
+    /// a time.
     #[inline(always)]
     pub fn magnitude_bound_lanes<const D: usize>(&self, p: &[[f64; LANES]; 3]) -> [f64; LANES] {
         debug_assert_eq!(D, self.degree + 1);
         let by_degree: &[f64; D] = self.magnitude_by_degree[..D]
             .try_into()
             .expect("D is the degree plus one");
-        std::array::from_fn(|i| {
-            let r = p[0][i].abs().max(p[1][i].abs()).max(p[2][i].abs());
-            let b = by_degree.iter().rev().fold(0.0f64, |b, &a| b * r + a);
-            b * (1.0 + 1e-9)
-        })
+        std::array::from_fn(|i| magnitude_bound_from(by_degree, [p[0][i], p[1][i], p[2][i]]))
     }
 
     /// [`Compiled::eval_with_bound`] from a table of the point's coordinate powers (at least
