@@ -287,7 +287,10 @@ fn lane<const D: usize>(coeffs: &[Lanes; D], l: usize) -> [f64; D] {
     std::array::from_fn(|j| coeffs[j][l])
 }
 
-/// [`front_in`] compiled for AVX2.
+/// [`front_in`] in AVX2 intrinsics: four lanes a register, each operation the IEEE (or
+/// 64-bit integer) operation `front_in` takes for each lane, in the same order, so every
+/// lane's result that `rest_in` reads is the same bits (tested); each `if` of `front_in` is
+/// a blend on the comparison's mask, and the status is decided from the masks at the end.
 ///
 /// # Safety
 /// The processor must have AVX2.
@@ -299,7 +302,285 @@ unsafe fn front_avx2<const D: usize>(
     hi: Lanes,
     active: [bool; LANES],
 ) -> Front<D> {
-    front_in(coeffs, lo, hi, active)
+    use std::arch::x86_64::*;
+    let n = D - 1;
+    // The helpers are macros, so that every use is inlined into this AVX2 code.
+    macro_rules! splat {
+        ($x:expr $(,)?) => {
+            _mm256_set1_pd($x)
+        };
+    }
+    macro_rules! int {
+        ($k:expr $(,)?) => {
+            _mm256_set1_epi64x($k)
+        };
+    }
+    macro_rules! load {
+        ($v:expr $(,)?) => {
+            _mm256_loadu_pd($v.as_ptr())
+        };
+    }
+    // `if m { a } else { b }` lane by lane.
+    macro_rules! pick {
+        ($m:expr, $a:expr, $b:expr $(,)?) => {
+            _mm256_blendv_pd($b, $a, $m)
+        };
+    }
+    macro_rules! and {
+        ($a:expr, $b:expr $(,)?) => {
+            _mm256_and_pd($a, $b)
+        };
+    }
+    macro_rules! or {
+        ($a:expr, $b:expr $(,)?) => {
+            _mm256_or_pd($a, $b)
+        };
+    }
+    macro_rules! mul {
+        ($a:expr, $b:expr $(,)?) => {
+            _mm256_mul_pd($a, $b)
+        };
+    }
+    macro_rules! add {
+        ($a:expr, $b:expr $(,)?) => {
+            _mm256_add_pd($a, $b)
+        };
+    }
+    macro_rules! sub {
+        ($a:expr, $b:expr $(,)?) => {
+            _mm256_sub_pd($a, $b)
+        };
+    }
+    macro_rules! abs {
+        ($v:expr $(,)?) => {
+            _mm256_and_pd($v, _mm256_castsi256_pd(int!(i64::MAX)))
+        };
+    }
+    // Rust's `a < b`, `a <= b` and `a != b` (true for a NaN).
+    macro_rules! lt {
+        ($a:expr, $b:expr $(,)?) => {
+            _mm256_cmp_pd::<_CMP_LT_OQ>($a, $b)
+        };
+    }
+    macro_rules! le {
+        ($a:expr, $b:expr $(,)?) => {
+            _mm256_cmp_pd::<_CMP_LE_OQ>($a, $b)
+        };
+    }
+    macro_rules! ne {
+        ($a:expr, $b:expr $(,)?) => {
+            _mm256_cmp_pd::<_CMP_NEQ_UQ>($a, $b)
+        };
+    }
+    macro_rules! finite {
+        ($v:expr $(,)?) => {
+            lt!(abs!($v), splat!(f64::INFINITY))
+        };
+    }
+    macro_rules! mask_of {
+        ($m:expr $(,)?) => {
+            _mm256_castsi256_pd($m)
+        };
+    }
+    // `exponent` and `pow2`, lane by lane in 64-bit integers.
+    macro_rules! exponent {
+        ($x:expr) => {
+            _mm256_sub_epi64(
+                _mm256_and_si256(
+                    _mm256_srli_epi64::<52>(_mm256_castpd_si256($x)),
+                    int!(0x7ff),
+                ),
+                int!(1023),
+            )
+        };
+    }
+    macro_rules! pow2 {
+        ($k:expr $(,)?) => {
+            _mm256_castsi256_pd(_mm256_slli_epi64::<52>(_mm256_add_epi64($k, int!(1023))))
+        };
+    }
+    // `lo_k ≤ k ≤ hi_k` for 64-bit lanes.
+    macro_rules! within {
+        ($k:expr, $lo_k:expr, $hi_k:expr $(,)?) => {
+            mask_of!(_mm256_and_si256(
+                _mm256_cmpgt_epi64($k, int!($lo_k - 1)),
+                _mm256_cmpgt_epi64(int!($hi_k + 1), $k),
+            ))
+        };
+    }
+    macro_rules! store {
+        ($v:expr) => {{
+            let mut out = [0.0; LANES];
+            _mm256_storeu_pd(out.as_mut_ptr(), $v);
+            out
+        }};
+    }
+    let zero = _mm256_setzero_pd();
+    let (lo_v, hi_v) = (load!(&lo), load!(&hi));
+    // Loops, not closures (`from_fn`, `map`, `fold`): a closure is compiled without AVX2
+    // and not inlined here.
+    let mut c = [_mm256_setzero_pd(); D];
+    for (cj, given) in c.iter_mut().zip(coeffs) {
+        *cj = load!(given);
+    }
+    // The preparation's tests: valid, then the usual case.
+    let active_mask = mask_of!(_mm256_set_epi64x(
+        -i64::from(active[3]),
+        -i64::from(active[2]),
+        -i64::from(active[1]),
+        -i64::from(active[0]),
+    ));
+    let mut all_finite = active_mask;
+    for &cj in &c {
+        all_finite = and!(all_finite, finite!(cj));
+    }
+    let valid = and!(all_finite, lt!(lo_v, hi_v));
+    // `lo.abs().max(hi.abs())`: neither is NaN in a valid lane (`lo < hi`).
+    let r = _mm256_max_pd(abs!(lo_v), abs!(hi_v));
+    let cn = c[n];
+    let an = abs!(cn);
+    let (mut pow, mut negligible) = (splat!(1.0), zero);
+    for i in (0..n).rev() {
+        pow = mul!(pow, r);
+        negligible = or!(
+            negligible,
+            and!(
+                ne!(c[i], zero),
+                le!(mul!(an, pow), mul!(splat!(f64::EPSILON), abs!(c[i]))),
+            ),
+        );
+    }
+    let e_r = _mm256_add_epi64(exponent!(r), int!(1));
+    let e_n = exponent!(cn);
+    let e_r_less = _mm256_sub_epi64(e_r, int!(1));
+    let (mut k_times, mut reaches) = (_mm256_setzero_si256(), zero);
+    for k in 1..D {
+        let ck = c[n - k];
+        // k·(e_r − 1), by k additions.
+        k_times = _mm256_add_epi64(k_times, e_r_less);
+        let span = _mm256_add_epi64(_mm256_sub_epi64(exponent!(ck), e_n), int!(1));
+        reaches = or!(
+            reaches,
+            and!(ne!(ck, zero), mask_of!(_mm256_cmpgt_epi64(span, k_times))),
+        );
+    }
+    // first = −n·e_r − e_n, last = −e_n.
+    let mut n_e_r = _mm256_setzero_si256();
+    for _ in 0..n {
+        n_e_r = _mm256_add_epi64(n_e_r, e_r);
+    }
+    let first = _mm256_sub_epi64(_mm256_sub_epi64(_mm256_setzero_si256(), n_e_r), e_n);
+    let last = _mm256_sub_epi64(_mm256_setzero_si256(), e_n);
+    let usual = and!(
+        and!(
+            and!(ne!(cn, zero), finite!(r)),
+            _mm256_andnot_pd(negligible, within!(e_r, -1000, 999)),
+        ),
+        and!(
+            reaches,
+            and!(within!(first, -1022, 1023), within!(last, -1022, 1023)),
+        ),
+    );
+    // The rescaling: cⱼ·2^(j·e_r + first).
+    let mut k = first;
+    for cj in c.iter_mut() {
+        *cj = mul!(*cj, pow2!(k));
+        k = _mm256_add_epi64(k, e_r);
+    }
+    let scale = pow2!(e_r);
+    let inv = pow2!(_mm256_sub_epi64(_mm256_setzero_si256(), e_r));
+    let (p_lo, p_hi) = (mul!(lo_v, inv), mul!(hi_v, inv));
+    // `bernstein_fixed` on `[p_lo, p_hi]`.
+    let reversed = lt!(abs!(p_hi), abs!(p_lo));
+    let x0 = pick!(reversed, p_hi, p_lo);
+    let h = pick!(reversed, sub!(p_lo, p_hi), sub!(p_hi, p_lo));
+    let mut d = c;
+    let shift = ne!(x0, zero);
+    if _mm256_movemask_pd(shift) != 0 {
+        let mut shifted = d;
+        for i in 0..n {
+            for j in (i..n).rev() {
+                shifted[j] = add!(shifted[j], mul!(x0, shifted[j + 1]));
+            }
+        }
+        for (dj, sj) in d.iter_mut().zip(shifted) {
+            *dj = pick!(shift, sj, *dj);
+        }
+    }
+    let mut hk = splat!(1.0);
+    for (dj, &ib) in d.iter_mut().zip(&INV_BINOMIAL[n]) {
+        *dj = mul!(*dj, mul!(hk, splat!(ib)));
+        hk = mul!(hk, h);
+    }
+    for i in 1..D {
+        for j in (i..D).rev() {
+            d[j] = add!(d[j], d[j - 1]);
+        }
+    }
+    let mut b = d;
+    for j in 0..D {
+        b[j] = pick!(reversed, d[n - j], d[j]);
+    }
+    // `search`'s bounds and its first test.
+    let w = sub!(p_hi, p_lo);
+    let reach = add!(abs!(p_lo), w);
+    let mut size = zero;
+    for &cj in c.iter().rev() {
+        size = add!(mul!(size, reach), abs!(cj));
+    }
+    let unit = mul!(splat!((n + 1) as f64 * f64::EPSILON), size);
+    let margin = mul!(splat!(64.0), unit);
+    let ends_unclear = or!(
+        _mm256_andnot_pd(finite!(unit), _mm256_castsi256_pd(int!(-1))),
+        or!(le!(abs!(b[0]), margin), le!(abs!(b[n]), margin)),
+    );
+    let (mut uncertain, mut changes) = (zero, _mm256_setzero_si256());
+    for j in 0..n {
+        uncertain = or!(uncertain, le!(abs!(b[j + 1]), margin));
+        let differ = _mm256_xor_pd(lt!(b[j], zero), lt!(b[j + 1], zero));
+        // A mask lane is −1: subtracting it counts.
+        changes = _mm256_sub_epi64(changes, _mm256_castpd_si256(differ));
+    }
+    let (valid, usual, ends_unclear, uncertain) = (
+        _mm256_movemask_pd(valid),
+        _mm256_movemask_pd(usual),
+        _mm256_movemask_pd(ends_unclear),
+        _mm256_movemask_pd(uncertain),
+    );
+    let mut counts = [0i64; LANES];
+    _mm256_storeu_si256(counts.as_mut_ptr().cast(), changes);
+    let mut status = [Status::NoRoot; LANES];
+    for (l, lane_status) in status.iter_mut().enumerate() {
+        let set = |m: i32| m >> l & 1 == 1;
+        *lane_status = if !set(valid) {
+            Status::NoRoot
+        } else if !set(usual) {
+            Status::Other
+        } else if set(ends_unclear) {
+            Status::Undecided
+        } else if set(uncertain) {
+            Status::Search(None)
+        } else if counts[l] == 0 {
+            Status::NoRoot
+        } else {
+            Status::Search(Some((counts[l] as u32).min(2)))
+        };
+    }
+    let (mut c_out, mut b_out) = ([[0.0; LANES]; D], [[0.0; LANES]; D]);
+    for j in 0..D {
+        _mm256_storeu_pd(c_out[j].as_mut_ptr(), c[j]);
+        _mm256_storeu_pd(b_out[j].as_mut_ptr(), b[j]);
+    }
+    Front {
+        c: c_out,
+        scale: store!(scale),
+        lo: store!(p_lo),
+        hi: store!(p_hi),
+        b: b_out,
+        size: store!(size),
+        unit: store!(unit),
+        status,
+    }
 }
 
 /// [`rest_in`] compiled for AVX2: the same operations (AVX2 brings no fused multiply-add),
@@ -440,6 +721,7 @@ mod tests {
                 (coeffs[l], lo[l], hi[l]) = query::<D>(&mut next);
             }
             let active: [bool; LANES] = std::array::from_fn(|l| g % 7 != 0 || l % 2 == 0);
+            same_fronts(&by_power(&coeffs), lo, hi, active);
             for &(solver, _) in Solver::ALL {
                 let detected = solver.first_root_lanes(&coeffs, lo, hi, active);
                 let baseline = solver.first_root_lanes_baseline(&coeffs, lo, hi, active);
@@ -464,6 +746,42 @@ mod tests {
             }
         }
         found
+    }
+
+    /// The two fronts (intrinsics and `front_in`) agree on every status and, where the rest
+    /// reads them (a lane that searches), on every value, bit for bit.
+    fn same_fronts<const D: usize>(
+        coeffs: &[Lanes; D],
+        lo: Lanes,
+        hi: Lanes,
+        active: [bool; LANES],
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            let plain = front_in(coeffs, lo, hi, active);
+            // SAFETY: the processor has AVX2, checked just above.
+            let fast = unsafe { front_avx2(coeffs, lo, hi, active) };
+            assert_eq!(plain.status, fast.status, "{coeffs:?} {lo:?} {hi:?}");
+            let bits = |v: &Lanes, l: usize| v[l].to_bits();
+            for l in 0..LANES {
+                if matches!(plain.status[l], Status::Undecided | Status::Search(_)) {
+                    let what = (coeffs, lo, hi, l);
+                    for j in 0..D {
+                        assert_eq!(bits(&plain.c[j], l), bits(&fast.c[j], l), "{what:?}");
+                        assert_eq!(bits(&plain.b[j], l), bits(&fast.b[j], l), "{what:?}");
+                    }
+                    for (a, b) in [
+                        (&plain.scale, &fast.scale),
+                        (&plain.lo, &fast.lo),
+                        (&plain.hi, &fast.hi),
+                        (&plain.size, &fast.size),
+                        (&plain.unit, &fast.unit),
+                    ] {
+                        assert_eq!(bits(a, l), bits(b, l), "{what:?}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]
