@@ -45,11 +45,16 @@ struct Front<const D: usize> {
     scale: Lanes,
     lo: Lanes,
     hi: Lanes,
-    b: [Lanes; D],
+    /// Each lane's Bernstein coefficients, in its first `D` entries (whole vector stores:
+    /// the search copies them with vector loads, which wait long on narrower stores).
+    b: [[f64; PADDED]; LANES],
     size: Lanes,
     unit: Lanes,
     status: [Status; LANES],
 }
+
+/// [`MAX_COEFFS`] rounded up to whole groups of [`LANES`]: the length of [`Front::b`]'s rows.
+const PADDED: usize = MAX_COEFFS.div_ceil(LANES) * LANES;
 
 /// The binary exponent of a finite non-zero `x` (as `prep::exponent`, in 64 bits, which the
 /// lanes compute without conversions).
@@ -177,6 +182,12 @@ fn front_in<const D: usize>(
             bj[l] = choose(reversed[l], d[n - j][l], d[j][l]);
         }
     }
+    let mut b_lanes = [[0.0; PADDED]; LANES];
+    for (l, row) in b_lanes.iter_mut().enumerate() {
+        for (j, bj) in b.iter().enumerate() {
+            row[j] = bj[l];
+        }
+    }
     // `search`'s bounds and its first test.
     let mut size = [0.0; LANES];
     let mut unit = [0.0; LANES];
@@ -214,7 +225,7 @@ fn front_in<const D: usize>(
         scale,
         lo: p_lo,
         hi: p_hi,
-        b,
+        b: b_lanes,
         size,
         unit,
         status,
@@ -566,10 +577,37 @@ unsafe fn front_avx2<const D: usize>(
             Status::Search(Some((counts[l] as u32).min(2)))
         };
     }
-    let (mut c_out, mut b_out) = ([[0.0; LANES]; D], [[0.0; LANES]; D]);
+    let mut c_out = [[0.0; LANES]; D];
     for j in 0..D {
         _mm256_storeu_pd(c_out[j].as_mut_ptr(), c[j]);
-        _mm256_storeu_pd(b_out[j].as_mut_ptr(), b[j]);
+    }
+    // The lanes' coefficients transposed four powers at a time (a 4 × 4 transpose in
+    // registers), each lane's row stored in whole vectors.
+    let mut b_out = [[0.0; PADDED]; LANES];
+    for j in (0..D).step_by(LANES) {
+        let mut rows = [zero; LANES];
+        for (k, r) in rows.iter_mut().enumerate() {
+            if j + k < D {
+                *r = b[j + k];
+            }
+        }
+        let (t0, t1) = (
+            _mm256_unpacklo_pd(rows[0], rows[1]),
+            _mm256_unpackhi_pd(rows[0], rows[1]),
+        );
+        let (t2, t3) = (
+            _mm256_unpacklo_pd(rows[2], rows[3]),
+            _mm256_unpackhi_pd(rows[2], rows[3]),
+        );
+        let lanes = [
+            _mm256_permute2f128_pd::<0x20>(t0, t2),
+            _mm256_permute2f128_pd::<0x20>(t1, t3),
+            _mm256_permute2f128_pd::<0x31>(t0, t2),
+            _mm256_permute2f128_pd::<0x31>(t1, t3),
+        ];
+        for (out, lane) in b_out.iter_mut().zip(lanes) {
+            _mm256_storeu_pd(out[j..].as_mut_ptr(), lane);
+        }
     }
     Front {
         c: c_out,
@@ -626,8 +664,8 @@ fn rest_in<const D: usize>(
             Status::Other => solver.first_root(&lane(coeffs, l), lo[l], hi[l]),
             Status::Undecided => settle(solver, Fast::Undecided, || p.to_prepared(), &mut ()),
             Status::Search(whole) => {
-                let b: [f64; D] = std::array::from_fn(|j| front.b[j][l]);
-                match bernstein::bracket_from(p, &b, front.size[l], front.unit[l], whole, &mut ()) {
+                let b: &[f64; D] = front.b[l][..D].try_into().expect("D ≤ PADDED");
+                match bernstein::bracket_from(p, b, front.size[l], front.unit[l], whole, &mut ()) {
                     Ok(bracket) => {
                         brackets[l] = Some(bracket);
                         None
@@ -768,7 +806,8 @@ mod tests {
                     let what = (coeffs, lo, hi, l);
                     for j in 0..D {
                         assert_eq!(bits(&plain.c[j], l), bits(&fast.c[j], l), "{what:?}");
-                        assert_eq!(bits(&plain.b[j], l), bits(&fast.b[j], l), "{what:?}");
+                        let b = |f: &Front<D>| f.b[l][j].to_bits();
+                        assert_eq!(b(&plain), b(&fast), "{what:?}");
                     }
                     for (a, b) in [
                         (&plain.scale, &fast.scale),
