@@ -264,7 +264,16 @@ fn bracket_of_piece<const D: usize>(
     } else {
         changes.trailing_zeros() as usize
     };
-    let s = (i as f64 + b[i] / (b[i] - b[i + 1])) / n as f64;
+    // `b[i]` and `b[i + 1]` picked by constant indices: a variable index would keep the
+    // search's coefficients in memory, where each split's narrow stores stall the next
+    // split's wide loads.
+    let (mut bi, mut next) = (b[0], b[1]);
+    for j in 1..n {
+        if j == i {
+            (bi, next) = (b[j], b[j + 1]);
+        }
+    }
+    let s = (i as f64 + bi / (bi - next)) / n as f64;
     let start = ta + (tb - ta) * s;
     // The size of `P`'s terms at every point of `[ta, tb]` is at most its size at the end
     // farther from zero; from `lo = 0` that is at most the search's `size` (at `hi`).
