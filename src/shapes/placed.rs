@@ -233,10 +233,9 @@ impl<S: ObjectShape> Shape for Placed<S> {
         t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [Option<f64>; LANES] {
-        let mut local = *rays;
-        for ray in &mut local {
-            *ray = self.at.ray_to_object(ray);
-        }
+        // Made fresh from the world rays, not updated in place: an in-place update reads
+        // each ray back in wide loads while the copy's narrower stores are pending.
+        let local: [Ray; LANES] = std::array::from_fn(|i| self.at.ray_to_object(&rays[i]));
         self.shape
             .intersect_lanes(&self.at, rays, &local, t_min, t_max)
     }
