@@ -17,6 +17,8 @@
 use super::bernstein::{self, Fast, INV_BINOMIAL};
 use super::prep::{Fixed, MAX_COEFFS};
 use super::refine::refine_simple_lanes;
+#[cfg(target_arch = "x86_64")]
+use super::refine::refine_simple_lanes_avx2;
 use super::{settle, Solver};
 use crate::geometry::LANES;
 
@@ -289,7 +291,7 @@ pub(super) fn first_roots_by_power<const D: usize>(
             return rest_avx2(solver, coeffs, lo, hi, &front);
         }
     }
-    rest_in(solver, coeffs, lo, hi, &front_in(coeffs, lo, hi, active))
+    rest_in::<D, false>(solver, coeffs, lo, hi, &front_in(coeffs, lo, hi, active))
 }
 
 /// Lane `l`'s coefficients, ascending.
@@ -635,14 +637,15 @@ unsafe fn rest_avx2<const D: usize>(
     hi: Lanes,
     front: &Front<D>,
 ) -> [Option<f64>; LANES] {
-    rest_in(solver, coeffs, lo, hi, front)
+    rest_in::<D, true>(solver, coeffs, lo, hi, front)
 }
 
 /// The part of [`first_roots`] after the lanes' front: each lane on from it, as the scalar
 /// query goes on (see `observed`), up to the refinement of the search's bracket; then the
-/// lanes' brackets refined together.
+/// lanes' brackets refined together (with `AVX2`, which only code compiled for AVX2 may
+/// set, in one vector a step: `refine::refine_simple_lanes_avx2`).
 #[inline(always)]
-fn rest_in<const D: usize>(
+fn rest_in<const D: usize, const AVX2: bool>(
     solver: Solver,
     coeffs: &[Lanes; D],
     lo: Lanes,
@@ -676,6 +679,15 @@ fn rest_in<const D: usize>(
         };
     }
     if brackets.iter().any(Option::is_some) {
+        #[cfg(target_arch = "x86_64")]
+        let roots = if AVX2 {
+            // SAFETY: `AVX2` is set only by `rest_avx2`, which runs only where the
+            // processor has AVX2. The lanes' prepared coefficients by power are `front.c`.
+            unsafe { refine_simple_lanes_avx2(&front.c, brackets) }
+        } else {
+            refine_simple_lanes(std::array::from_fn(|l| &fixed[l].c), brackets)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
         let roots = refine_simple_lanes(std::array::from_fn(|l| &fixed[l].c), brackets);
         for l in 0..LANES {
             if brackets[l].is_some() {

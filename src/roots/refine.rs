@@ -127,6 +127,207 @@ pub(crate) fn refine_simple_lanes<const D: usize>(
     out
 }
 
+/// [`refine_simple_lanes`] in AVX2 intrinsics, the lanes' polynomials given by power
+/// (`c[j][l]` is lane `l`'s coefficient of `xʲ`): every lane takes the steps of
+/// [`Refinement::step`] in the same IEEE operations and order, four lanes a register, each
+/// `if` a blend on the comparison's mask, until every lane has ended (a lane that has ended
+/// keeps its answer while the others go on). The same answers bit for bit (tested).
+///
+/// # Safety
+/// The processor must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub(crate) unsafe fn refine_simple_lanes_avx2<const D: usize>(
+    c: &[[f64; LANES]; D],
+    bracket: [Option<Bracket>; LANES],
+) -> [f64; LANES] {
+    use std::arch::x86_64::*;
+    // Macros, not closures: a closure is compiled without AVX2 and may not be inlined here.
+    macro_rules! splat {
+        ($x:expr) => {
+            _mm256_set1_pd($x)
+        };
+    }
+    macro_rules! add {
+        ($a:expr, $b:expr) => {
+            _mm256_add_pd($a, $b)
+        };
+    }
+    macro_rules! sub {
+        ($a:expr, $b:expr) => {
+            _mm256_sub_pd($a, $b)
+        };
+    }
+    macro_rules! mul {
+        ($a:expr, $b:expr) => {
+            _mm256_mul_pd($a, $b)
+        };
+    }
+    macro_rules! div {
+        ($a:expr, $b:expr) => {
+            _mm256_div_pd($a, $b)
+        };
+    }
+    macro_rules! and {
+        ($a:expr, $b:expr) => {
+            _mm256_and_pd($a, $b)
+        };
+    }
+    macro_rules! or {
+        ($a:expr, $b:expr) => {
+            _mm256_or_pd($a, $b)
+        };
+    }
+    macro_rules! not {
+        ($a:expr) => {
+            _mm256_xor_pd($a, _mm256_castsi256_pd(_mm256_set1_epi64x(-1)))
+        };
+    }
+    macro_rules! abs {
+        ($v:expr) => {
+            _mm256_and_pd($v, _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX)))
+        };
+    }
+    // `if m { a } else { b }` lane by lane.
+    macro_rules! pick {
+        ($m:expr, $a:expr, $b:expr) => {
+            _mm256_blendv_pd($b, $a, $m)
+        };
+    }
+    // Rust's `<`, `<=`, `>`, `>=` and `==` (false for a NaN).
+    macro_rules! lt {
+        ($a:expr, $b:expr) => {
+            _mm256_cmp_pd::<_CMP_LT_OQ>($a, $b)
+        };
+    }
+    macro_rules! le {
+        ($a:expr, $b:expr) => {
+            _mm256_cmp_pd::<_CMP_LE_OQ>($a, $b)
+        };
+    }
+    macro_rules! gt {
+        ($a:expr, $b:expr) => {
+            _mm256_cmp_pd::<_CMP_GT_OQ>($a, $b)
+        };
+    }
+    macro_rules! ge {
+        ($a:expr, $b:expr) => {
+            _mm256_cmp_pd::<_CMP_GE_OQ>($a, $b)
+        };
+    }
+    macro_rules! eq {
+        ($a:expr, $b:expr) => {
+            _mm256_cmp_pd::<_CMP_EQ_OQ>($a, $b)
+        };
+    }
+    let lanes_of = |f: &dyn Fn(&Bracket) -> f64| {
+        let v: [f64; LANES] = std::array::from_fn(|l| bracket[l].as_ref().map_or(0.0, f));
+        v
+    };
+    macro_rules! load {
+        ($v:expr) => {{
+            let v: [f64; LANES] = $v;
+            _mm256_set_pd(v[3], v[2], v[1], v[0])
+        }};
+    }
+    let mut coeff = [_mm256_setzero_pd(); D];
+    for (cj, given) in coeff.iter_mut().zip(c) {
+        *cj = _mm256_loadu_pd(given.as_ptr());
+    }
+    // `Refinement::new`, lane by lane.
+    let (mut a, mut b) = (load!(lanes_of(&|r| r.ta)), load!(lanes_of(&|r| r.tb)));
+    let fa = load!(lanes_of(&|r| r.fa));
+    let start = load!(lanes_of(&|r| r.start));
+    let size = load!(lanes_of(&|r| r.size));
+    let zero = _mm256_setzero_pd();
+    let neg_a = lt!(fa, zero);
+    let mut x = pick!(
+        and!(gt!(start, a), lt!(start, b)),
+        start,
+        mul!(splat!(0.5), add!(a, b))
+    );
+    let mut step = sub!(b, a);
+    let mut step_before = step;
+    // Lanes still stepping (all ones) and their answers so far.
+    let mut running = _mm256_castsi256_pd(_mm256_set_epi64x(
+        -i64::from(bracket[3].is_some()),
+        -i64::from(bracket[2].is_some()),
+        -i64::from(bracket[1].is_some()),
+        -i64::from(bracket[0].is_some()),
+    ));
+    let mut out = zero;
+    for _ in 0..MAX_ITER {
+        if _mm256_movemask_pd(running) == 0 {
+            break;
+        }
+        // `eval3` and `size_at(c, |x|)`.
+        let (mut v, mut d, mut h) = (zero, zero, zero);
+        let ax = abs!(x);
+        let mut size_x = zero;
+        for &cj in coeff.iter().rev() {
+            h = add!(mul!(h, x), d);
+            d = add!(mul!(d, x), v);
+            v = add!(mul!(v, x), cj);
+            size_x = add!(mul!(size_x, ax), abs!(cj));
+        }
+        // Ends at x: p(x) is zero.
+        let at_zero = eq!(v, zero);
+        // Ends with one last Newton step: p(x) is rounding noise.
+        let noise_bound = splat!(4.0 * f64::EPSILON);
+        let noise = and!(
+            le!(abs!(v), mul!(noise_bound, size)),
+            le!(abs!(v), mul!(noise_bound, size_x))
+        );
+        let last = sub!(x, div!(v, d));
+        let last_answer = pick!(and!(ge!(last, a), le!(last, b)), last, x);
+        let noise = _mm256_andnot_pd(at_zero, noise);
+        // The bracket moves to x.
+        let same_sign = not!(_mm256_xor_pd(lt!(v, zero), neg_a));
+        let na = pick!(same_sign, x, a);
+        let nb = pick!(same_sign, b, x);
+        let den = sub!(mul!(d, d), mul!(v, h));
+        let mut next = pick!(
+            gt!(den, zero),
+            sub!(x, div!(mul!(v, d), den)),
+            sub!(x, div!(v, d))
+        );
+        let away = or!(
+            gt!(abs!(sub!(next, x)), mul!(splat!(0.5), step_before)),
+            not!(and!(gt!(next, na), lt!(next, nb)))
+        );
+        let mid = mul!(splat!(0.5), add!(na, nb));
+        next = pick!(away, mid, next);
+        // Ends at x: the bisection cannot split the bracket.
+        let stuck = and!(away, or!(le!(mid, na), ge!(mid, nb)));
+        let new_step = abs!(sub!(next, x));
+        // Ends at next: the step is below an ulp or two.
+        let small = le!(new_step, mul!(splat!(2.0 * f64::EPSILON), abs!(next)));
+        // The answers of the lanes that end here, in the scalar step's order of tests.
+        let ended_zero = and!(running, at_zero);
+        let ended_noise = and!(running, noise);
+        let going = _mm256_andnot_pd(or!(at_zero, noise), running);
+        let ended_stuck = and!(going, stuck);
+        let ended_small = and!(_mm256_andnot_pd(stuck, going), small);
+        out = pick!(ended_zero, x, out);
+        out = pick!(ended_noise, last_answer, out);
+        out = pick!(ended_stuck, x, out);
+        out = pick!(ended_small, next, out);
+        // The lanes that go on take the new state.
+        let on = _mm256_andnot_pd(or!(stuck, small), going);
+        a = pick!(on, na, a);
+        b = pick!(on, nb, b);
+        step_before = pick!(on, step, step_before);
+        step = pick!(on, new_step, step);
+        x = pick!(on, next, x);
+        running = on;
+    }
+    // Lanes still stepping after `MAX_ITER` steps answer their current point.
+    out = pick!(running, x, out);
+    let mut answers = [0.0; LANES];
+    _mm256_storeu_pd(answers.as_mut_ptr(), out);
+    answers
+}
+
 /// The state of one refinement between its steps (see [`Refinement::step`]).
 #[derive(Clone, Copy, Debug)]
 struct Refinement {
@@ -216,6 +417,120 @@ impl Refinement {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Random brackets of one simple root for polynomials of `D` coefficients, four at a
+    /// time (some lanes empty): the lanes' AVX2 refinement against `refine_simple`, bit for
+    /// bit, and the interleaved scalar lanes too.
+    fn lanes_match<const D: usize>(seed: u64) {
+        let mut next = crate::testing::uniform_stream(seed);
+        let mut refined = 0;
+        for group in 0..3000 {
+            let mut c = [[0.0; D]; LANES];
+            let mut brackets = [None; LANES];
+            for l in 0..LANES {
+                if group % 5 == 0 && l == 2 {
+                    continue;
+                }
+                // (x − r)·Π(x − s) with r in the bracket and the other roots outside it.
+                let (a, b) = (next() * 0.5, 0.5 + next() * 0.5);
+                let r = a + (b - a) * (0.05 + 0.9 * next());
+                let mut degree = 0;
+                // Ascending coefficients, scaled by a power of two; multiplying by (x − root)
+                // shifts them up and subtracts root times them.
+                let mut q = [0.0; D];
+                q[0] = 2f64.powi((next() * 40.0) as i32 - 20);
+                let mul = |q: &mut [f64; D], root: f64| {
+                    for j in (1..D).rev() {
+                        q[j] = q[j - 1] - root * q[j];
+                    }
+                    q[0] *= -root;
+                };
+                mul(&mut q, r);
+                degree += 1;
+                while degree < D - 1 {
+                    let outside = if next() < 0.5 {
+                        b + 0.01 + next() * 2.0
+                    } else {
+                        a - 0.01 - next() * 2.0
+                    };
+                    mul(&mut q, outside);
+                    degree += 1;
+                }
+                c[l] = q;
+                let fa = horner_of(&q, a);
+                let fb = horner_of(&q, b);
+                if fa == 0.0 || fb == 0.0 || (fa < 0.0) == (fb < 0.0) {
+                    continue;
+                }
+                let start = match (next() * 4.0) as u32 {
+                    0 => a - 1.0,
+                    1 => r,
+                    _ => a + (b - a) * next(),
+                };
+                let size = if next() < 0.5 {
+                    size_at(&q, a.abs().max(b.abs()))
+                } else {
+                    f64::INFINITY
+                };
+                brackets[l] = Some(Bracket {
+                    ta: a,
+                    tb: b,
+                    fa,
+                    start,
+                    size,
+                });
+            }
+            let want: [Option<f64>; LANES] = std::array::from_fn(|l| {
+                brackets[l]
+                    .map(|r| refine_simple(&c[l], r.ta, r.tb, r.fa, r.start, r.size, &mut ()))
+            });
+            let interleaved = refine_simple_lanes(std::array::from_fn(|l| &c[l]), brackets);
+            for l in 0..LANES {
+                if let Some(w) = want[l] {
+                    assert_eq!(
+                        interleaved[l].to_bits(),
+                        w.to_bits(),
+                        "{:?} {:?}",
+                        c[l],
+                        brackets[l]
+                    );
+                    refined += 1;
+                }
+            }
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                let by_power: [[f64; LANES]; D] =
+                    std::array::from_fn(|j| std::array::from_fn(|l| c[l][j]));
+                // SAFETY: the processor has AVX2, checked just above.
+                let fast = unsafe { refine_simple_lanes_avx2(&by_power, brackets) };
+                for l in 0..LANES {
+                    if let Some(w) = want[l] {
+                        assert_eq!(
+                            fast[l].to_bits(),
+                            w.to_bits(),
+                            "{:?} {:?}",
+                            c[l],
+                            brackets[l]
+                        );
+                    }
+                }
+            }
+        }
+        assert!(refined > 9000, "{refined}");
+    }
+
+    fn horner_of(c: &[f64], x: f64) -> f64 {
+        c.iter().rev().fold(0.0, |s, &a| s * x + a)
+    }
+
+    #[test]
+    fn the_lanes_refinements_are_the_scalar_one_bit_for_bit() {
+        lanes_match::<3>(0x1234_5678);
+        lanes_match::<5>(0x9abc_def0);
+        lanes_match::<7>(0x0f1e_2d3c);
+        lanes_match::<9>(0x4b5a_6978);
+        lanes_match::<17>(0x8796_a5b4);
+    }
 
     #[test]
     fn the_size_bound_changes_no_answer() {
