@@ -1292,7 +1292,12 @@ impl LaneQueries {
         if !kept {
             return None;
         }
-        let inv = big.map(pow2_inverse);
+        // A loop, not `map`: `map` was an out-of-line call whose answer the scaling below
+        // then read back in wide loads from its narrow stores, and waited.
+        let mut inv = [0.0; LANES];
+        for i in 0..LANES {
+            inv[i] = pow2_inverse(big[i]);
+        }
         for c in cs.iter_mut() {
             for i in 0..LANES {
                 c[i] *= inv[i];
