@@ -317,77 +317,15 @@ unsafe fn front_avx2<const D: usize>(
 ) -> Front<D> {
     use std::arch::x86_64::*;
     let n = D - 1;
-    // The helpers are macros, so that every use is inlined into this AVX2 code.
-    macro_rules! splat {
-        ($x:expr $(,)?) => {
-            _mm256_set1_pd($x)
-        };
-    }
-    macro_rules! int {
-        ($k:expr $(,)?) => {
-            _mm256_set1_epi64x($k)
-        };
-    }
+    // The lane operations are `roots::avx2`'s macros, and these.
     macro_rules! load {
         ($v:expr $(,)?) => {
             _mm256_loadu_pd($v.as_ptr())
         };
     }
-    // `if m { a } else { b }` lane by lane.
-    macro_rules! pick {
-        ($m:expr, $a:expr, $b:expr $(,)?) => {
-            _mm256_blendv_pd($b, $a, $m)
-        };
-    }
-    macro_rules! and {
-        ($a:expr, $b:expr $(,)?) => {
-            _mm256_and_pd($a, $b)
-        };
-    }
-    macro_rules! or {
-        ($a:expr, $b:expr $(,)?) => {
-            _mm256_or_pd($a, $b)
-        };
-    }
-    macro_rules! mul {
-        ($a:expr, $b:expr $(,)?) => {
-            _mm256_mul_pd($a, $b)
-        };
-    }
-    macro_rules! add {
-        ($a:expr, $b:expr $(,)?) => {
-            _mm256_add_pd($a, $b)
-        };
-    }
-    macro_rules! sub {
-        ($a:expr, $b:expr $(,)?) => {
-            _mm256_sub_pd($a, $b)
-        };
-    }
-    macro_rules! abs {
-        ($v:expr $(,)?) => {
-            _mm256_and_pd($v, _mm256_castsi256_pd(int!(i64::MAX)))
-        };
-    }
-    // Rust's `a < b`, `a <= b` and `a != b` (true for a NaN).
-    macro_rules! lt {
-        ($a:expr, $b:expr $(,)?) => {
-            _mm256_cmp_pd::<_CMP_LT_OQ>($a, $b)
-        };
-    }
-    macro_rules! le {
-        ($a:expr, $b:expr $(,)?) => {
-            _mm256_cmp_pd::<_CMP_LE_OQ>($a, $b)
-        };
-    }
-    macro_rules! ne {
-        ($a:expr, $b:expr $(,)?) => {
-            _mm256_cmp_pd::<_CMP_NEQ_UQ>($a, $b)
-        };
-    }
-    macro_rules! finite {
-        ($v:expr $(,)?) => {
-            lt!(abs!($v), splat!(f64::INFINITY))
+    macro_rules! int {
+        ($k:expr $(,)?) => {
+            _mm256_set1_epi64x($k)
         };
     }
     macro_rules! mask_of {

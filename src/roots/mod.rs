@@ -43,6 +43,9 @@
 //! No input makes these functions panic or loop without end (every loop is bounded); none
 //! allocates except [`sturm_roots`], for its result.
 
+#[cfg(target_arch = "x86_64")]
+#[macro_use]
+mod avx2;
 mod bernstein;
 mod cluster;
 mod lanes;
