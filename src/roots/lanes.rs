@@ -10,9 +10,13 @@
 //! every step is an IEEE operation (no fused multiply-add is ever formed, as in the scalar
 //! code), and each `if` of the scalar code becomes a choice between two computed values.
 //!
-//! The queries (the lanes' part and each lane's rest) are compiled twice: for AVX2 (four
-//! `f64` lanes a register), chosen at run time when the processor has it, and for the x86-64
-//! baseline (SSE2, two lanes), which every other processor runs and the tests also run.
+//! The queries have two copies, chosen at run time: for AVX2 (four `f64` lanes a register)
+//! when the processor has it, and for the x86-64 baseline (SSE2, two lanes), which every
+//! other processor runs and the tests also run. In the AVX2 copy the lanes' part is written
+//! in intrinsics (`front_avx2`), each lane's rest is `rest_in` compiled for AVX2, and the
+//! brackets are refined four lanes a register (`refine::refine_simple_lanes_avx2`); the
+//! baseline copy compiles `front_in` and `rest_in` as they are. Both give the scalar query's
+//! answers bit for bit (tested).
 
 use super::bernstein::{self, Fast, INV_BINOMIAL};
 use super::prep::{Fixed, MAX_COEFFS};

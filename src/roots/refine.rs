@@ -1,6 +1,7 @@
 //! Refinement of a bracketed root: the safeguarded Newton/Schröder iteration every strategy
 //! uses on a sign-change bracket, and its Halley variant for a bracket known to hold exactly
-//! one simple root (the Bernstein fast path).
+//! one simple root (the Bernstein fast path), also for four brackets at once (in turn, or
+//! four lanes a register with AVX2).
 
 use super::trace::Observer;
 use crate::geometry::LANES;
