@@ -262,7 +262,7 @@ pub(super) fn first_roots<const D: usize>(
 
 /// The lanes' coefficients by power: `[j][l]` is lane `l`'s coefficient of `tʲ`.
 #[inline(always)]
-fn by_power<const D: usize>(coeffs: &[[f64; D]; LANES]) -> [Lanes; D] {
+pub(super) fn by_power<const D: usize>(coeffs: &[[f64; D]; LANES]) -> [Lanes; D] {
     std::array::from_fn(|j| std::array::from_fn(|l| coeffs[l][j]))
 }
 

@@ -210,6 +210,8 @@ pub(crate) unsafe fn refine_simple_lanes_avx2<const D: usize>(
         let na = pick!(same_sign, x, a);
         let nb = pick!(same_sign, b, x);
         let den = sub!(mul!(d, d), mul!(v, h));
+        // `x − v/d` is `last` again; written out, the compiler schedules the two divisions
+        // better (using `last` measured 1.025 on Barth's sextic).
         let mut next = pick!(
             gt!(den, zero),
             sub!(x, div!(mul!(v, d), den)),
@@ -340,6 +342,8 @@ impl Refinement {
 
 #[cfg(test)]
 mod tests {
+    use super::super::lanes::by_power;
+    use super::super::prep::horner;
     use super::*;
 
     /// Random brackets of one simple root for polynomials of `D` coefficients, four at a
@@ -381,8 +385,7 @@ mod tests {
                     degree += 1;
                 }
                 c[l] = q;
-                let fa = horner_of(&q, a);
-                let fb = horner_of(&q, b);
+                let (fa, fb) = (horner(&q, a), horner(&q, b));
                 if fa == 0.0 || fb == 0.0 || (fa < 0.0) == (fb < 0.0) {
                     continue;
                 }
@@ -408,43 +411,27 @@ mod tests {
                 brackets[l]
                     .map(|r| refine_simple(&c[l], r.ta, r.tb, r.fa, r.start, r.size, &mut ()))
             });
-            let interleaved = refine_simple_lanes(std::array::from_fn(|l| &c[l]), brackets);
-            for l in 0..LANES {
-                if let Some(w) = want[l] {
-                    assert_eq!(
-                        interleaved[l].to_bits(),
-                        w.to_bits(),
-                        "{:?} {:?}",
-                        c[l],
-                        brackets[l]
-                    );
-                    refined += 1;
-                }
-            }
-            #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
-                let by_power: [[f64; LANES]; D] =
-                    std::array::from_fn(|j| std::array::from_fn(|l| c[l][j]));
-                // SAFETY: the processor has AVX2, checked just above.
-                let fast = unsafe { refine_simple_lanes_avx2(&by_power, brackets) };
+            let check = |got: [f64; LANES], refined: &mut usize| {
                 for l in 0..LANES {
                     if let Some(w) = want[l] {
-                        assert_eq!(
-                            fast[l].to_bits(),
-                            w.to_bits(),
-                            "{:?} {:?}",
-                            c[l],
-                            brackets[l]
-                        );
+                        let what = (c[l], brackets[l]);
+                        assert_eq!(got[l].to_bits(), w.to_bits(), "{what:?}");
+                        *refined += 1;
                     }
                 }
+            };
+            check(
+                refine_simple_lanes(std::array::from_fn(|l| &c[l]), brackets),
+                &mut refined,
+            );
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the processor has AVX2, checked just above.
+                let fast = unsafe { refine_simple_lanes_avx2(&by_power(&c), brackets) };
+                check(fast, &mut 0);
             }
         }
         assert!(refined > 9000, "{refined}");
-    }
-
-    fn horner_of(c: &[f64], x: f64) -> f64 {
-        c.iter().rev().fold(0.0, |s, &a| s * x + a)
     }
 
     #[test]
