@@ -307,6 +307,13 @@ pub(crate) fn srgba8_into(pixels: &[Vec3], alpha: Option<&[f32]>, out: &mut [u8]
 pub(crate) fn srgb8_into(pixels: &[Vec3], out: &mut [u8]) {
     let table = srgb8_table();
     for (o, p) in out.chunks_exact_mut(3).zip(pixels) {
+        // A black pixel (+0 in every channel: most of a typical background) in one test.
+        if p.x.to_bits() | p.y.to_bits() | p.z.to_bits() == 0 {
+            o[0] = 0;
+            o[1] = 0;
+            o[2] = 0;
+            continue;
+        }
         o[0] = table.code(p.x as f64);
         o[1] = table.code(p.y as f64);
         o[2] = table.code(p.z as f64);
@@ -485,6 +492,38 @@ mod tests {
             };
             assert_eq!(linear_to_srgb8(v), srgb8_by_formula(v), "at {v:e}");
         }
+    }
+
+    #[test]
+    fn a_row_converts_as_each_channel_alone() {
+        // The black pixel's shortcut against the per-channel conversion: zeros of both
+        // signs, negatives, NaN and small positives in every channel and mixed.
+        let values = [
+            0.0,
+            -0.0,
+            -1.0,
+            f32::NAN,
+            f32::MIN_POSITIVE,
+            1e-7,
+            0.002,
+            0.5,
+            3.0,
+        ];
+        let mut pixels = Vec::new();
+        for &x in &values {
+            for &y in &values {
+                for &z in &values {
+                    pixels.push(Vec3::new(x, y, z));
+                }
+            }
+        }
+        let mut out = vec![7u8; pixels.len() * 3];
+        srgb8_into(&pixels, &mut out);
+        for (p, o) in pixels.iter().zip(out.chunks_exact(3)) {
+            let each = [p.x, p.y, p.z].map(|v| linear_to_srgb8(f64::from(v)));
+            assert_eq!(o, &each[..], "at {p:?}");
+        }
+        assert!(out.iter().any(|&c| c > 0) && out.iter().any(|&c| c == 0));
     }
 
     #[test]

@@ -252,10 +252,15 @@ impl SeenMask {
     /// full-image columns `(x0, x1)`: pixel `c` (full-image column, spanning `[c, c + 1]`)
     /// when `c + 1 ≥ x0` and `c ≤ x1`. Nothing when `x0 > x1`.
     fn mark(&mut self, row: usize, (x0, x1): (f64, f64)) {
+        self.mark_pixels(row, pixel_bounds((x0, x1)));
+    }
+
+    /// Marks the pixels `c` of the region's `row` with `lo ≤ c ≤ hi` (full-image columns, as
+    /// [`pixel_bounds`] gives them; clipped to the region). Nothing when `lo > hi`.
+    fn mark_pixels(&mut self, row: usize, (lo, hi): (f64, f64)) {
         let first = f64::from(self.x);
         let last = first + f64::from(self.width) - 1.0;
-        let lo = (x0 - 1.0).ceil().max(first);
-        let hi = x1.floor().min(last);
+        let (lo, hi) = (lo.max(first), hi.min(last));
         if lo > hi {
             return;
         }
@@ -276,6 +281,16 @@ impl SeenMask {
         (image_x - self.x..image_x - self.x + count)
             .any(|c| words[c as usize / 64] >> (c % 64) & 1 == 1)
     }
+}
+
+/// The first and last pixel columns `c` whose camera rays may pass through the full-image
+/// columns `(x0, x1)` (pixel `c` spans `[c, c + 1]`: `c + 1 ≥ x0` and `c ≤ x1`), as
+/// whole numbers in `f64`; the first above the last when there are none. Both ends are
+/// monotone in theirs, so the bounds of `(x0.max(a), x1.min(b))` are the larger and the
+/// smaller of the two pairs' bounds.
+#[inline]
+fn pixel_bounds((x0, x1): (f64, f64)) -> (f64, f64) {
+    ((x0 - 1.0).ceil(), x1.floor())
 }
 
 /// The pixels of `job`'s region whose camera rays may meet an object: those that see its
@@ -333,16 +348,19 @@ fn seen_mask(job: &Job) -> Option<SeenMask> {
             }
             Some(rects) => {
                 let last_row = region.height as f64 - 1.0;
+                // Each row's and each rectangle's pixel bounds once, not once a pair.
+                let rows: Vec<(f64, f64)> = spans.iter().map(|&span| pixel_bounds(span)).collect();
                 for rect in rects {
+                    let (rect_lo, rect_hi) = pixel_bounds(rect.x);
                     // The rows with `y + 1 ≥ rect.y.0` and `y ≤ rect.y.1`.
                     let lo = (rect.y.0 - 1.0 - f64::from(region.y)).ceil().max(0.0);
                     let hi = (rect.y.1 - f64::from(region.y)).floor().min(last_row);
                     if lo > hi {
                         continue;
                     }
-                    let rows = spans.iter().enumerate().take(hi as usize + 1);
-                    for (row, span) in rows.skip(lo as usize) {
-                        mask.mark(row, (span.0.max(rect.x.0), span.1.min(rect.x.1)));
+                    let rows = rows.iter().enumerate().take(hi as usize + 1);
+                    for (row, &(row_lo, row_hi)) in rows.skip(lo as usize) {
+                        mask.mark_pixels(row, (row_lo.max(rect_lo), row_hi.min(rect_hi)));
                     }
                 }
             }
@@ -677,6 +695,51 @@ mod tests {
             image.pixels,
             render(&scene, &Traced(&whitted), 2, false).pixels
         );
+    }
+
+    #[test]
+    fn a_rectangle_clipped_by_bounds_marks_what_its_clipped_span_marks() {
+        // `seen_mask` marks a cell's rectangle in a row by the larger and the smaller of the
+        // two pairs of pixel bounds; the span clipped first must mark the same pixels.
+        let region = Region {
+            x: 30,
+            y: 0,
+            width: 200,
+            height: 1,
+        };
+        let ends = [
+            f64::NEG_INFINITY,
+            -3.0,
+            29.5,
+            30.0,
+            64.0,
+            64.25,
+            99.999,
+            100.0,
+            127.5,
+            229.0,
+            229.5,
+            500.0,
+            f64::INFINITY,
+            f64::NAN,
+        ];
+        let mut marked = 0;
+        for &a0 in &ends {
+            for &a1 in &ends {
+                for &b0 in &ends[..ends.len() / 2] {
+                    for &b1 in &ends[ends.len() / 2..] {
+                        let mut clipped = SeenMask::new(region);
+                        clipped.mark(0, (a0.max(b0), a1.min(b1)));
+                        let mut by_bounds = SeenMask::new(region);
+                        let (a, b) = (pixel_bounds((a0, a1)), pixel_bounds((b0, b1)));
+                        by_bounds.mark_pixels(0, (a.0.max(b.0), a.1.min(b.1)));
+                        assert_eq!(clipped.bits, by_bounds.bits, "({a0}, {a1}) and ({b0}, {b1})");
+                        marked += usize::from(clipped.bits.iter().any(|&w| w != 0));
+                    }
+                }
+            }
+        }
+        assert!(marked > 100, "only {marked} cases marked anything");
     }
 
     #[test]
