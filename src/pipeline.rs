@@ -278,6 +278,32 @@ pub struct Rendered {
     pub stats: RenderStats,
 }
 
+impl Rendered {
+    /// Everything but the pixels.
+    pub fn summary(&self) -> RenderSummary {
+        RenderSummary {
+            full_width: self.full_width,
+            full_height: self.full_height,
+            region: self.region,
+            stats: self.stats,
+        }
+    }
+}
+
+/// A finished render without its pixels ([`Renderer::render_streamed`] handed them to its
+/// hook band by band): the same fields as [`Rendered`] but the image.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderSummary {
+    /// Width of the full image the region belongs to.
+    pub full_width: u32,
+    /// Height of the full image the region belongs to.
+    pub full_height: u32,
+    /// Where the rendered pixels lie in the full image.
+    pub region: Region,
+    /// What it cost.
+    pub stats: RenderStats,
+}
+
 /// The thread pool could not be built.
 #[derive(Debug, thiserror::Error, miette::Diagnostic)]
 #[error("cannot start the render threads: {0}")]
@@ -329,6 +355,49 @@ impl Renderer {
         control: &Control,
         band_done: &BandDone<'_>,
     ) -> Result<Rendered, RenderError> {
+        let (image, summary) = self.render_with(scene, request, control, band_done, true)?;
+        let RenderSummary {
+            full_width,
+            full_height,
+            region,
+            stats,
+        } = summary;
+        Ok(Rendered {
+            image: image.expect("a kept image"),
+            full_width,
+            full_height,
+            region,
+            stats,
+        })
+    }
+
+    /// [`Renderer::render_in_bands`] without keeping the image: each band's rows are handed to
+    /// `band_done` (in the same order and with the same pixels) from a buffer that is reused
+    /// for a later band once the hook returns, so the hook must copy what it keeps. For a
+    /// caller that consumes the rows as they come (a streamed PNG): a whole image's memory is
+    /// never allocated, and the render is faster by the page faults that saves.
+    pub fn render_streamed(
+        &self,
+        scene: &Scene,
+        request: &RenderRequest,
+        control: &Control,
+        band_done: &BandDone<'_>,
+    ) -> Result<RenderSummary, RenderError> {
+        Ok(self
+            .render_with(scene, request, control, band_done, false)?
+            .1)
+    }
+
+    /// The render behind [`Renderer::render_in_bands`] (`keep_image`) and
+    /// [`Renderer::render_streamed`].
+    fn render_with(
+        &self,
+        scene: &Scene,
+        request: &RenderRequest,
+        control: &Control,
+        band_done: &BandDone<'_>,
+        keep_image: bool,
+    ) -> Result<(Option<Image>, RenderSummary), RenderError> {
         let start = Instant::now();
         let (full_width, full_height) = request.full_size(scene)?;
         let region = request.region_in(scene)?;
@@ -349,6 +418,7 @@ impl Renderer {
             spp: request.spp.max(1),
             seed: request.seed,
             alpha: request.alpha,
+            keep_image,
         };
         let total = region.pixel_count();
         let done = AtomicU64::new(0);
@@ -368,17 +438,19 @@ impl Renderer {
         };
         let (image, rays) = integrator::render(&self.pool, request.view, &setup, &job, &hooks)
             .ok_or(RenderError::Cancelled)?;
-        Ok(Rendered {
+        Ok((
             image,
-            full_width,
-            full_height,
-            region,
-            stats: RenderStats {
-                rays,
-                elapsed: start.elapsed(),
-                threads: self.threads(),
+            RenderSummary {
+                full_width,
+                full_height,
+                region,
+                stats: RenderStats {
+                    rays,
+                    elapsed: start.elapsed(),
+                    threads: self.threads(),
+                },
             },
-        })
+        ))
     }
 }
 
@@ -482,6 +554,70 @@ mod tests {
         assert_eq!(again.image, rendered.image);
         assert!(rendered.stats.rays >= 40 * 37);
         assert_eq!(rendered.stats.threads, 2);
+    }
+
+    #[test]
+    fn streamed_bands_are_the_kept_image_with_and_without_alpha() {
+        let scene = heart();
+        for alpha in [false, true] {
+            let request = RenderRequest {
+                width: Some(40),
+                height: Some(69), // five bands on two threads (buffers reused), the last short
+                alpha,
+                ..RenderRequest::default()
+            };
+            let renderer = Renderer::new(2).unwrap();
+            let kept = renderer
+                .render(&scene, &request, &Control::default())
+                .unwrap();
+            let seen = Mutex::new(Vec::new());
+            let summary = renderer
+                .render_streamed(
+                    &scene,
+                    &request,
+                    &Control::default(),
+                    &|row, rows, coverage| {
+                        assert_eq!(coverage.is_some(), alpha);
+                        assert_eq!(rows.len() % 40, 0, "whole rows");
+                        let coverage = coverage.map(<[f32]>::to_vec);
+                        seen.lock().unwrap().push((row, rows.to_vec(), coverage));
+                    },
+                )
+                .unwrap();
+            let mut seen = seen.into_inner().unwrap();
+            seen.sort_by_key(|(row, _, _)| *row);
+            let rows: Vec<u32> = seen.iter().map(|(row, _, _)| *row).collect();
+            assert_eq!(rows, vec![0, 16, 32, 48, 64]);
+            assert_eq!(seen[4].1.len(), 40 * 5, "the last band is five rows");
+            let pixels: Vec<Vec3> = seen.iter().flat_map(|(_, px, _)| px.clone()).collect();
+            assert_eq!(pixels, kept.image.pixels);
+            let coverage: Option<Vec<f32>> = alpha.then(|| {
+                seen.iter()
+                    .flat_map(|(_, _, a)| a.clone().expect("coverage"))
+                    .collect()
+            });
+            assert_eq!(coverage, kept.image.alpha);
+            assert_eq!(summary.full_width, 40);
+            assert_eq!(summary.full_height, 69);
+            assert_eq!(summary.region, kept.region);
+            assert_eq!(summary.stats.rays, kept.stats.rays);
+        }
+    }
+
+    #[test]
+    fn a_cancelled_streamed_render_says_so() {
+        let scene = heart();
+        let token = CancelToken::new();
+        token.cancel();
+        let control = Control::new(token, |_| {});
+        let renderer = Renderer::new(2).unwrap();
+        let bands = AtomicU64::new(0);
+        let result =
+            renderer.render_streamed(&scene, &RenderRequest::default(), &control, &|_, _, _| {
+                bands.fetch_add(1, Ordering::Relaxed);
+            });
+        assert_eq!(result, Err(RenderError::Cancelled));
+        assert_eq!(bands.into_inner(), 0);
     }
 
     #[test]

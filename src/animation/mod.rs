@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use crate::camera::Camera;
 use crate::film::{self, AtomicFile, ImageFormat, OutputError, Region};
-use crate::pipeline::{Control, RenderError, RenderRequest, Rendered, Renderer};
+use crate::pipeline::{Control, RenderError, RenderRequest, RenderSummary, Renderer};
 use crate::scene::{self, Animation, FrameTime, LoadOptions, Scene, SceneError};
 use crate::tiles::{self, PartInfo};
 
@@ -266,7 +266,7 @@ impl FrameJob {
         control: &Control,
         format: ImageFormat,
         path: &Path,
-    ) -> Result<Rendered, FrameError> {
+    ) -> Result<RenderSummary, FrameError> {
         let (scene, request) = self.frame(frame)?;
         let region = request.region_in(&scene)?;
         let (full_width, full_height) = request.full_size(&scene)?;
@@ -288,7 +288,7 @@ impl FrameJob {
                 key: self.key(&scene, &request, frame),
             };
             tiles::write_part(&rendered.image, &info, format, path)?;
-            return Ok(rendered);
+            return Ok(rendered.summary());
         }
         let mut file = AtomicFile::create(path)?;
         let rendered = if format == ImageFormat::Png {
@@ -298,7 +298,7 @@ impl FrameJob {
                 region.height,
                 request.alpha,
                 |sink| {
-                    renderer.render_in_bands(&scene, &request, control, &|row, rows, alpha| {
+                    renderer.render_streamed(&scene, &request, control, &|row, rows, alpha| {
                         sink.rows(row, rows, alpha)
                     })
                 },
@@ -309,7 +309,7 @@ impl FrameJob {
         } else {
             let rendered = renderer.render(&scene, &request, control)?;
             film::encode(&rendered.image, format, &mut file)?;
-            rendered
+            rendered.summary()
         };
         if control.cancel.is_cancelled() {
             return Err(RenderError::Cancelled.into());

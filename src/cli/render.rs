@@ -3,7 +3,7 @@
 use super::animate::AnimationArgs;
 use crate::film::{self, AtomicFile, ImageFormat};
 use crate::pipeline::{
-    CancelToken, Control, Region, RenderError, RenderRequest, Rendered, Renderer, View,
+    CancelToken, Control, Region, RenderError, RenderRequest, RenderSummary, Renderer, View,
 };
 use crate::roots::Solver;
 use crate::scene::{self, LoadOptions, Scene};
@@ -299,12 +299,12 @@ fn render_into(
     control: &Control,
     format: ImageFormat,
     file: &mut AtomicFile,
-) -> Result<Rendered, Failure> {
+) -> Result<RenderSummary, Failure> {
     if format == ImageFormat::Png {
         let region = request.region_in(scene).map_err(fail)?;
         let (rendered, written) =
             film::encode_png_streaming(file, region.width, region.height, request.alpha, |sink| {
-                renderer.render_in_bands(scene, request, control, &|row, rows, alpha| {
+                renderer.render_streamed(scene, request, control, &|row, rows, alpha| {
                     sink.rows(row, rows, alpha)
                 })
             });
@@ -317,7 +317,7 @@ fn render_into(
             .render(scene, request, control)
             .map_err(render_failure)?;
         film::encode(&rendered.image, format, file).map_err(fail)?;
-        Ok(rendered)
+        Ok(rendered.summary())
     }
 }
 

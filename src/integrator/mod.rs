@@ -187,22 +187,22 @@ pub(crate) fn with_shader<W: WithShader>(view: View, setup: &ShadeSetup, work: W
     }
 }
 
-/// Renders `job` in `view` on `pool`: the region's image and the rays traced, or `None` when
-/// cancelled.
+/// Renders `job` in `view` on `pool`: the region's image (when `job.keep_image`) and the rays
+/// traced, or `None` when cancelled.
 pub(crate) fn render(
     pool: &scheduler::RenderPool,
     view: View,
     setup: &ShadeSetup,
     job: &Job,
     hooks: &Hooks,
-) -> Option<(Image, u64)> {
+) -> Option<(Option<Image>, u64)> {
     struct Render<'a> {
         pool: &'a scheduler::RenderPool,
         job: &'a Job<'a>,
         hooks: &'a Hooks<'a>,
     }
     impl WithShader for Render<'_> {
-        type Output = Option<(Image, u64)>;
+        type Output = Option<(Option<Image>, u64)>;
         fn run<S: Shader>(self, shader: &S) -> Self::Output {
             scheduler::run(self.pool, shader, self.job, self.hooks)
         }

@@ -30,6 +30,9 @@ pub(crate) struct Job<'a> {
     pub seed: u64,
     /// Make an image with alpha (see the module docs).
     pub alpha: bool,
+    /// Keep the region's image (else each band is rendered into a buffer that is reused once
+    /// the band has gone to [`Hooks::band_done`], and no image is returned).
+    pub keep_image: bool,
 }
 
 /// A hook handed each finished band of a render: its first row, its pixels and, for a
@@ -87,14 +90,15 @@ impl std::fmt::Debug for RenderPool {
     }
 }
 
-/// Renders `job.region` with `shader` on the threads of `pool`; returns the region's image and
-/// the rays traced, or `None` when cancelled before every tile was done.
+/// Renders `job.region` with `shader` on the threads of `pool`; returns the region's image
+/// (`None` unless `job.keep_image`) and the rays traced, or `None` when cancelled before every
+/// tile was done.
 pub(crate) fn run<S: Shader>(
     pool: &RenderPool,
     shader: &S,
     job: &Job,
     hooks: &Hooks,
-) -> Option<(Image, u64)> {
+) -> Option<(Option<Image>, u64)> {
     let region = job.region;
     let (width, height) = (region.width, region.height);
     let sampler = PixelSampler {
@@ -110,43 +114,47 @@ pub(crate) fn run<S: Shader>(
             Some((seen_mask(job)?, stored))
         }),
     };
-    let mut image = if job.alpha {
-        Image::transparent(width, height)
-    } else {
-        Image::new(width, height)
-    };
-    // Each band of TILE_SIZE rows is a disjoint slice of the image, filled in place tile by
-    // tile: no per-tile buffers, so the film exists once. Workers take the next band from a
-    // shared counter: bands finish in order from the top, and a worker that runs out of work
-    // waits for one band at most.
+    let mut image = job.keep_image.then(|| {
+        if job.alpha {
+            Image::transparent(width, height)
+        } else {
+            Image::new(width, height)
+        }
+    });
+    // Kept, each band of TILE_SIZE rows is a disjoint slice of the image, filled in place tile
+    // by tile: no per-tile buffers, so the film exists once. Streamed, a band is filled in a
+    // buffer of the pool's, which goes back to the pool once the hook has had the band: as
+    // many buffers as threads, whose memory is written once and then reused (a whole film's
+    // pages, each faulted in and zeroed by the kernel, cost more than the hook's reading).
+    // Workers take the next band from a shared counter: bands finish in order from the top,
+    // and a worker that runs out of work waits for one band at most.
     let band_len = width as usize * TILE_SIZE as usize;
-    let mut alpha_bands = image.alpha.as_mut().map(|a| a.chunks_mut(band_len));
-    let bands: Vec<Mutex<Band>> = image
-        .pixels
-        .chunks_mut(band_len)
-        .map(|pixels| {
-            let alpha = alpha_bands.as_mut().and_then(Iterator::next);
-            Mutex::new(Band { pixels, alpha })
-        })
-        .collect();
+    let band_count = height.div_ceil(TILE_SIZE) as usize;
+    let kept: Option<Vec<Mutex<Band>>> = image.as_mut().map(|image| {
+        let mut alpha_bands = image.alpha.as_mut().map(|a| a.chunks_mut(band_len));
+        image
+            .pixels
+            .chunks_mut(band_len)
+            .map(|pixels| {
+                let alpha = alpha_bands.as_mut().and_then(Iterator::next);
+                Mutex::new(Band { pixels, alpha })
+            })
+            .collect()
+    });
+    let buffers: Mutex<Vec<BandBuffer>> = Mutex::new(Vec::new());
     let next_band = AtomicUsize::new(0);
     let rays = AtomicU64::new(0);
     let stopped = AtomicBool::new(false);
-    let worker = || loop {
-        let band = next_band.fetch_add(1, Ordering::Relaxed);
-        let Some(slot) = bands.get(band) else {
-            return;
-        };
-        // Each band is taken once, so its lock is never contended.
-        let mut out = slot.lock().unwrap_or_else(|e| e.into_inner());
+    // Band `band`'s rows rendered into `out`, which the hook is then handed; false when
+    // cancelled first.
+    let render_band = |band: usize, out: &mut Band| -> bool {
         let y0 = band as u32 * TILE_SIZE;
         let y1 = (y0 + TILE_SIZE).min(height);
         let mut band_rays = 0;
         for x0 in (0..width).step_by(TILE_SIZE as usize) {
             if (hooks.cancelled)() {
-                stopped.store(true, Ordering::Relaxed);
                 rays.fetch_add(band_rays, Ordering::Relaxed);
-                return;
+                return false;
             }
             let x1 = (x0 + TILE_SIZE).min(width);
             let (tile_rays, finished) = sampler.tile(
@@ -155,20 +163,48 @@ pub(crate) fn run<S: Shader>(
                 (x0, x1),
                 (y0, y1),
                 width,
-                &mut out,
+                out,
                 hooks.cancelled,
             );
             band_rays += tile_rays;
             if !finished {
-                stopped.store(true, Ordering::Relaxed);
                 rays.fetch_add(band_rays, Ordering::Relaxed);
-                return;
+                return false;
             }
             (hooks.tile_done)(((x1 - x0) * (y1 - y0)) as u64);
         }
         rays.fetch_add(band_rays, Ordering::Relaxed);
         (hooks.band_done)(y0, &*out.pixels, out.alpha.as_deref());
-        drop(out);
+        true
+    };
+    let worker = || loop {
+        let band = next_band.fetch_add(1, Ordering::Relaxed);
+        if band >= band_count {
+            return;
+        }
+        let finished = match &kept {
+            Some(bands) => {
+                // Each band is taken once, so its lock is never contended.
+                let mut out = bands[band].lock().unwrap_or_else(|e| e.into_inner());
+                render_band(band, &mut out)
+            }
+            None => {
+                let rows = (height - band as u32 * TILE_SIZE).min(TILE_SIZE) as usize;
+                let len = rows * width as usize;
+                let taken = buffers.lock().unwrap_or_else(|e| e.into_inner()).pop();
+                let mut buffer = taken.unwrap_or_else(|| BandBuffer::new(band_len, job.alpha));
+                let finished = render_band(band, &mut buffer.band(len));
+                buffers
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .push(buffer);
+                finished
+            }
+        };
+        if !finished {
+            stopped.store(true, Ordering::Relaxed);
+            return;
+        }
         if pool.active.load(Ordering::Relaxed) > 1 {
             // Another render waits for these threads: let it have them for a band.
             return;
@@ -177,15 +213,40 @@ pub(crate) fn run<S: Shader>(
     pool.active.fetch_add(1, Ordering::Relaxed);
     // Until every band is taken (or the render is cancelled): each round ends when every
     // thread has left the worker, after one band each while other renders are running.
-    while !stopped.load(Ordering::Relaxed) && next_band.load(Ordering::Relaxed) < bands.len() {
+    while !stopped.load(Ordering::Relaxed) && next_band.load(Ordering::Relaxed) < band_count {
         pool.threads.broadcast(|_| worker());
     }
     pool.active.fetch_sub(1, Ordering::Relaxed);
-    drop(bands);
+    drop(kept);
     if stopped.into_inner() {
         return None;
     }
     Some((image, rays.into_inner()))
+}
+
+/// A streamed render's storage for one band (see [`run`]): every pixel of a band is written
+/// before the hook sees it, so a reused buffer's old contents never show.
+struct BandBuffer {
+    pixels: Vec<Vec3>,
+    alpha: Option<Vec<f32>>,
+}
+
+impl BandBuffer {
+    /// Room for `len` pixels, with their coverage when `alpha`.
+    fn new(len: usize, alpha: bool) -> Self {
+        Self {
+            pixels: vec![Vec3::ZERO; len],
+            alpha: alpha.then(|| vec![0.0; len]),
+        }
+    }
+
+    /// The first `len` pixels (at most the buffer's) as a band.
+    fn band(&mut self, len: usize) -> Band<'_> {
+        Band {
+            pixels: &mut self.pixels[..len],
+            alpha: self.alpha.as_mut().map(|a| &mut a[..len]),
+        }
+    }
 }
 
 /// One band of rows of the region's image: its pixels and, with alpha, their coverage.
@@ -587,6 +648,7 @@ mod tests {
             spp,
             seed: 3,
             alpha,
+            keep_image: true,
         };
         let hooks = Hooks {
             cancelled: &|| false,
@@ -595,7 +657,8 @@ mod tests {
                 assert_eq!(band_alpha.map(<[f32]>::len), alpha.then_some(pixels.len()));
             },
         };
-        run(&pool, shader, &job, &hooks).unwrap()
+        let (image, rays) = run(&pool, shader, &job, &hooks).unwrap();
+        (image.expect("a kept image"), rays)
     }
 
     /// `S` with every ray traced: no [`Shader::miss_colour`].
@@ -655,6 +718,7 @@ mod tests {
             spp: 1,
             seed: 0,
             alpha: false,
+            keep_image: true,
         };
         let mask = seen_mask(&job).expect("the box is in front of the eye");
         let seen_in = |row: usize| (0..37).filter(|&c| mask.any(row, c, 1)).collect::<Vec<_>>();
@@ -733,7 +797,10 @@ mod tests {
                         let mut by_bounds = SeenMask::new(region);
                         let (a, b) = (pixel_bounds((a0, a1)), pixel_bounds((b0, b1)));
                         by_bounds.mark_pixels(0, (a.0.max(b.0), a.1.min(b.1)));
-                        assert_eq!(clipped.bits, by_bounds.bits, "({a0}, {a1}) and ({b0}, {b1})");
+                        assert_eq!(
+                            clipped.bits, by_bounds.bits,
+                            "({a0}, {a1}) and ({b0}, {b1})"
+                        );
                         marked += usize::from(clipped.bits.iter().any(|&w| w != 0));
                     }
                 }
@@ -810,6 +877,7 @@ mod tests {
             spp: 1,
             seed: 0,
             alpha: false,
+            keep_image: true,
         };
         let mask = seen_mask(&job).expect("the box is in front of the eye");
         assert!(!mask.any(29, 38, 4), "the hole is left out: {mask:?}");
