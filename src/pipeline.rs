@@ -362,8 +362,10 @@ impl Renderer {
             region,
             stats,
         } = summary;
+        // `render_with` keeps the image when asked to.
+        let image = image.expect("a kept image");
         Ok(Rendered {
-            image: image.expect("a kept image"),
+            image,
             full_width,
             full_height,
             region,
@@ -375,7 +377,8 @@ impl Renderer {
     /// `band_done` (in the same order and with the same pixels) from a buffer that is reused
     /// for a later band once the hook returns, so the hook must copy what it keeps. For a
     /// caller that consumes the rows as they come (a streamed PNG): a whole image's memory is
-    /// never allocated, and the render is faster by the page faults that saves.
+    /// never allocated, so the render's memory is a few bands (one buffer per thread) whatever
+    /// the image's size.
     pub fn render_streamed(
         &self,
         scene: &Scene,
