@@ -304,6 +304,25 @@ pub struct RenderSummary {
     pub stats: RenderStats,
 }
 
+impl RenderSummary {
+    /// The finished render with its region's image.
+    pub fn with_image(self, image: Image) -> Rendered {
+        let Self {
+            full_width,
+            full_height,
+            region,
+            stats,
+        } = self;
+        Rendered {
+            image,
+            full_width,
+            full_height,
+            region,
+            stats,
+        }
+    }
+}
+
 /// The thread pool could not be built.
 #[derive(Debug, thiserror::Error, miette::Diagnostic)]
 #[error("cannot start the render threads: {0}")]
@@ -356,21 +375,8 @@ impl Renderer {
         band_done: &BandDone<'_>,
     ) -> Result<Rendered, RenderError> {
         let (image, summary) = self.render_with(scene, request, control, band_done, true)?;
-        let RenderSummary {
-            full_width,
-            full_height,
-            region,
-            stats,
-        } = summary;
         // `render_with` keeps the image when asked to.
-        let image = image.expect("a kept image");
-        Ok(Rendered {
-            image,
-            full_width,
-            full_height,
-            region,
-            stats,
-        })
+        Ok(summary.with_image(image.expect("a kept image")))
     }
 
     /// [`Renderer::render_in_bands`] without keeping the image: each band's rows are handed to
@@ -482,6 +488,28 @@ mod tests {
         scene::parse(scene::DEFAULT_SCENE, "heart.scene", &LoadOptions::default()).unwrap()
     }
 
+    /// A band as a hook was handed it: first row, pixels, coverage, and the address of the
+    /// pixels (which storage the renderer handed over).
+    type HandedBand = (u32, Vec<Vec3>, Option<Vec<f32>>, usize);
+
+    /// Renders with `render` (given the hook), collecting every band it hands over; returns
+    /// what `render` returned and the bands sorted by first row.
+    fn collect_bands<R>(render: impl FnOnce(&BandDone<'_>) -> R) -> (R, Vec<HandedBand>) {
+        let handed = Mutex::new(Vec::new());
+        let result = render(&|row, rows, alpha| {
+            let band = (
+                row,
+                rows.to_vec(),
+                alpha.map(<[f32]>::to_vec),
+                rows.as_ptr() as usize,
+            );
+            handed.lock().unwrap().push(band);
+        });
+        let mut bands = handed.into_inner().unwrap();
+        bands.sort_by_key(|band| band.0);
+        (result, bands)
+    }
+
     #[test]
     fn renderer_is_send_and_sync() {
         fn check<T: Send + Sync>() {}
@@ -533,23 +561,14 @@ mod tests {
             ..RenderRequest::default()
         };
         let renderer = Renderer::new(2).unwrap();
-        let seen = Mutex::new(Vec::new());
-        let rendered = renderer
-            .render_in_bands(
-                &scene,
-                &request,
-                &Control::default(),
-                &|row, rows, alpha| {
-                    assert!(alpha.is_none());
-                    seen.lock().unwrap().push((row, rows.to_vec()));
-                },
-            )
-            .unwrap();
-        let mut seen = seen.into_inner().unwrap();
-        seen.sort_by_key(|(row, _)| *row);
-        let rows: Vec<u32> = seen.iter().map(|(row, _)| *row).collect();
+        let (rendered, bands) = collect_bands(|hook| {
+            renderer.render_in_bands(&scene, &request, &Control::default(), hook)
+        });
+        let rendered = rendered.unwrap();
+        let rows: Vec<u32> = bands.iter().map(|band| band.0).collect();
         assert_eq!(rows, vec![0, 16, 32]);
-        let handed: Vec<Vec3> = seen.into_iter().flat_map(|(_, px)| px).collect();
+        assert!(bands.iter().all(|band| band.2.is_none()), "no alpha asked");
+        let handed: Vec<Vec3> = bands.into_iter().flat_map(|band| band.1).collect();
         assert_eq!(handed, rendered.image.pixels);
         let again = renderer
             .render(&scene, &request, &Control::default())
@@ -573,30 +592,28 @@ mod tests {
             let kept = renderer
                 .render(&scene, &request, &Control::default())
                 .unwrap();
-            let seen = Mutex::new(Vec::new());
-            let summary = renderer
-                .render_streamed(
-                    &scene,
-                    &request,
-                    &Control::default(),
-                    &|row, rows, coverage| {
-                        assert_eq!(coverage.is_some(), alpha);
-                        assert_eq!(rows.len() % 40, 0, "whole rows");
-                        let coverage = coverage.map(<[f32]>::to_vec);
-                        seen.lock().unwrap().push((row, rows.to_vec(), coverage));
-                    },
-                )
-                .unwrap();
-            let mut seen = seen.into_inner().unwrap();
-            seen.sort_by_key(|(row, _, _)| *row);
-            let rows: Vec<u32> = seen.iter().map(|(row, _, _)| *row).collect();
+            let (summary, bands) = collect_bands(|hook| {
+                renderer.render_streamed(&scene, &request, &Control::default(), hook)
+            });
+            let summary = summary.unwrap();
+            let rows: Vec<u32> = bands.iter().map(|band| band.0).collect();
             assert_eq!(rows, vec![0, 16, 32, 48, 64]);
-            assert_eq!(seen[4].1.len(), 40 * 5, "the last band is five rows");
-            let pixels: Vec<Vec3> = seen.iter().flat_map(|(_, px, _)| px.clone()).collect();
+            assert!(
+                bands.iter().all(|band| band.1.len() % 40 == 0),
+                "whole rows"
+            );
+            assert_eq!(bands[4].1.len(), 40 * 5, "the last band is five rows");
+            // The memory promise: five bands from at most one buffer per thread.
+            let mut buffers: Vec<usize> = bands.iter().map(|band| band.3).collect();
+            buffers.sort_unstable();
+            buffers.dedup();
+            assert!(buffers.len() <= 2, "{} buffers for 5 bands", buffers.len());
+            let pixels: Vec<Vec3> = bands.iter().flat_map(|band| band.1.clone()).collect();
             assert_eq!(pixels, kept.image.pixels);
             let coverage: Option<Vec<f32>> = alpha.then(|| {
-                seen.iter()
-                    .flat_map(|(_, _, a)| a.clone().expect("coverage"))
+                bands
+                    .iter()
+                    .flat_map(|band| band.2.clone().expect("coverage"))
                     .collect()
             });
             assert_eq!(coverage, kept.image.alpha);

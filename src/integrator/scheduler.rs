@@ -123,9 +123,9 @@ pub(crate) fn run<S: Shader>(
     });
     // Kept, each band of TILE_SIZE rows is a disjoint slice of the image, filled in place tile
     // by tile: no per-tile buffers, so the film exists once. Streamed, a band is filled in a
-    // buffer of the pool's, which goes back to the pool once the hook has had the band: as
-    // many buffers as threads, whose memory is written once and then reused (a whole film's
-    // pages, each faulted in and zeroed by the kernel, cost more than the hook's reading).
+    // buffer of the render's, which goes back to it once the hook has had the band: at most
+    // as many buffers as threads, so the render's memory is a few bands whatever the image's
+    // size (and the film's pages are never faulted in).
     // Workers take the next band from a shared counter: bands finish in order from the top,
     // and a worker that runs out of work waits for one band at most.
     let band_len = width as usize * TILE_SIZE as usize;
