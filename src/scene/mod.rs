@@ -211,6 +211,30 @@ impl Scene {
                 }
             }
         }
+        // Where every lane that hit met the same object, their normals are asked together
+        // (the same answers as `hit` gives one at a time).
+        let mut objects = best.iter().flatten().map(|&(object, _)| object);
+        let Some(first) = objects.next() else {
+            return [None; LANES];
+        };
+        if objects.all(|object| object == first) {
+            let points: [DVec3; LANES] = std::array::from_fn(|lane| match best[lane] {
+                Some((_, t)) => rays[lane].at(t),
+                None => DVec3::ZERO,
+            });
+            let normals = self.objects[first]
+                .shape
+                .normal_lanes(&points, best.map(|hit| hit.is_some()));
+            return std::array::from_fn(|lane| {
+                let (object, t) = best[lane]?;
+                Some(SceneHit {
+                    object,
+                    t,
+                    point: points[lane],
+                    normal: normals[lane],
+                })
+            });
+        }
         std::array::from_fn(|lane| best[lane].map(|(object, t)| self.hit(&rays[lane], object, t)))
     }
 

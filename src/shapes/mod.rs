@@ -82,6 +82,19 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
     }
     /// Unit outward normal at the world point `p` on the surface.
     fn normal(&self, p: DVec3) -> DVec3;
+    /// [`Shape::normal`] at the [`LANES`] world points `p` where `live` is set: lane `i` is
+    /// always exactly `self.normal(p[i])` there, and zero where `live[i]` is not (that lane's
+    /// point is not read as a surface point). The hits of neighbouring camera rays ask this;
+    /// a shape may answer it more cheaply, never differently.
+    fn normal_lanes(&self, p: &[DVec3; LANES], live: [bool; LANES]) -> [DVec3; LANES] {
+        std::array::from_fn(|i| {
+            if live[i] {
+                self.normal(p[i])
+            } else {
+                DVec3::ZERO
+            }
+        })
+    }
     /// World-space box containing the surface.
     fn bounds(&self) -> Aabb;
     /// World-space solid ellipsoids whose union holds every point at which `intersect` may

@@ -157,6 +157,22 @@ pub trait ObjectShape: Send + Sync + std::fmt::Debug {
     }
     /// Unit outward world normal at the object-space point `q` on the surface.
     fn normal(&self, at: &Placement, q: DVec3) -> DVec3;
+    /// [`ObjectShape::normal`] at the [`LANES`] object-space points `q` where `live` is set:
+    /// lane `i` is exactly `self.normal(at, q[i])` there, and zero elsewhere.
+    fn normal_lanes(
+        &self,
+        at: &Placement,
+        q: &[DVec3; LANES],
+        live: [bool; LANES],
+    ) -> [DVec3; LANES] {
+        std::array::from_fn(|i| {
+            if live[i] {
+                self.normal(at, q[i])
+            } else {
+                DVec3::ZERO
+            }
+        })
+    }
     /// World-space box containing the surface.
     fn bounds(&self, at: &Placement) -> Aabb;
     /// See [`Shape::enclosing_ellipsoids`], in object space.
@@ -255,6 +271,13 @@ impl<S: ObjectShape> Shape for Placed<S> {
     fn normal(&self, p: DVec3) -> DVec3 {
         self.shape
             .normal(&self.at, self.at.frame().point_to_object(p))
+    }
+
+    #[inline]
+    fn normal_lanes(&self, p: &[DVec3; LANES], live: [bool; LANES]) -> [DVec3; LANES] {
+        let frame = self.at.frame();
+        let q = p.map(|p| frame.point_to_object(p));
+        self.shape.normal_lanes(&self.at, &q, live)
     }
 
     fn bounds(&self) -> Aabb {

@@ -41,7 +41,7 @@ use super::{SolverReport, LANES};
 use crate::geometry::{Aabb, DMat3, DVec3, Frame, Ray, SolidEllipsoid};
 use crate::roots::Solver;
 use dd::Dd;
-use poly::{Compiled, Gradient, Poly, Powers, Uni};
+use poly::{Compiled, Gradient, Poly, Powers, PowersLanes, Uni};
 pub use presets::{Preset, HEART_EQUATION};
 
 #[doc(hidden)]
@@ -179,8 +179,14 @@ impl Surface {
     /// ([`Surface::normal_from_signs`]), with `∇f` in double-double arithmetic as the
     /// fallback where the signs are not split by a plane.
     fn normal_direction(&self, q: DVec3, h: f64) -> DVec3 {
-        let p = q.to_array();
-        let (values, magnitudes) = match &self.torus {
+        let (values, magnitudes) = self.gradient_with_bound(q.to_array());
+        self.direction_from_gradient(q, h, values, magnitudes)
+    }
+
+    /// `∇f` at `p` in `f64` and, for each component, the sum of its terms' magnitudes.
+    #[inline]
+    fn gradient_with_bound(&self, p: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+        match &self.torus {
             Some(t) => t.gradient_with_bound(p),
             None => {
                 // One table of powers and one pass for the three partial derivatives (the
@@ -188,7 +194,37 @@ impl Surface {
                 let powers = Powers::new(p, self.gradient.degree);
                 self.gradient.eval_with_bound_on(&powers)
             }
-        };
+        }
+    }
+
+    /// [`Surface::gradient_with_bound`] at [`LANES`] points: lane `i` is point `i`'s, the
+    /// same bits.
+    #[inline]
+    fn gradient_with_bound_lanes(
+        &self,
+        points: &[[f64; 3]; LANES],
+    ) -> [([f64; 3], [f64; 3]); LANES] {
+        match &self.torus {
+            Some(t) => points.map(|p| t.gradient_with_bound(p)),
+            None => {
+                let powers = PowersLanes::new(points, self.gradient.degree);
+                let (v, m) = self.gradient.eval_with_bound_lanes(&powers);
+                std::array::from_fn(|i| (v.map(|c| c[i]), m.map(|c| c[i])))
+            }
+        }
+    }
+
+    /// [`Surface::normal_direction`] at `q`, given `∇f` there (`values`) and its terms'
+    /// magnitudes as [`Surface::gradient_with_bound`] finds them.
+    #[inline]
+    fn direction_from_gradient(
+        &self,
+        q: DVec3,
+        h: f64,
+        values: [f64; 3],
+        magnitudes: [f64; 3],
+    ) -> DVec3 {
+        let p = q.to_array();
         let g = DVec3::from_array(values);
         let scale = magnitudes.iter().fold(0.0f64, |m, &v| m.max(v));
         let terms = self.gradient.most_terms as f64;
@@ -936,6 +972,29 @@ impl ImplicitShape {
         }
     }
 
+    /// The unit world normal at the object-space surface point `q` of a generic surface
+    /// whose outward normal runs along `g` ([`Surface::normal_direction`]); where `g` is zero
+    /// (a singular point), the direction from the object's centre.
+    #[inline]
+    fn world_normal(at: &Placement, q: DVec3, g: DVec3) -> DVec3 {
+        // Scale before normalising so tiny (but non-zero) gradients do not underflow.
+        let big = g.abs().max_element();
+        let n = if big > 0.0 && big.is_finite() {
+            g / big
+        } else {
+            // A singular point: the direction from the object's centre is the best guess
+            // available from the point alone (right for the tips of hearts and cones
+            // pointing away from the centre).
+            let r = q.abs().max_element();
+            if r > 0.0 && r.is_finite() {
+                q / r
+            } else {
+                DVec3::Z
+            }
+        };
+        at.normal_to_world(n)
+    }
+
     /// [`Shape::intersect_lanes`](crate::shapes::Shape::intersect_lanes) on the generic path
     /// (camera rays, and through `occludes_lanes` shadow rays): the rays that reach the
     /// composition are composed together and, where all four keep the surface's degree,
@@ -1626,22 +1685,41 @@ impl ObjectShape for ImplicitShape {
             Kind::Generic(s) => s,
         };
         let g = s.normal_direction(q, SIGN_SPHERE * self.bound);
-        // Scale before normalising so tiny (but non-zero) gradients do not underflow.
-        let big = g.abs().max_element();
-        let n = if big > 0.0 && big.is_finite() {
-            g / big
-        } else {
-            // A singular point: the direction from the object's centre is the best guess
-            // available from the point alone (right for the tips of hearts and cones
-            // pointing away from the centre).
-            let r = q.abs().max_element();
-            if r > 0.0 && r.is_finite() {
-                q / r
-            } else {
-                DVec3::Z
+        Self::world_normal(at, q, g)
+    }
+
+    fn normal_lanes(
+        &self,
+        at: &Placement,
+        q: &[DVec3; LANES],
+        live: [bool; LANES],
+    ) -> [DVec3; LANES] {
+        // The gradient in lanes pays for the general expansion; the torus's closed form and
+        // the heart's own normal are cheaper one at a time.
+        let s = match &self.kind {
+            Kind::Generic(s) if s.torus.is_none() => s,
+            _ => {
+                return std::array::from_fn(|i| {
+                    if live[i] {
+                        self.normal(at, q[i])
+                    } else {
+                        DVec3::ZERO
+                    }
+                })
             }
         };
-        at.normal_to_world(n)
+        // Every lane's gradient is taken (a lane that is not live, at whatever point it
+        // holds), and only the live lanes' are used.
+        let gradients = s.gradient_with_bound_lanes(&q.map(|p| p.to_array()));
+        let h = SIGN_SPHERE * self.bound;
+        std::array::from_fn(|i| {
+            if !live[i] {
+                return DVec3::ZERO;
+            }
+            let (values, magnitudes) = gradients[i];
+            let g = s.direction_from_gradient(q[i], h, values, magnitudes);
+            Self::world_normal(at, q[i], g)
+        })
     }
 
     fn bounds(&self, at: &Placement) -> Aabb {
@@ -1718,6 +1796,65 @@ mod tests {
             v.extend(s.e);
             v.into_iter().map(f64::to_bits).collect()
         })
+    }
+
+    /// `normal_lanes` gives, lane by lane, exactly what `normal` gives alone: on the surfaces
+    /// whose gradient is taken in lanes (Barth's sextic, Chmutov's octic, a cone through its
+    /// apex, where the gradient vanishes and the fallbacks answer) and on those answered one
+    /// at a time (the torus's closed form, the paper's heart), placed by a frame that is not
+    /// the identity, with lanes left out.
+    #[test]
+    fn normals_in_lanes_are_the_normals_one_at_a_time_bit_for_bit() {
+        use crate::shapes::Shape;
+        let frame = Frame::new(
+            DVec3::new(0.3, -1.2, 2.0),
+            DVec3::new(0.8, 0.1, 0.0),
+            DVec3::new(-0.1, 0.9, 0.2),
+            DVec3::new(0.0, -0.3, 1.1),
+        )
+        .unwrap();
+        let surfaces = [
+            presets::preset("barth_sextic", &[]).unwrap().equation,
+            presets::preset("chmutov", &[8.0]).unwrap().equation,
+            "x^2 + y^2 - z^2".to_string(),
+            presets::preset("torus", &[1.0, 0.3]).unwrap().equation,
+            presets::preset("heart", &[]).unwrap().equation,
+        ];
+        let mut uniform = crate::testing::uniform_stream(0x2545_f491_4f6c_dd1d);
+        for equation in &surfaces {
+            let shape = Implicit::new(equation, frame, Some(1.5)).unwrap();
+            let centre = frame.point_to_world(DVec3::ZERO);
+            // Points on the surface: where rays from outside towards the centre meet it, and
+            // the object's centre itself (the cone's apex).
+            let mut points = vec![centre];
+            while points.len() < 400 {
+                let mut v = || 2.0 * uniform() - 1.0;
+                let origin = centre + DVec3::new(v(), v(), v()).normalize_or(DVec3::X) * 8.0;
+                let target = centre + DVec3::new(v(), v(), v()) * 0.7;
+                let ray = Ray::new(origin, target - origin);
+                if let Some(t) = shape.intersect(&ray, 0.0, f64::INFINITY) {
+                    points.push(ray.at(t));
+                }
+            }
+            for (k, group) in points.chunks_exact(LANES).enumerate() {
+                let p: [DVec3; LANES] = std::array::from_fn(|i| group[i]);
+                let live: [bool; LANES] = std::array::from_fn(|i| (k + i) % 5 != 0);
+                let lanes = shape.normal_lanes(&p, live);
+                for i in 0..LANES {
+                    let want = if live[i] {
+                        shape.normal(p[i])
+                    } else {
+                        DVec3::ZERO
+                    };
+                    assert_eq!(
+                        lanes[i].to_array().map(f64::to_bits),
+                        want.to_array().map(f64::to_bits),
+                        "{equation} at {:?}",
+                        p[i]
+                    );
+                }
+            }
+        }
     }
 
     #[test]
