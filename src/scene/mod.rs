@@ -73,10 +73,13 @@ pub struct Object {
     pub line: usize,
     /// Cached `shape.bounds()`.
     pub bounds: Aabb,
+    /// Cached `shape.normal_lanes_pays()`.
+    pub normal_lanes_pays: bool,
 }
 
 impl Object {
-    /// An object; its bounds are computed once here.
+    /// An object; its bounds (and whether its normals are cheaper asked four at a time) are
+    /// found once here.
     pub fn new(
         shape: Box<dyn Shape>,
         material: Material,
@@ -84,12 +87,14 @@ impl Object {
         line: usize,
     ) -> Self {
         let bounds = shape.bounds();
+        let normal_lanes_pays = shape.normal_lanes_pays();
         Self {
             shape,
             material,
             keyword,
             line,
             bounds,
+            normal_lanes_pays,
         }
     }
 }
@@ -211,29 +216,14 @@ impl Scene {
                 }
             }
         }
-        // Where every lane that hit met the same object, their normals are asked together
-        // (the same answers as `hit` gives one at a time).
+        // Where every lane that hit met the same object, and that object's normals cost less
+        // asked together, they are (the same answers as `hit` gives one at a time).
         let mut objects = best.iter().flatten().map(|&(object, _)| object);
         let Some(first) = objects.next() else {
             return [None; LANES];
         };
-        if objects.all(|object| object == first) {
-            let points: [DVec3; LANES] = std::array::from_fn(|lane| match best[lane] {
-                Some((_, t)) => rays[lane].at(t),
-                None => DVec3::ZERO,
-            });
-            let normals = self.objects[first]
-                .shape
-                .normal_lanes(&points, best.map(|hit| hit.is_some()));
-            return std::array::from_fn(|lane| {
-                let (object, t) = best[lane]?;
-                Some(SceneHit {
-                    object,
-                    t,
-                    point: points[lane],
-                    normal: normals[lane],
-                })
-            });
+        if self.objects[first].normal_lanes_pays && objects.all(|object| object == first) {
+            return self.hits_on_one_object(rays, first, best);
         }
         std::array::from_fn(|lane| best[lane].map(|(object, t)| self.hit(&rays[lane], object, t)))
     }
@@ -252,6 +242,34 @@ impl Scene {
             }
         }
         best.map(|(object, t)| self.hit(ray, object, t))
+    }
+
+    /// The hit records of the lanes of `best` (each a lane's object and `t`, all on object
+    /// `object`), their normals asked together: the same records as [`Scene::hit`] makes.
+    /// Kept out of line, so that the callers' other paths compile as they would without it.
+    #[inline(never)]
+    fn hits_on_one_object(
+        &self,
+        rays: &[Ray; LANES],
+        object: usize,
+        best: [Option<(usize, f64)>; LANES],
+    ) -> [Option<SceneHit>; LANES] {
+        let points: [DVec3; LANES] = std::array::from_fn(|lane| match best[lane] {
+            Some((_, t)) => rays[lane].at(t),
+            None => DVec3::ZERO,
+        });
+        let normals = self.objects[object]
+            .shape
+            .normal_lanes(&points, best.map(|hit| hit.is_some()));
+        std::array::from_fn(|lane| {
+            let (object, t) = best[lane]?;
+            Some(SceneHit {
+                object,
+                t,
+                point: points[lane],
+                normal: normals[lane],
+            })
+        })
     }
 
     /// The hit record of `ray` meeting object `object` at `t`.

@@ -95,6 +95,12 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
             }
         })
     }
+    /// Whether [`Shape::normal_lanes`] does less work than [`Shape::normal`] asked lane by
+    /// lane (false unless a shape says so): callers may ask either way, the answers are the
+    /// same.
+    fn normal_lanes_pays(&self) -> bool {
+        false
+    }
     /// World-space box containing the surface.
     fn bounds(&self) -> Aabb;
     /// World-space solid ellipsoids whose union holds every point at which `intersect` may

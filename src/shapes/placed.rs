@@ -173,6 +173,10 @@ pub trait ObjectShape: Send + Sync + std::fmt::Debug {
             }
         })
     }
+    /// See [`Shape::normal_lanes_pays`].
+    fn normal_lanes_pays(&self) -> bool {
+        false
+    }
     /// World-space box containing the surface.
     fn bounds(&self, at: &Placement) -> Aabb;
     /// See [`Shape::enclosing_ellipsoids`], in object space.
@@ -278,6 +282,10 @@ impl<S: ObjectShape> Shape for Placed<S> {
         let frame = self.at.frame();
         let q = p.map(|p| frame.point_to_object(p));
         self.shape.normal_lanes(&self.at, &q, live)
+    }
+
+    fn normal_lanes_pays(&self) -> bool {
+        self.shape.normal_lanes_pays()
     }
 
     fn bounds(&self) -> Aabb {

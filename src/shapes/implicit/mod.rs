@@ -1722,6 +1722,10 @@ impl ObjectShape for ImplicitShape {
         })
     }
 
+    fn normal_lanes_pays(&self) -> bool {
+        matches!(&self.kind, Kind::Generic(s) if s.torus.is_none())
+    }
+
     fn bounds(&self, at: &Placement) -> Aabb {
         // The clip sphere's image is an ellipsoid: its half-extent along world axis a is
         // r·|row a of M|.
