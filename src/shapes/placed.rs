@@ -165,13 +165,7 @@ pub trait ObjectShape: Send + Sync + std::fmt::Debug {
         q: &[DVec3; LANES],
         live: [bool; LANES],
     ) -> [DVec3; LANES] {
-        std::array::from_fn(|i| {
-            if live[i] {
-                self.normal(at, q[i])
-            } else {
-                DVec3::ZERO
-            }
-        })
+        normals_one_at_a_time(self, at, q, live)
     }
     /// See [`Shape::normal_lanes_pays`].
     fn normal_lanes_pays(&self) -> bool {
@@ -199,6 +193,23 @@ pub trait ObjectShape: Send + Sync + std::fmt::Debug {
         let _ = (at, world, local, t_min, t_max);
         None
     }
+}
+
+/// [`ObjectShape::normal_lanes`] asked of `shape` lane by lane: its default, and the answer of
+/// a shape whose own lanes path does not cover a case.
+pub(crate) fn normals_one_at_a_time<S: ObjectShape + ?Sized>(
+    shape: &S,
+    at: &Placement,
+    q: &[DVec3; LANES],
+    live: [bool; LANES],
+) -> [DVec3; LANES] {
+    std::array::from_fn(|i| {
+        if live[i] {
+            shape.normal(at, q[i])
+        } else {
+            DVec3::ZERO
+        }
+    })
 }
 
 /// An object-space shape `S` placed in the world by a [`Placement`]; implements [`Shape`].

@@ -1698,15 +1698,7 @@ impl ObjectShape for ImplicitShape {
         // the heart's own normal are cheaper one at a time.
         let s = match &self.kind {
             Kind::Generic(s) if s.torus.is_none() => s,
-            _ => {
-                return std::array::from_fn(|i| {
-                    if live[i] {
-                        self.normal(at, q[i])
-                    } else {
-                        DVec3::ZERO
-                    }
-                })
-            }
+            _ => return super::placed::normals_one_at_a_time(self, at, q, live),
         };
         // Every lane's gradient is taken (a lane that is not live, at whatever point it
         // holds), and only the live lanes' are used.
