@@ -197,21 +197,21 @@ impl Surface {
         }
     }
 
-    /// [`Surface::gradient_with_bound`] at [`LANES`] points: lane `i` is point `i`'s, the
-    /// same bits.
+    /// [`Surface::gradient_with_bound`] at [`LANES`] points of a surface without the torus
+    /// form (its general expansion's partials; see [`ImplicitShape::lanes_surface`]): lane
+    /// `i` is point `i`'s, the same bits.
     #[inline]
-    fn gradient_with_bound_lanes(
+    fn expansion_gradient_lanes(
         &self,
         points: &[[f64; 3]; LANES],
     ) -> [([f64; 3], [f64; 3]); LANES] {
-        match &self.torus {
-            Some(t) => points.map(|p| t.gradient_with_bound(p)),
-            None => {
-                let powers = PowersLanes::new(points, self.gradient.degree);
-                let (v, m) = self.gradient.eval_with_bound_lanes(&powers);
-                std::array::from_fn(|i| (v.map(|c| c[i]), m.map(|c| c[i])))
-            }
-        }
+        debug_assert!(
+            self.torus.is_none(),
+            "the torus form takes its own gradient"
+        );
+        let powers = PowersLanes::new(points, self.gradient.degree);
+        let (v, m) = self.gradient.eval_with_bound_lanes(&powers);
+        std::array::from_fn(|i| (v.map(|c| c[i]), m.map(|c| c[i])))
     }
 
     /// [`Surface::normal_direction`] at `q`, given `∇f` there (`values`) and its terms'
@@ -972,6 +972,16 @@ impl ImplicitShape {
         }
     }
 
+    /// The surface whose normals [`ObjectShape::normal_lanes`] takes four at a time: a
+    /// generic one with the general expansion. The torus's closed-form gradient and the
+    /// heart's own normal are cheaper one at a time (`None`).
+    fn lanes_surface(&self) -> Option<&Surface> {
+        match &self.kind {
+            Kind::Generic(s) if s.torus.is_none() => Some(s),
+            _ => None,
+        }
+    }
+
     /// The unit world normal at the object-space surface point `q` of a generic surface
     /// whose outward normal runs along `g` ([`Surface::normal_direction`]); where `g` is zero
     /// (a singular point), the direction from the object's centre.
@@ -1694,15 +1704,12 @@ impl ObjectShape for ImplicitShape {
         q: &[DVec3; LANES],
         live: [bool; LANES],
     ) -> [DVec3; LANES] {
-        // The gradient in lanes pays for the general expansion; the torus's closed form and
-        // the heart's own normal are cheaper one at a time.
-        let s = match &self.kind {
-            Kind::Generic(s) if s.torus.is_none() => s,
-            _ => return super::placed::normals_one_at_a_time(self, at, q, live),
+        let Some(s) = self.lanes_surface() else {
+            return super::placed::normals_one_at_a_time(self, at, q, live);
         };
         // Every lane's gradient is taken (a lane that is not live, at whatever point it
         // holds), and only the live lanes' are used.
-        let gradients = s.gradient_with_bound_lanes(&q.map(|p| p.to_array()));
+        let gradients = s.expansion_gradient_lanes(&q.map(|p| p.to_array()));
         let h = SIGN_SPHERE * self.bound;
         std::array::from_fn(|i| {
             if !live[i] {
@@ -1715,7 +1722,7 @@ impl ObjectShape for ImplicitShape {
     }
 
     fn normal_lanes_pays(&self) -> bool {
-        matches!(&self.kind, Kind::Generic(s) if s.torus.is_none())
+        self.lanes_surface().is_some()
     }
 
     fn bounds(&self, at: &Placement) -> Aabb {
@@ -1817,8 +1824,10 @@ mod tests {
             presets::preset("heart", &[]).unwrap().equation,
         ];
         let mut uniform = crate::testing::uniform_stream(0x2545_f491_4f6c_dd1d);
-        for equation in &surfaces {
+        for (k, equation) in surfaces.iter().enumerate() {
             let shape = Implicit::new(equation, frame, Some(1.5)).unwrap();
+            // The first three take the lanes path; the torus and the heart one at a time.
+            assert_eq!(shape.normal_lanes_pays(), k < 3, "{equation}");
             let centre = frame.point_to_world(DVec3::ZERO);
             // Points on the surface: where rays from outside towards the centre meet it, and
             // the object's centre itself (the cone's apex).
