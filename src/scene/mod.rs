@@ -142,15 +142,18 @@ impl Scene {
     pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
         // `intersect` asks each object with the whole (t_min, t_max) until the first one
         // answers, so that first answer alone decides whether it returns a hit.
+        let alone = self.box_tests_skipped();
         self.objects.iter().any(|obj| {
-            obj.bounds.clip(ray, t_min, t_max).is_some() && obj.shape.occludes(ray, t_min, t_max)
+            (alone || obj.bounds.clip(ray, t_min, t_max).is_some())
+                && obj.shape.occludes(ray, t_min, t_max)
         })
     }
 
     /// [`Scene::occluded`] for [`LANES`] rays at once, each with its own range: lane `i` is
     /// exactly `self.occluded(&rays[i], t_min[i], t_max[i])` (`false` when
     /// `t_max[i] <= t_min[i]`). Each object is asked for the lanes not yet blocked whose ray
-    /// meets its box, all at once ([`Shape::occludes_lanes`]).
+    /// meets its box (every such lane where [`Scene::box_tests_skipped`]), all at once
+    /// ([`Shape::occludes_lanes`]).
     pub fn occluded_lanes(
         &self,
         rays: &[Ray; LANES],
@@ -158,16 +161,18 @@ impl Scene {
         t_max: [f64; LANES],
     ) -> [bool; LANES] {
         let mut blocked = [false; LANES];
+        let alone = self.box_tests_skipped();
         for obj in &self.objects {
             let mut ask = [f64::NEG_INFINITY; LANES];
             let mut any = false;
             for lane in 0..LANES {
                 if !blocked[lane]
                     && t_max[lane] > t_min[lane]
-                    && obj
-                        .bounds
-                        .clip(&rays[lane], t_min[lane], t_max[lane])
-                        .is_some()
+                    && (alone
+                        || obj
+                            .bounds
+                            .clip(&rays[lane], t_min[lane], t_max[lane])
+                            .is_some())
                 {
                     ask[lane] = t_max[lane];
                     any = true;
@@ -186,7 +191,8 @@ impl Scene {
 
     /// [`Scene::intersect`] for [`LANES`] rays at once (camera rays of neighbouring pixels):
     /// lane `i` is exactly `self.intersect(&rays[i], t_min, t_max)`. Each object is asked for
-    /// the lanes whose ray meets its box, all at once ([`Shape::intersect_lanes`]).
+    /// the lanes whose ray meets its box (every lane where [`Scene::box_tests_skipped`]), all
+    /// at once ([`Shape::intersect_lanes`]).
     pub fn intersect_lanes(
         &self,
         rays: &[Ray; LANES],
@@ -195,12 +201,13 @@ impl Scene {
     ) -> [Option<SceneHit>; LANES] {
         let mut best: [Option<(usize, f64)>; LANES] = [None; LANES];
         let mut t_far = [t_max; LANES];
+        let alone = self.box_tests_skipped();
         for (i, obj) in self.objects.iter().enumerate() {
             // An idle lane (its ray misses the box) asks for nothing: `t_max = −∞`.
             let mut ask = [f64::NEG_INFINITY; LANES];
             let mut any = false;
             for lane in 0..LANES {
-                if obj.bounds.clip(&rays[lane], t_min, t_far[lane]).is_some() {
+                if alone || obj.bounds.clip(&rays[lane], t_min, t_far[lane]).is_some() {
                     ask[lane] = t_far[lane];
                     any = true;
                 }
@@ -232,8 +239,9 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SceneHit> {
         let mut best: Option<(usize, f64)> = None;
         let mut t_far = t_max;
+        let alone = self.box_tests_skipped();
         for (i, obj) in self.objects.iter().enumerate() {
-            if obj.bounds.clip(ray, t_min, t_far).is_none() {
+            if !alone && obj.bounds.clip(ray, t_min, t_far).is_none() {
                 continue;
             }
             if let Some(t) = obj.shape.intersect(ray, t_min, t_far) {
@@ -242,6 +250,17 @@ impl Scene {
             }
         }
         best.map(|(object, t)| self.hit(ray, object, t))
+    }
+
+    /// Whether the scene's queries ask the objects without testing the ray against their
+    /// boxes first: when there is one object. The box test only saves work (a shape finds
+    /// no hit off its bounds). With several objects it spares most objects most rays; with
+    /// one, the object's own query tests its bounds at least as cheaply (a typed surface
+    /// clips four rays to its box in vector registers), and the scene's slab tests were pure
+    /// cost: 5–8 % of the instructions of a one-object render (docs/performance.md).
+    #[inline]
+    pub fn box_tests_skipped(&self) -> bool {
+        self.objects.len() == 1
     }
 
     /// The hit records of the lanes of `best` (each a lane's object and `t`, all on object

@@ -77,8 +77,8 @@ fn camera_rays(scene: &Scene, side: u32) -> Vec<Ray> {
     rays
 }
 
-#[test]
-fn every_shipped_scene_gives_the_same_hits_in_lanes() {
+/// The shipped scene files, sorted.
+fn shipped_scenes() -> Vec<std::path::PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let mut files: Vec<_> = std::fs::read_dir(&root)
         .unwrap()
@@ -88,26 +88,101 @@ fn every_shipped_scene_gives_the_same_hits_in_lanes() {
         .collect();
     files.sort();
     assert!(files.len() >= 10, "{files:?}");
+    files
+}
+
+/// Secondary rays of `rays`' hits: from each hit point towards the camera, and on through
+/// it (bounded by the caller, as shadow and reflected rays are).
+fn secondary_rays(scene: &Scene, rays: &[Ray]) -> Vec<Ray> {
+    let mut secondary = Vec::new();
+    for ray in rays {
+        if let Some(hit) = scene.intersect(ray, 0.0, f64::INFINITY) {
+            secondary.push(Ray::new(hit.point, -ray.dir));
+            secondary.push(Ray::new(hit.point, ray.dir));
+        }
+    }
+    secondary
+}
+
+#[test]
+fn every_shipped_scene_gives_the_same_hits_in_lanes() {
     let mut blocked = 0;
-    for file in files {
+    for file in shipped_scenes() {
         let scene = parse_file(&file, &LoadOptions::default()).unwrap();
         let what = file.display().to_string();
         let rays = camera_rays(&scene, 48);
         let hits = check(&scene, &rays, 0.0, f64::INFINITY, &what);
         assert!(hits > 0, "{what}: no camera ray hits");
-        // Secondary rays: from the hit points of the camera rays towards the camera, and
-        // through them, bounded (as shadow and reflected rays are).
-        let mut secondary = Vec::new();
-        for ray in &rays {
-            if let Some(hit) = scene.intersect(ray, 0.0, f64::INFINITY) {
-                secondary.push(Ray::new(hit.point, -ray.dir));
-                secondary.push(Ray::new(hit.point, ray.dir));
-            }
-        }
+        let secondary = secondary_rays(&scene, &rays);
         check(&scene, &secondary, 1e-9, 20.0, &what);
         blocked += check_occluded(&scene, &secondary, &what);
     }
     assert!(blocked > 1000, "{blocked} shadow-style rays blocked");
+}
+
+/// A scene of one object asks it without the box test (`Scene::box_tests_skipped`): every
+/// object of every shipped scene, alone in its scene, gives the answers its box test and its
+/// shape give together (the same `t` to the bit, the same shadow answers), one ray at a
+/// time and in lanes.
+#[test]
+fn an_object_alone_gives_the_same_hits_without_the_box_test() {
+    let mut shapes = std::collections::BTreeSet::new();
+    let (mut hits, mut misses_of_the_box) = (0, 0);
+    for file in shipped_scenes() {
+        let count = parse_file(&file, &LoadOptions::default())
+            .unwrap()
+            .objects
+            .len();
+        for keep in 0..count {
+            let mut scene = parse_file(&file, &LoadOptions::default()).unwrap();
+            let object = scene.objects.swap_remove(keep);
+            shapes.insert(object.keyword);
+            scene.objects = vec![object];
+            assert!(scene.box_tests_skipped());
+            let what = format!("{}, object {keep} alone", file.display());
+            let camera = camera_rays(&scene, 32);
+            let secondary = secondary_rays(&scene, &camera);
+            let object = &scene.objects[0];
+            for (rays, t_min, t_max) in [(&camera, 0.0, f64::INFINITY), (&secondary, 1e-9, 20.0)] {
+                check(&scene, rays, t_min, t_max, &what);
+                for ray in rays {
+                    let boxed = object.bounds.clip(ray, t_min, t_max);
+                    misses_of_the_box += usize::from(boxed.is_none());
+                    let want = boxed.and_then(|_| object.shape.intersect(ray, t_min, t_max));
+                    let got = scene.intersect(ray, t_min, t_max);
+                    assert_eq!(
+                        got.map(|h| h.t.to_bits()),
+                        want.map(f64::to_bits),
+                        "{what}: {ray:?}"
+                    );
+                    let occluded = boxed.is_some() && object.shape.occludes(ray, t_min, t_max);
+                    assert_eq!(
+                        scene.occluded(ray, t_min, t_max),
+                        occluded,
+                        "{what}: {ray:?}"
+                    );
+                    hits += usize::from(got.is_some());
+                }
+            }
+            check_occluded(&scene, &secondary, &what);
+        }
+    }
+    // Every kind of object, and rays on both sides of their boxes.
+    for keyword in [
+        "HEART",
+        "IMPLICIT",
+        "SPHERE",
+        "PLANE",
+        "BOX",
+        "ELLIPSOID",
+        "POLYGON",
+    ] {
+        assert!(shapes.contains(keyword), "no {keyword} alone: {shapes:?}");
+    }
+    assert!(
+        hits > 1000 && misses_of_the_box > 1000,
+        "{hits} hits, {misses_of_the_box} misses of the box"
+    );
 }
 
 #[test]
