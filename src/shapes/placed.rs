@@ -6,7 +6,7 @@
 //! ([`ObjectShape`]) together with the placement, which also maps normals and boxes back.
 
 use super::{Shape, ShapeError, SolverReport, LANES};
-use crate::geometry::{Aabb, DVec3, Frame, FrameError, Hexahedron, Ray, SolidEllipsoid};
+use crate::geometry::{Aabb, DMat3, DVec3, Frame, FrameError, Hexahedron, Ray, SolidEllipsoid};
 
 /// A validated object frame (`p_world = M·p_object + position`) and `‖M⁻¹‖∞`, which bounds how
 /// much the rounding of a world point grows on its way into object space.
@@ -14,6 +14,8 @@ use crate::geometry::{Aabb, DVec3, Frame, FrameError, Hexahedron, Ray, SolidElli
 pub struct Placement {
     frame: Frame,
     inv_norm: f64,
+    /// The frame maps nothing: position `+0` and every matrix the identity, bit for bit.
+    identity: bool,
 }
 
 /// How a shape's placement parameters are called in its error messages: the shape (`"box"`),
@@ -34,7 +36,17 @@ impl Placement {
         let inv_norm = (0..3)
             .map(|i| frame.m_inv.row(i).abs().element_sum())
             .fold(0.0, f64::max);
-        Self { frame, inv_norm }
+        let bits = |m: DMat3| m.to_cols_array().map(f64::to_bits);
+        let unit = bits(DMat3::IDENTITY);
+        let identity = frame.position.to_array().map(f64::to_bits) == [0; 3]
+            && bits(frame.m) == unit
+            && bits(frame.m_inv) == unit
+            && bits(frame.normal_matrix) == unit;
+        Self {
+            frame,
+            inv_norm,
+            identity,
+        }
     }
 
     /// The placement at `position` with basis columns `u`, `v`, `w` (finite, linearly
@@ -98,7 +110,32 @@ impl Placement {
     /// The world ray in object space, with the same `t` (see [`Frame::ray_to_object`]).
     #[inline]
     pub fn ray_to_object(&self, ray: &Ray) -> Ray {
-        self.frame.ray_to_object(ray)
+        // The identity frame's product would give the same numbers but for the sign of a
+        // zero (`1·(−0) + 0·y` is `+0`): a placement at the origin with the unit basis, the
+        // usual one of a typed surface, skips the nine products and sums per vector.
+        if self.identity {
+            *ray
+        } else {
+            self.frame.ray_to_object(ray)
+        }
+    }
+
+    /// Whether object space is world space: the placement at `+0` with the unit basis, bit
+    /// for bit (the usual placement of a typed surface). Then [`Placement::ray_to_object`]
+    /// and [`Placement::point_to_object`] hand back what they are given.
+    #[inline]
+    pub fn is_identity(&self) -> bool {
+        self.identity
+    }
+
+    /// The world point `p` in object coordinates (see [`Frame::point_to_object`]).
+    #[inline]
+    pub fn point_to_object(&self, p: DVec3) -> DVec3 {
+        if self.identity {
+            p
+        } else {
+            self.frame.point_to_object(p)
+        }
     }
 
     /// An object-space normal direction `n` (any length, outward) as a unit world normal:
@@ -107,7 +144,11 @@ impl Placement {
     /// NaN).
     #[inline]
     pub fn normal_to_world(&self, n: DVec3) -> DVec3 {
-        let w = self.frame.normal_matrix * n;
+        let w = if self.identity {
+            n
+        } else {
+            self.frame.normal_matrix * n
+        };
         let big = w.abs().max_element();
         if big > 0.0 && big.is_finite() {
             (w / big).normalize()
@@ -264,9 +305,16 @@ impl<S: ObjectShape> Shape for Placed<S> {
         t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [Option<f64>; LANES] {
+        if self.at.is_identity() {
+            // Object space is world space: the world rays themselves, not copies.
+            return self
+                .shape
+                .intersect_lanes(&self.at, rays, rays, t_min, t_max);
+        }
         // Made fresh from the world rays, not updated in place: an in-place update reads
         // each ray back in wide loads while the copy's narrower stores are pending.
-        let local: [Ray; LANES] = std::array::from_fn(|i| self.at.ray_to_object(&rays[i]));
+        let frame = self.at.frame();
+        let local: [Ray; LANES] = std::array::from_fn(|i| frame.ray_to_object(&rays[i]));
         self.shape
             .intersect_lanes(&self.at, rays, &local, t_min, t_max)
     }
@@ -284,12 +332,14 @@ impl<S: ObjectShape> Shape for Placed<S> {
     }
 
     fn normal(&self, p: DVec3) -> DVec3 {
-        self.shape
-            .normal(&self.at, self.at.frame().point_to_object(p))
+        self.shape.normal(&self.at, self.at.point_to_object(p))
     }
 
     #[inline]
     fn normal_lanes(&self, p: &[DVec3; LANES], live: [bool; LANES]) -> [DVec3; LANES] {
+        if self.at.is_identity() {
+            return self.shape.normal_lanes(&self.at, p, live);
+        }
         let frame = self.at.frame();
         let q = p.map(|p| frame.point_to_object(p));
         self.shape.normal_lanes(&self.at, &q, live)
@@ -420,6 +470,49 @@ mod tests {
             );
         }
         assert_eq!(at.normal_to_world(DVec3::ZERO), DVec3::Z);
+    }
+
+    /// The identity placement hands rays, points and normals through unchanged, where the
+    /// frame's products give the same values (up to the sign of a zero); any other placement,
+    /// even at `−0` or with a unit basis in another order, maps them.
+    #[test]
+    fn the_identity_placement_maps_nothing() {
+        let unit = |p: DVec3| Placement::from_basis(p, DVec3::X, DVec3::Y, DVec3::Z).unwrap();
+        let at = unit(DVec3::ZERO);
+        assert!(at.is_identity());
+        let others = [
+            unit(DVec3::new(0.0, -0.0, 0.0)),
+            unit(DVec3::new(0.0, 0.0, 1e-300)),
+            Placement::from_basis(DVec3::ZERO, DVec3::Y, DVec3::X, DVec3::Z).unwrap(),
+            Placement::from_basis(DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z * 2.0).unwrap(),
+        ];
+        assert!(others.iter().all(|o| !o.is_identity()));
+        let frame = at.frame();
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        };
+        for _ in 0..1000 {
+            let (o, d) = (
+                DVec3::new(next(), next(), next()),
+                DVec3::new(next(), next(), next()),
+            );
+            let ray = Ray::new(o * 10.0, d);
+            let (got, want) = (at.ray_to_object(&ray), frame.ray_to_object(&ray));
+            assert_eq!((got.origin, got.dir), (ray.origin, ray.dir));
+            assert_eq!((got.origin, got.dir), (want.origin, want.dir));
+            assert_eq!(at.point_to_object(o), frame.point_to_object(o));
+            assert_eq!(
+                at.normal_to_world(d).to_array().map(f64::to_bits),
+                frame
+                    .normal_to_world(d / d.abs().max_element())
+                    .to_array()
+                    .map(f64::to_bits),
+            );
+        }
     }
 
     #[test]
