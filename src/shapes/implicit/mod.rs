@@ -1400,6 +1400,11 @@ impl LaneQueries {
         t_max: [f64; LANES],
     ) -> [FirstHit; LANES] {
         let roots = solver.first_root_lanes_by_power(c, self.s_lo, self.s_hi, [true; LANES]);
+        if roots.iter().all(Option::is_none) {
+            // No lane has a root (the usual answer to a group of shadow rays): nothing to
+            // check.
+            return [FirstHit::Answer(None); LANES];
+        }
         // `ill_conditioned`'s first test and `is_root`, lane by lane in the same operations;
         // a lane without a root computes on at 0 and is answered by its `None`.
         let at = roots.map(|r| r.unwrap_or(0.0));
