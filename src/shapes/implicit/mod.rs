@@ -1354,10 +1354,13 @@ impl LaneQueries {
                 big[i] = larger_magnitude(big[i], c[i]);
             }
         }
-        let kept = (0..LANES).all(|i| {
+        // Every lane tested, without branches (`all` stopped at the first failing lane, a
+        // loop of its own).
+        let mut kept = true;
+        for i in 0..LANES {
             let dropped = (n > 0) & negligible_beside(cs[n][i], big[i]);
-            spans.alive[i] & (big[i] > 0.0) & big[i].is_finite() & !dropped
-        });
+            kept &= spans.alive[i] & (big[i] > 0.0) & big[i].is_finite() & !dropped;
+        }
         if !kept {
             return None;
         }
