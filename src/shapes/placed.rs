@@ -488,13 +488,8 @@ mod tests {
         ];
         assert!(others.iter().all(|o| !o.is_identity()));
         let frame = at.frame();
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-        };
+        let mut uniform = crate::testing::uniform_stream(0x9e37_79b9_7f4a_7c15);
+        let mut next = move || 2.0 * uniform() - 1.0;
         for _ in 0..1000 {
             let (o, d) = (
                 DVec3::new(next(), next(), next()),
