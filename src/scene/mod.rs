@@ -257,7 +257,7 @@ impl Scene {
     /// no hit off its bounds). With several objects it spares most objects most rays; with
     /// one, the object's own query tests its bounds at least as cheaply (a typed surface
     /// clips four rays to its box in vector registers), and the scene's slab tests were pure
-    /// cost: 5–8 % of the instructions of a one-object render (docs/performance.md).
+    /// cost: 4–8 % of the instructions of a one-object render (docs/performance.md).
     #[inline]
     pub fn box_tests_skipped(&self) -> bool {
         self.objects.len() == 1
