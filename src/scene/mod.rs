@@ -142,11 +142,9 @@ impl Scene {
     pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
         // `intersect` asks each object with the whole (t_min, t_max) until the first one
         // answers, so that first answer alone decides whether it returns a hit.
-        let alone = self.box_tests_skipped();
-        self.objects.iter().any(|obj| {
-            (alone || obj.bounds.clip(ray, t_min, t_max).is_some())
-                && obj.shape.occludes(ray, t_min, t_max)
-        })
+        self.objects
+            .iter()
+            .any(|obj| self.asks(obj, ray, t_min, t_max) && obj.shape.occludes(ray, t_min, t_max))
     }
 
     /// [`Scene::occluded`] for [`LANES`] rays at once, each with its own range: lane `i` is
@@ -161,18 +159,13 @@ impl Scene {
         t_max: [f64; LANES],
     ) -> [bool; LANES] {
         let mut blocked = [false; LANES];
-        let alone = self.box_tests_skipped();
         for obj in &self.objects {
             let mut ask = [f64::NEG_INFINITY; LANES];
             let mut any = false;
             for lane in 0..LANES {
                 if !blocked[lane]
                     && t_max[lane] > t_min[lane]
-                    && (alone
-                        || obj
-                            .bounds
-                            .clip(&rays[lane], t_min[lane], t_max[lane])
-                            .is_some())
+                    && self.asks(obj, &rays[lane], t_min[lane], t_max[lane])
                 {
                     ask[lane] = t_max[lane];
                     any = true;
@@ -201,13 +194,12 @@ impl Scene {
     ) -> [Option<SceneHit>; LANES] {
         let mut best: [Option<(usize, f64)>; LANES] = [None; LANES];
         let mut t_far = [t_max; LANES];
-        let alone = self.box_tests_skipped();
         for (i, obj) in self.objects.iter().enumerate() {
             // An idle lane (its ray misses the box) asks for nothing: `t_max = −∞`.
             let mut ask = [f64::NEG_INFINITY; LANES];
             let mut any = false;
             for lane in 0..LANES {
-                if alone || obj.bounds.clip(&rays[lane], t_min, t_far[lane]).is_some() {
+                if self.asks(obj, &rays[lane], t_min, t_far[lane]) {
                     ask[lane] = t_far[lane];
                     any = true;
                 }
@@ -239,9 +231,8 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SceneHit> {
         let mut best: Option<(usize, f64)> = None;
         let mut t_far = t_max;
-        let alone = self.box_tests_skipped();
         for (i, obj) in self.objects.iter().enumerate() {
-            if !alone && obj.bounds.clip(ray, t_min, t_far).is_none() {
+            if !self.asks(obj, ray, t_min, t_far) {
                 continue;
             }
             if let Some(t) = obj.shape.intersect(ray, t_min, t_far) {
@@ -261,6 +252,13 @@ impl Scene {
     #[inline]
     pub fn box_tests_skipped(&self) -> bool {
         self.objects.len() == 1
+    }
+
+    /// Whether a query of the scene asks `obj` about `ray` on `(t_min, t_max)`: where the
+    /// box tests are skipped, always; else when the ray meets its box there.
+    #[inline]
+    fn asks(&self, obj: &Object, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        self.box_tests_skipped() || obj.bounds.clip(ray, t_min, t_max).is_some()
     }
 
     /// The hit records of the lanes of `best` (each a lane's object and `t`, all on object
