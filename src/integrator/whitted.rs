@@ -190,6 +190,7 @@ impl Shader for Whitted<'_> {
         self.trace(ray, 0.0, 0, sample)
     }
 
+    #[inline(always)]
     fn radiance_lanes(&self, rays: &[Ray; LANES], samples: &mut [Sample; LANES]) -> [DVec3; LANES] {
         // The camera rays' first hits together (the shapes may share work across lanes),
         // then each lane shaded as `trace` shades it.
@@ -283,6 +284,7 @@ impl<'a> Whitted<'a> {
     /// together ([`Scene::occluded_lanes`]), for an opaque scene (where a shadow ray is an
     /// any-hit query). Every lane draws its random numbers in the order `shade` draws them
     /// (all lanes walk the same lights and light samples), so the colours are the same.
+    #[inline(always)]
     fn shade_lanes(
         &self,
         rays: &[Ray; LANES],
@@ -352,7 +354,7 @@ impl<'a> Whitted<'a> {
     }
 
     /// What shading needs of the hit `hit` of `ray`.
-    #[inline]
+    #[inline(always)]
     fn surface(&self, ray: &Ray, hit: &SceneHit) -> SurfacePoint<'a> {
         let scene: &'a Scene = self.scene;
         let m = &scene.objects[hit.object].material;
@@ -380,7 +382,7 @@ impl<'a> Whitted<'a> {
 
     /// The colour of the surface point `at`, given `colour` from the lights: what its reflection and refraction add (below the maximum depth), attenuated
     /// on a back side.
-    #[inline]
+    #[inline(always)]
     fn finish(&self, at: &SurfacePoint, mut colour: DVec3, depth: u32, s: &mut Sample) -> DVec3 {
         let SurfacePoint {
             m,
