@@ -1098,33 +1098,53 @@ impl ImplicitShape {
             });
         };
         let settled = queries.first_hits(s, solver, spans, &cs, t_max);
-        std::array::from_fn(|i| {
-            let ahead = match settled[i] {
-                FirstHit::Answer(hit) => return hit,
-                FirstHit::GoOn(root) => Some(Some(root)),
+        // A loop, not `from_fn`: its closure was an out-of-line call a lane, compiled for the
+        // baseline even in the AVX2 copy.
+        let mut hits = [None; LANES];
+        for i in 0..LANES {
+            hits[i] = match settled[i] {
+                FirstHit::Answer(hit) => hit,
+                FirstHit::GoOn(root) => self.go_on_lane(s, spans, &cs, &queries, i, root, t_max[i]),
             };
-            let span = spans.get(i)?;
-            let c = lane(&cs, i);
-            let q = Query {
-                deg: D - 1,
-                inv: queries.inv[i],
-                s_lo: queries.s_lo[i],
-                s_hi: queries.s_hi[i],
-            };
-            let mut answer = ahead;
-            self.solve(
-                s,
-                &span,
-                &c,
-                q,
-                t_max[i],
-                &mut |c: &[f64], lo: f64, hi: f64| match answer.take() {
-                    Some(root) => root,
-                    None => first_root(c, lo, hi),
-                },
-                &mut false,
-            )
-        })
+        }
+        hits
+    }
+
+    /// Lane `i` of [`ImplicitShape::intersect_lanes_fixed`] where its first query's `root`
+    /// did not settle the hit: solved on as [`ImplicitShape::solve`] goes on alone.
+    #[allow(clippy::too_many_arguments)]
+    fn go_on_lane<const D: usize>(
+        &self,
+        s: &Surface,
+        spans: &LaneSpans,
+        cs: &[[f64; LANES]; D],
+        queries: &LaneQueries,
+        i: usize,
+        root: f64,
+        t_max: f64,
+    ) -> Option<f64> {
+        let span = spans.get(i)?;
+        let c: Uni = std::array::from_fn(|k| if k < D { cs[k][i] } else { 0.0 });
+        let q = Query {
+            deg: D - 1,
+            inv: queries.inv[i],
+            s_lo: queries.s_lo[i],
+            s_hi: queries.s_hi[i],
+        };
+        let solver = self.solver;
+        let mut answer = Some(Some(root));
+        self.solve(
+            s,
+            &span,
+            &c,
+            q,
+            t_max,
+            &mut |c: &[f64], lo: f64, hi: f64| match answer.take() {
+                Some(root) => root,
+                None => solver.first_root(c, lo, hi),
+            },
+            &mut false,
+        )
     }
 
     /// The generic path of [`ObjectShape::intersect`], `ray` in object space, its first-root
@@ -1442,21 +1462,23 @@ impl LaneQueries {
         let point: [[f64; LANES]; 3] =
             std::array::from_fn(|axis| lanes(|i| spans.mid[axis][i] + at[i] * spans.e[axis][i]));
         let bound = s.f.magnitude_bound_lanes::<D>(&point);
-        std::array::from_fn(|i| {
+        let mut settled = [FirstHit::Answer(None); LANES];
+        for i in 0..LANES {
             let Some(root) = roots[i] else {
-                return FirstHit::Answer(None);
+                continue;
             };
             let t = spans.t_mid[i] + root * spans.t_half[i];
             let hit = resolved(D, self.inv[i], bound[i], dp[i])
                 && t > spans.guard[i]
                 && t < t_max[i]
                 && residual_is_rounding(p[i], m[i]);
-            if hit {
+            settled[i] = if hit {
                 FirstHit::Answer(Some(t))
             } else {
                 FirstHit::GoOn(root)
-            }
-        })
+            };
+        }
+        settled
     }
 }
 
