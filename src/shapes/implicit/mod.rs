@@ -1084,15 +1084,11 @@ impl ImplicitShape {
         let mut first_root = |c: &[f64], lo: f64, hi: f64| solver.first_root(c, lo, hi);
         let mut cs = [[0.0; LANES]; D];
         s.compose_lanes(&spans.mid, &spans.e, &mut cs);
-        // Lane `i`'s polynomial, ascending (zero above the degree).
-        let lane = |cs: &[[f64; LANES]; D], i: usize| -> Uni {
-            std::array::from_fn(|k| if k < D { cs[k][i] } else { 0.0 })
-        };
         let Some(queries) = LaneQueries::new(spans, &mut cs) else {
             // Not all four keep the degree: each alone, from its composition.
             return std::array::from_fn(|i| {
                 let span = spans.get(i)?;
-                let mut c = lane(&cs, i);
+                let mut c = lane_polynomial(&cs, i);
                 let q = span.query(s, &mut c)?;
                 self.solve(s, &span, &c, q, t_max[i], &mut first_root, &mut false)
             });
@@ -1124,7 +1120,7 @@ impl ImplicitShape {
         t_max: f64,
     ) -> Option<f64> {
         let span = spans.get(i)?;
-        let c: Uni = std::array::from_fn(|k| if k < D { cs[k][i] } else { 0.0 });
+        let c = lane_polynomial(cs, i);
         let q = Query {
             deg: D - 1,
             inv: queries.inv[i],
@@ -1274,6 +1270,12 @@ fn min_or_first(a: f64, b: f64) -> f64 {
     } else {
         b
     }
+}
+
+/// Lane `i`'s polynomial of the lanes' `cs` (by power), ascending, zero above the degree.
+#[inline(always)]
+fn lane_polynomial<const D: usize>(cs: &[[f64; LANES]; D], i: usize) -> Uni {
+    std::array::from_fn(|k| if k < D { cs[k][i] } else { 0.0 })
 }
 
 /// One value per lane, lane `i`'s from `f(i)`.
@@ -1918,6 +1920,21 @@ mod tests {
         }
     }
 
+    /// The preset `name` (with `params`) through the generic path, at the origin.
+    fn generic_preset(name: &str, params: &[f64]) -> Implicit {
+        let p = presets::preset(name, params).unwrap();
+        Implicit::new_generic(&p.equation, Frame::identity(), p.bound).unwrap()
+    }
+
+    /// The object-space shape of a surface made by [`generic_preset`], and its surface.
+    fn generic_parts(shape: &Implicit) -> (&ImplicitShape, &Surface) {
+        let object = shape.object();
+        let Kind::Generic(s) = &object.kind else {
+            panic!("made generic");
+        };
+        (object, s)
+    }
+
     #[test]
     fn spans_in_lanes_are_the_scalar_spans_bit_for_bit_in_both_copies() {
         for (name, params) in [
@@ -1926,12 +1943,8 @@ mod tests {
             ("taubin_heart", vec![]),
         ] {
             // Taubin's heart through the generic path (its preset takes the heart's).
-            let p = presets::preset(name, &params).unwrap();
-            let shape = Implicit::new_generic(&p.equation, Frame::identity(), p.bound).unwrap();
-            let object = shape.object();
-            let Kind::Generic(s) = &object.kind else {
-                panic!("{name} is generic");
-            };
+            let shape = generic_preset(name, &params);
+            let (object, s) = generic_parts(&shape);
             let r = object.bound;
             let mut uniform = crate::testing::uniform_stream(0x7f4a_7c15_9e37_79b9);
             let mut counts = [0usize; 2];
@@ -1998,12 +2011,8 @@ mod tests {
             ("chmutov", vec![8.0]),
             ("taubin_heart", vec![]),
         ] {
-            let p = presets::preset(name, &params).unwrap();
-            let shape = Implicit::new_generic(&p.equation, Frame::identity(), p.bound).unwrap();
-            let object = shape.object();
-            let Kind::Generic(s) = &object.kind else {
-                panic!("{name} is generic");
-            };
+            let shape = generic_preset(name, &params);
+            let (object, s) = generic_parts(&shape);
             let r = object.bound;
             let mut uniform = crate::testing::uniform_stream(0x9e37_79b9_7f4a_7c15);
             let mut hits = 0usize;
