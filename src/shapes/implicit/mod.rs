@@ -2002,9 +2002,11 @@ mod tests {
 
     #[test]
     fn intersections_in_lanes_are_the_same_in_both_copies() {
-        // The generic lanes query compiled for AVX2 (where this processor has it) and the
-        // baseline copy other processors run: the same hits, bit for bit, on camera-like and
-        // secondary rays through typed surfaces of degrees 4 to 8.
+        // The generic lanes query's body compiled for AVX2 (where this processor has it) and
+        // for the baseline (what a processor without AVX2 runs of it; the spans and the roots'
+        // front it calls choose their own copies at run time, and their tests check both): the
+        // same hits, bit for bit, on camera-like and secondary rays through typed surfaces of
+        // degrees 4 to 8.
         for (name, params) in [
             ("torus", vec![1.0, 0.3]),
             ("barth_sextic", vec![]),
