@@ -294,24 +294,47 @@ impl SeenMask {
     /// full-image columns `(x0, x1)`: pixel `c` (full-image column, spanning `[c, c + 1]`)
     /// when `c + 1 ≥ x0` and `c ≤ x1`. Nothing when `x0 > x1`.
     fn mark(&mut self, row: usize, (x0, x1): (f64, f64)) {
-        self.mark_pixels(row, pixel_bounds((x0, x1)));
+        self.mark_columns(row, self.columns(pixel_bounds((x0, x1))));
     }
 
-    /// Marks the pixels `c` of the region's `row` with `lo ≤ c ≤ hi` (full-image columns, as
-    /// [`pixel_bounds`] gives them; clipped to the region). Nothing when `lo > hi`.
-    fn mark_pixels(&mut self, row: usize, (lo, hi): (f64, f64)) {
-        let first = f64::from(self.x);
-        let last = first + f64::from(self.width) - 1.0;
-        let (lo, hi) = (lo.max(first), hi.min(last));
+    /// [`pixel_bounds`]' whole-number bounds `(lo, hi)` (full-image columns) as columns of the
+    /// region, clipped to it: `lo` to `[0, width]` and `hi` to `[−1, width − 1]`, so the pair
+    /// is empty where it was or where it lies outside the region. A NaN bound takes no part,
+    /// as in `f64::max` and `f64::min`: the larger and the smaller of two pairs of columns
+    /// are the columns of the larger and the smaller of the two pairs of bounds.
+    fn columns(&self, (lo, hi): (f64, f64)) -> (i64, i64) {
+        let (first, width) = (i64::from(self.x), i64::from(self.width));
+        // `as` saturates ±∞ (and whole numbers beyond `i64`).
+        let lo = if lo.is_nan() {
+            0
+        } else {
+            (lo as i64).saturating_sub(first).clamp(0, width)
+        };
+        let hi = if hi.is_nan() {
+            width - 1
+        } else {
+            (hi as i64).saturating_sub(first).clamp(-1, width - 1)
+        };
+        (lo, hi)
+    }
+
+    /// Marks the pixels of the region's `row` in the region's columns `lo ..= hi` (as
+    /// [`SeenMask::columns`] gives them). Nothing when `lo > hi`.
+    fn mark_columns(&mut self, row: usize, (lo, hi): (i64, i64)) {
         if lo > hi {
             return;
         }
-        let (lo, hi) = ((lo - first) as usize, (hi - first) as usize);
+        let (lo, hi) = (lo as usize, hi as usize);
         let words = &mut self.bits[row * self.words..(row + 1) * self.words];
-        for (w, word) in words.iter_mut().enumerate().take(hi / 64 + 1).skip(lo / 64) {
-            let from = lo.max(w * 64) - w * 64;
-            let to = hi.min(w * 64 + 63) - w * 64;
-            *word |= (u64::MAX >> (63 - to)) & (u64::MAX << from);
+        let (first, last) = (lo / 64, hi / 64);
+        let from = u64::MAX << (lo % 64);
+        let to = u64::MAX >> (63 - hi % 64);
+        if first == last {
+            words[first] |= from & to;
+        } else {
+            words[first] |= from;
+            words[first + 1..last].fill(u64::MAX);
+            words[last] |= to;
         }
     }
 
@@ -390,10 +413,13 @@ fn seen_mask(job: &Job) -> Option<SeenMask> {
             }
             Some(rects) => {
                 let last_row = region.height as f64 - 1.0;
-                // Each row's and each rectangle's pixel bounds once, not once a pair.
-                let rows: Vec<(f64, f64)> = spans.iter().map(|&span| pixel_bounds(span)).collect();
+                // Each row's and each rectangle's columns once, not once a pair.
+                let rows: Vec<(i64, i64)> = spans
+                    .iter()
+                    .map(|&span| mask.columns(pixel_bounds(span)))
+                    .collect();
                 for rect in rects {
-                    let (rect_lo, rect_hi) = pixel_bounds(rect.x);
+                    let (rect_lo, rect_hi) = mask.columns(pixel_bounds(rect.x));
                     // The rows with `y + 1 ≥ rect.y.0` and `y ≤ rect.y.1`.
                     let lo = (rect.y.0 - 1.0 - f64::from(region.y)).ceil().max(0.0);
                     let hi = (rect.y.1 - f64::from(region.y)).floor().min(last_row);
@@ -402,7 +428,7 @@ fn seen_mask(job: &Job) -> Option<SeenMask> {
                     }
                     let rows = rows.iter().enumerate().take(hi as usize + 1);
                     for (row, &(row_lo, row_hi)) in rows.skip(lo as usize) {
-                        mask.mark_pixels(row, (row_lo.max(rect_lo), row_hi.min(rect_hi)));
+                        mask.mark_columns(row, (row_lo.max(rect_lo), row_hi.min(rect_hi)));
                     }
                 }
             }
@@ -801,7 +827,7 @@ mod tests {
     #[test]
     fn a_rectangle_clipped_by_bounds_marks_what_its_clipped_span_marks() {
         // `seen_mask` marks a cell's rectangle in a row by the larger and the smaller of the
-        // two pairs of pixel bounds; the span clipped first must mark the same pixels.
+        // two pairs of columns; the span clipped first must mark the same pixels.
         let region = Region {
             x: 30,
             y: 0,
@@ -832,8 +858,9 @@ mod tests {
                         let mut clipped = SeenMask::new(region);
                         clipped.mark(0, (a0.max(b0), a1.min(b1)));
                         let mut by_bounds = SeenMask::new(region);
-                        let (a, b) = (pixel_bounds((a0, a1)), pixel_bounds((b0, b1)));
-                        by_bounds.mark_pixels(0, (a.0.max(b.0), a.1.min(b.1)));
+                        let a = by_bounds.columns(pixel_bounds((a0, a1)));
+                        let b = by_bounds.columns(pixel_bounds((b0, b1)));
+                        by_bounds.mark_columns(0, (a.0.max(b.0), a.1.min(b.1)));
                         assert_eq!(
                             clipped.bits, by_bounds.bits,
                             "({a0}, {a1}) and ({b0}, {b1})"
@@ -844,6 +871,32 @@ mod tests {
             }
         }
         assert!(marked > 100, "only {marked} cases marked anything");
+    }
+
+    #[test]
+    fn every_run_of_columns_marks_exactly_its_pixels() {
+        // Every pair of whole-number bounds around a region three words wide, against the
+        // pixels one by one.
+        let region = Region {
+            x: 40,
+            y: 0,
+            width: 150,
+            height: 2,
+        };
+        for lo in 36..=194 {
+            for hi in 36..=194 {
+                let mut mask = SeenMask::new(region);
+                mask.mark_columns(1, mask.columns((f64::from(lo), f64::from(hi))));
+                assert!(
+                    mask.bits[..mask.words].iter().all(|&w| w == 0),
+                    "row 0 untouched"
+                );
+                for c in 40..190u32 {
+                    let want = i64::from(lo) <= i64::from(c) && i64::from(c) <= i64::from(hi);
+                    assert_eq!(mask.any(1, c, 1), want, "bounds {lo}..={hi}, column {c}");
+                }
+            }
+        }
     }
 
     #[test]
