@@ -5,7 +5,8 @@
 use super::Vec3;
 
 /// Writes premultiplied `pixels` with coverage `alpha` (`None`: opaque) as straight-alpha
-/// 8-bit sRGBA bytes (see [`Image::to_srgba8`](super::Image::to_srgba8)) into `out`, which holds four bytes a pixel.
+/// 8-bit sRGBA bytes (see [`Image::to_srgba8`](super::Image::to_srgba8)) into `out`, which
+/// holds four bytes a pixel.
 pub(crate) fn srgba8_into(pixels: &[Vec3], alpha: Option<&[f32]>, out: &mut [u8]) {
     let table = srgb8_table();
     for (i, (o, p)) in out.chunks_exact_mut(4).zip(pixels).enumerate() {

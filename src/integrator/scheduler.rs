@@ -36,7 +36,7 @@ pub(crate) struct Job<'a> {
 }
 
 /// A hook handed each finished band of a render: its first row, its pixels and, for a
-/// render with alpha, their coverage (see [`Hooks::band_done`]).
+/// render with alpha, their coverage (see the scheduler's `Hooks::band_done`).
 pub type BandDone<'a> = dyn Fn(u32, &[Vec3], Option<&[f32]>) + Sync + 'a;
 
 /// The caller's side of a render, all called from worker threads.
@@ -456,8 +456,8 @@ impl<'a> PixelSampler<'a> {
     }
 
     /// Renders the tile of columns `xs` and rows `ys` of the region's image into `band`, the
-    /// region's rows from `ys.0` on (the region's width), each pixel's `f64` mean stored as the film
-    /// stores it; returns the rays traced. Pixel `(x, y)` of the region is pixel
+    /// region's rows from `ys.0` on (the region's width), each pixel's `f64` mean stored as
+    /// the film stores it; returns the rays traced. Pixel `(x, y)` of the region is pixel
     /// `(region.x + x, region.y + y)` of the full image, and is sampled as that pixel. With
     /// alpha, a sample whose primary ray hit nothing adds nothing to the colour (which is thus
     /// premultiplied) and the pixel's alpha is the fraction of samples that hit.
