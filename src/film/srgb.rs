@@ -55,10 +55,9 @@ struct Srgb8Table {
     /// `first_f32[c]`: the smallest `f32` whose code is `c` (index 0 unused; index 256 is
     /// +∞, reached by nothing).
     first_f32: [f32; 257],
-    /// The code of each bucket's lower edge, plus one entry for 1.0 itself.
-    bucket_code: [u8; SRGB_BUCKETS + 1],
-    /// `bucket_code` widened, for the AVX2 gathers.
-    bucket_code_i32: [i32; SRGB_BUCKETS + 1],
+    /// The code of each bucket's lower edge, plus one entry for 1.0 itself (0–255, as `i32`:
+    /// the width the AVX2 gathers read).
+    bucket_code: [i32; SRGB_BUCKETS + 1],
 }
 
 impl Srgb8Table {
@@ -72,7 +71,7 @@ impl Srgb8Table {
             return 0;
         }
         let v = v.min(1.0);
-        let code = self.bucket_code[(v * SRGB_BUCKETS as f64) as usize];
+        let code = self.bucket_code[(v * SRGB_BUCKETS as f64) as usize] as u8;
         if code < 255 && v >= self.first_linear[code as usize + 1] {
             code + 1
         } else {
@@ -89,12 +88,13 @@ impl Srgb8Table {
             return 0;
         }
         let v = v.min(1.0);
-        let code = self.bucket_code[(v * SRGB_BUCKETS as f32) as usize];
+        let code = self.bucket_code[(v * SRGB_BUCKETS as f32) as usize] as u8;
         code + u8::from(v >= self.first_f32[code as usize + 1])
     }
 
-    /// `out[i]` = the code of `channels[i]`, one at a time.
+    /// `out[i]` = the code of `channels[i]`, one at a time (`out` as long as `channels`).
     fn channels(&self, channels: &[f32], out: &mut [u8]) {
+        assert_eq!(channels.len(), out.len());
         for (o, &v) in out.iter_mut().zip(channels) {
             *o = self.code_f32(v);
         }
@@ -110,7 +110,8 @@ impl Srgb8Table {
     #[target_feature(enable = "avx2")]
     unsafe fn channels_avx2(&self, channels: &[f32], out: &mut [u8]) {
         use std::arch::x86_64::*;
-        let whole = channels.len().min(out.len()) / 8 * 8;
+        assert_eq!(channels.len(), out.len());
+        let whole = channels.len() / 8 * 8;
         let zero = _mm256_setzero_ps();
         let one = _mm256_set1_ps(1.0);
         let scale = _mm256_set1_ps(SRGB_BUCKETS as f32);
@@ -129,7 +130,7 @@ impl Srgb8Table {
             // code is 0; every index is within the table.
             let v = _mm256_min_ps(_mm256_max_ps(v, zero), one);
             let bucket = _mm256_cvttps_epi32(_mm256_mul_ps(v, scale));
-            let code = _mm256_i32gather_epi32::<4>(self.bucket_code_i32.as_ptr(), bucket);
+            let code = _mm256_i32gather_epi32::<4>(self.bucket_code.as_ptr(), bucket);
             let first =
                 _mm256_i32gather_ps::<4>(self.first_f32.as_ptr(), _mm256_add_epi32(code, next));
             // All ones (−1) where reached: subtracting it adds one.
@@ -161,7 +162,7 @@ fn srgb8_table() -> &'static Srgb8Table {
             while code < 255 && first_linear[code + 1] <= edge {
                 code += 1;
             }
-            *out = code as u8;
+            *out = code as i32;
         }
         let mut first_f32 = [f32::INFINITY; 257];
         for (first, &linear) in first_f32.iter_mut().zip(&first_linear).skip(1) {
@@ -176,7 +177,6 @@ fn srgb8_table() -> &'static Srgb8Table {
             first_linear,
             first_f32,
             bucket_code,
-            bucket_code_i32: bucket_code.map(i32::from),
         }
     })
 }
@@ -264,11 +264,14 @@ mod tests {
         let table = srgb8_table();
         for i in 0..SRGB_BUCKETS {
             let (lo, hi) = (table.bucket_code[i], table.bucket_code[i + 1]);
-            assert!(hi - lo <= 1, "bucket {i} spans codes {lo}..={hi}");
+            assert!(
+                (0..=1).contains(&(hi - lo)),
+                "bucket {i} spans codes {lo}..={hi}"
+            );
         }
         for (i, &code) in table.bucket_code.iter().enumerate() {
             let edge = i as f64 / SRGB_BUCKETS as f64;
-            assert_eq!(code, srgb8_by_formula(edge), "bucket {i}");
+            assert_eq!(code, i32::from(srgb8_by_formula(edge)), "bucket {i}");
         }
         for code in 1..=255usize {
             let first = table.first_linear[code];
