@@ -46,6 +46,7 @@
 #[cfg(target_arch = "x86_64")]
 #[macro_use]
 mod avx2;
+mod bands;
 mod bernstein;
 mod cluster;
 mod lanes;
@@ -63,10 +64,12 @@ pub use trace::{Path, Trace};
 /// give no roots; so do the zero polynomial and more than 17 coefficients (after dropping
 /// trailing zeros). Infinite `lo`/`hi` are allowed.
 pub fn sturm_roots(coeffs: &[f64], lo: f64, hi: f64) -> Vec<f64> {
-    match prep::prepare(coeffs, lo, hi) {
-        Some(p) => sturm::all_roots(&p),
-        None => Vec::new(),
-    }
+    let mut all = Vec::new();
+    bands::each(coeffs, lo, hi, &mut |p| {
+        all.extend(sturm::all_roots(&p));
+        true
+    });
+    all
 }
 
 /// The smallest real root in `(lo, hi]` (normally the first element [`sturm_roots`] returns),
@@ -116,8 +119,30 @@ fn observed(
     }
     fixed!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17);
     let p = prep::prepare(coeffs, lo, hi)?;
+    if bands::loses_terms(coeffs, &p) {
+        return by_parts(solver, coeffs, lo, hi, obs);
+    }
     let fast = bernstein::first_root(&p, obs);
     settle(solver, fast, || p, obs)
+}
+
+/// [`observed`] for an interval too wide for one scale (the `bands` module): the first root
+/// of the first part, in ascending order, that has one.
+#[cold]
+fn by_parts(
+    solver: Solver,
+    coeffs: &[f64],
+    lo: f64,
+    hi: f64,
+    obs: &mut impl Observer,
+) -> Option<f64> {
+    let mut first = None;
+    bands::each(coeffs, lo, hi, &mut |p| {
+        let fast = bernstein::first_root(&p, obs);
+        first = settle(solver, fast, || p, obs);
+        first.is_none()
+    });
+    first
 }
 
 /// The answer of the Bernstein test `fast` when it has one, else `solver`'s on the prepared
