@@ -170,7 +170,7 @@ pub fn run(args: RootsArgs) -> i32 {
     let roots = if args.first {
         args.solver
             .unwrap_or(Solver::Sturm)
-            .first_root(&coeffs, lo, hi)
+            .first_root_at_any_scale(&coeffs, lo, hi)
             .into_iter()
             .collect()
     } else {

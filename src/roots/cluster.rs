@@ -36,9 +36,23 @@
 //! cluster, else its middle. A cluster at an end of the interval is examined on a span
 //! reflected past that end, and reported only when its point lies in `(lo, hi]`; `P(lo) = 0`
 //! exactly excludes it, `P(hi) = 0` exactly reports `hi`.
+//!
+//! # Roots far smaller than the interval
+//!
+//! A piece still undecided after `MAX_DEPTH` halvings is usually one `f64` cannot resolve
+//! (it counts as a zero piece). But near 0 the rounding bound shrinks with `|t|`, and a
+//! piece there may be tiny only relative to the interval (roots near 10⁻⁷⁰ in an interval of
+//! size 1): such a piece, below `2⁻⁴⁰` of the interval's reach, is first cut at 0 if it
+//! spans it (roots of opposite signs are never one cluster), then examined again at its own
+//! scale: `P(s·U)` with `s` a power of two about the piece's reach, its coefficients scaled
+//! exactly by powers of two (so that the values near the small roots neither underflow nor
+//! lose bits), and with a root exactly at 0 divided out (`P = Tᵐ·R`, 0 reported once, at the
+//! right end of the piece `[a, 0]`). Scaling by powers of two changes no rounding, so this
+//! answers as the full interval would with unlimited exponent range; each level shrinks the
+//! scale by at least `2⁴⁰`, so at most `MAX_LEVELS` levels.
 
 use super::bernstein::bernstein_fixed;
-use super::prep::{horner, Prepared, MAX_COEFFS};
+use super::prep::{exponent, horner, mul_pow2, Prepared, MAX_COEFFS};
 use super::refine::refine;
 use super::trace::Observer;
 use std::mem::MaybeUninit;
@@ -46,8 +60,16 @@ use std::mem::MaybeUninit;
 /// Halvings after which a piece counts as a zero piece.
 const MAX_DEPTH: usize = 100;
 
-/// Pieces examined at most; what is left after that counts as zero pieces.
+/// Pieces examined at most (over every level); what is left after that counts as zero
+/// pieces.
 const MAX_NODES: usize = 40_000;
+
+/// A piece undecided at `MAX_DEPTH` whose reach is below this fraction of the interval's is
+/// examined again at its own scale.
+const TINY: f64 = 1.0 / (1u64 << 40) as f64;
+
+/// Most levels of examination at a smaller scale (the `f64` range over factors of `2⁴⁰`).
+const MAX_LEVELS: usize = 64;
 
 /// Split ratio of a piece: off the middle, so that dyadic roots are not hit exactly.
 const SPLIT: f64 = 0.496_858_407_346_410_2;
@@ -216,13 +238,88 @@ pub(crate) fn roots<O: Observer>(p: &Prepared, emit: &mut dyn FnMut(f64) -> bool
             match p.n + 1 {
                 $($d => {
                     let c: &[f64; $d] = p.c[..$d].try_into().expect("degree D - 1");
-                    roots_fixed(c, p.lo, p.hi, emit, obs)
+                    roots_fixed(c, p.lo, p.hi, emit, obs, &mut Budget { nodes: 0, level: 0 });
                 })*
                 _ => {}
             }
         };
     }
     fixed!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17)
+}
+
+/// What one search may still spend: pieces examined (over every level), and the current
+/// level of examination at a smaller scale.
+struct Budget {
+    nodes: usize,
+    level: usize,
+}
+
+/// [`roots_fixed`] for any degree (`c.len()` from 2 to 17); nothing for a constant.
+fn roots_any<O: Observer>(
+    c: &[f64],
+    lo: f64,
+    hi: f64,
+    emit: &mut dyn FnMut(f64) -> bool,
+    obs: &mut O,
+    budget: &mut Budget,
+) -> bool {
+    macro_rules! fixed {
+        ($($d:literal)*) => {
+            match c.len() {
+                $($d => {
+                    let c: &[f64; $d] = c.try_into().expect("D coefficients");
+                    roots_fixed(c, lo, hi, emit, obs, budget)
+                })*
+                _ => true,
+            }
+        };
+    }
+    fixed!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17)
+}
+
+/// The roots of `c` in the piece `(a, b]` (one sign: `a ≥ 0` or `b ≤ 0`), examined at the
+/// piece's own scale (see the module documentation); `false` when `emit` asks to stop.
+fn at_own_scale<O: Observer>(
+    c: &[f64],
+    a: f64,
+    b: f64,
+    emit: &mut dyn FnMut(f64) -> bool,
+    obs: &mut O,
+    budget: &mut Budget,
+) -> bool {
+    // A root exactly at 0: `P = Tᵐ·R`; R has the other roots.
+    let m = c.iter().position(|&x| x != 0.0).unwrap_or(c.len());
+    let r = &c[m.min(c.len())..];
+    if r.len() < 2 {
+        // R is a non-zero constant (or P is zero, which `prepare` refuses).
+        return !(m > 0 && b == 0.0) || emit(0.0);
+    }
+    // `s = 2^e` just above the piece's reach; R(s·U) scaled by `2^-top`, exactly.
+    let e = exponent(a.abs().max(b.abs())) + 1;
+    let top = r
+        .iter()
+        .enumerate()
+        .filter(|(_, x)| **x != 0.0)
+        .map(|(j, x)| exponent(*x) + j as i32 * e)
+        .max()
+        .expect("a non-zero coefficient");
+    let mut scaled = [0.0; MAX_COEFFS];
+    for (j, (d, &x)) in scaled.iter_mut().zip(r).enumerate() {
+        *d = mul_pow2(x, j as i32 * e - top);
+    }
+    let s = mul_pow2(1.0, e);
+    let (inv, n) = (mul_pow2(1.0, -e), r.len());
+    budget.level += 1;
+    let go_on = roots_any(
+        &scaled[..n],
+        a * inv,
+        b * inv,
+        &mut |u| emit(u * s),
+        obs,
+        budget,
+    );
+    budget.level -= 1;
+    go_on && (!(m > 0 && b == 0.0) || emit(0.0))
 }
 
 /// [`roots`] for a polynomial of degree `D − 1` (a fixed size, so that every piece's
@@ -233,7 +330,8 @@ fn roots_fixed<const D: usize, O: Observer>(
     hi: f64,
     emit: &mut dyn FnMut(f64) -> bool,
     obs: &mut O,
-) {
+    budget: &mut Budget,
+) -> bool {
     let p_lo_zero = horner(c, lo) == 0.0;
     let p_hi_zero = horner(c, hi) == 0.0;
     // An open cluster: its span.
@@ -260,18 +358,41 @@ fn roots_fixed<const D: usize, O: Observer>(
     };
     // The pending right halves (range and depth), below `top`; not zeroed (2.4 kB for a
     // query that usually pushes a few entries).
-    let mut stack = [MaybeUninit::<(f64, f64, usize)>::uninit(); MAX_DEPTH + 1];
+    // One more entry than the halvings: the cut at 0 of a tiny piece (once per search).
+    let mut stack = [MaybeUninit::<(f64, f64, usize)>::uninit(); MAX_DEPTH + 2];
     let mut top = 0;
     let (mut a, mut b, mut depth) = (lo, hi, 0usize);
-    let mut nodes = 0usize;
+    let tiny = TINY * lo.abs().max(hi.abs());
     loop {
-        nodes += 1;
+        budget.nodes += 1;
         let (bz, m) = bernstein_fixed(c, a, b);
         let mut kind = classify(c, a, b, &bz, m);
         let mid = a + SPLIT * (b - a);
         if kind == Kind::Split
+            && depth >= MAX_DEPTH
+            && budget.nodes < MAX_NODES
+            && budget.level < MAX_LEVELS
+            && a.abs().max(b.abs()) < tiny
+        {
+            if a < 0.0 && b > 0.0 {
+                // Cut at 0: the right part waits, the left goes on.
+                stack[top].write((0.0, b, depth));
+                top += 1;
+                b = 0.0;
+                continue;
+            }
+            if let Some(span) = open.take() {
+                if !close(span, emit, obs) {
+                    return false;
+                }
+            }
+            if !at_own_scale(c, a, b, emit, obs, budget) {
+                return false;
+            }
+            kind = Kind::Empty;
+        } else if kind == Kind::Split
             && (depth >= MAX_DEPTH
-                || nodes >= MAX_NODES
+                || budget.nodes >= MAX_NODES
                 || !(mid > a && mid < b)
                 || b - a <= 4.0 * f64::EPSILON * a.abs().max(b.abs()))
         {
@@ -295,11 +416,11 @@ fn roots_fixed<const D: usize, O: Observer>(
             Kind::Empty | Kind::Simple => {
                 if let Some(span) = open.take() {
                     if !close(span, emit, obs) {
-                        return;
+                        return false;
                     }
                 }
                 if kind == Kind::Simple && !emit(simple_root(c, a, b, obs)) {
-                    return;
+                    return false;
                 }
             }
         }
@@ -311,8 +432,9 @@ fn roots_fixed<const D: usize, O: Observer>(
         // popped since.
         (a, b, depth) = unsafe { stack[top].assume_init() };
     }
-    if let Some(span) = open {
-        close(span, emit, obs);
+    match open {
+        Some(span) => close(span, emit, obs),
+        None => true,
     }
 }
 
@@ -357,6 +479,31 @@ mod tests {
         assert_eq!(max_variations(&[-1.0, 0.0, 0.0, 1.0], 0.5), 3);
         assert_eq!(max_variations(&[-1.0, 0.0, 0.0, -1.0], 0.5), 2);
         assert_eq!(max_variations(&[0.0, 0.0, 1.0], 0.5), 2);
+    }
+
+    #[test]
+    fn a_piece_near_zero_is_searched_again_at_its_own_scale() {
+        // (t² − a²)(t − 1) with a = 2⁻⁴⁰⁰ on (−2, 2]: ±a lie far below what 100 halvings of
+        // the interval reach; they are found apart, each to a few ulps.
+        let a = 2f64.powi(-400);
+        let c = [a * a, -a * a, -1.0, 1.0];
+        let r = all(&c, -2.0, 2.0);
+        assert_eq!(r.len(), 3, "{r:?}");
+        for (got, want) in r.iter().zip([-a, a, 1.0]) {
+            assert!(
+                (got - want).abs() <= 8.0 * f64::EPSILON * want.abs(),
+                "{r:?}"
+            );
+        }
+        // t·(t² − t + a): 0 exactly (divided out, reported once), then a (to a relative
+        // 2⁻⁴⁰⁰) and 1; 0 is excluded as the interval's lower end.
+        let c = [0.0, a, -1.0, 1.0];
+        let r = all(&c, -1.0, 2.0);
+        assert_eq!(r.len(), 3, "{r:?}");
+        assert_eq!(r[0], 0.0);
+        assert!((r[1] - a).abs() <= 8.0 * f64::EPSILON * a, "{r:?}");
+        assert!((r[2] - 1.0).abs() <= 8.0 * f64::EPSILON, "{r:?}");
+        assert_eq!(all(&c, 0.0, 2.0).len(), 2);
     }
 
     #[test]

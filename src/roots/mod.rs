@@ -40,6 +40,13 @@
 //! does not settle goes on alone where the scalar query would, so every lane's answer is the
 //! scalar one bit for bit (`lanes` module).
 //!
+//! Every scale: where one power-of-two scale cannot hold every term on the interval (a
+//! coefficient would under- or overflow), [`sturm_roots`] and
+//! [`Solver::first_root_at_any_scale`] cut the interval at 0 and into bands of magnitude, each
+//! prepared at its own scale (`bands` module); within a part, the subdivision searches a
+//! piece near 0 again at the piece's own scale (`cluster` module), so a root is found to a
+//! few ulps times its condition wherever it lies (docs/roots.md states the promise).
+//!
 //! No input makes these functions panic or loop without end (every loop is bounded); none
 //! allocates except [`sturm_roots`], for its result.
 
@@ -119,16 +126,12 @@ fn observed(
     }
     fixed!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17);
     let p = prep::prepare(coeffs, lo, hi)?;
-    if bands::loses_terms(coeffs, &p) {
-        return by_parts(solver, coeffs, lo, hi, obs);
-    }
     let fast = bernstein::first_root(&p, obs);
     settle(solver, fast, || p, obs)
 }
 
 /// [`observed`] for an interval too wide for one scale (the `bands` module): the first root
 /// of the first part, in ascending order, that has one.
-#[cold]
 fn by_parts(
     solver: Solver,
     coeffs: &[f64],
@@ -203,12 +206,28 @@ impl Solver {
             .map_or("?", |(_, n)| n)
     }
 
-    /// The smallest real root in `(lo, hi]` by this strategy.
+    /// The smallest real root in `(lo, hi]` by this strategy. For a polynomial whose terms
+    /// all stay within `f64` once the variable is scaled to the interval (every render's: the
+    /// scene limits keep coefficients within far less than the `f64` range of each other, see
+    /// docs/roots.md); [`Solver::first_root_at_any_scale`] for any input.
     #[inline]
     pub fn first_root(self, coeffs: &[f64], lo: f64, hi: f64) -> Option<f64> {
         match self {
             Solver::Sturm => first_root(coeffs, lo, hi),
             Solver::Yuksel => first_root_yuksel(coeffs, lo, hi),
+        }
+    }
+
+    /// [`Solver::first_root`] for any input: where one scale cannot hold every term of the
+    /// polynomial on `(lo, hi]` (a coefficient would under- or overflow, e.g. roots near
+    /// `1e-70` in an interval `1e28` wide), the interval is searched in parts of their own
+    /// scale, as [`sturm_roots`] does, and the answer is the first of [`sturm_roots`]'s list
+    /// (to the accuracy both promise). Otherwise exactly [`Solver::first_root`]. The check
+    /// costs one full preparation; no heap allocation.
+    pub fn first_root_at_any_scale(self, coeffs: &[f64], lo: f64, hi: f64) -> Option<f64> {
+        match prep::prepare(coeffs, lo, hi) {
+            Some(p) if bands::loses_terms(coeffs, &p) => by_parts(self, coeffs, lo, hi, &mut ()),
+            _ => self.first_root(coeffs, lo, hi),
         }
     }
 

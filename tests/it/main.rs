@@ -25,6 +25,7 @@ mod probe_cli;
 mod render_golden;
 mod render_shading;
 mod roots_cli;
+mod roots_edges;
 mod roots_heart;
 mod roots_lanes;
 mod roots_reference;
