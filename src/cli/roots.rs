@@ -87,7 +87,7 @@ fn parse_coefficient(s: &str) -> Result<f64, String> {
 /// Whether a value the coefficients took is an option written after them (`--first`,
 /// `--in=…`, `-h`), not a coefficient: it is not a number and looks like an option.
 fn is_option(s: &str) -> bool {
-    (s.starts_with("--") && s.len() > 2 || s == "-h") && s.parse::<f64>().is_err()
+    ((s.starts_with("--") && s.len() > 2) || s == "-h") && s.parse::<f64>().is_err()
 }
 
 /// Why the command line was not accepted: clap's own error (printed as clap prints it, help
@@ -195,7 +195,7 @@ mod tests {
             ("-0", 0.0),
             ("+3", 3.0),
             ("1.", 1.0),
-            ("-1.7320508075688771e-70", -1.7320508075688771e-70),
+            ("-1.7320508075688771e-70", -1.732_050_807_568_877e-70),
             ("4.9e-324", 4.9e-324),
         ] {
             assert_eq!(parse_coefficient(s), Ok(v), "{s}");

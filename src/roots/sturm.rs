@@ -43,6 +43,9 @@ const CERTAIN: f64 = 16.0;
 /// Tolerance, relative to `Σ|cⱼ||x|ʲ`, under which a value at a critical point is zero.
 pub(crate) const CRIT_TOL: f64 = 64.0 * f64::EPSILON;
 
+/// A root closer to 0 than this fraction of its bracket's width is bracketed from 0 itself.
+const NEAR_ZERO: f64 = 1.0 / (1u64 << 40) as f64;
+
 /// Most iterations of any loop (bisection of a `f64` range needs at most about 2100).
 const MAX_ITER: usize = 2200;
 
@@ -173,6 +176,19 @@ fn split(a: f64, b: f64) -> f64 {
     a + (b - a) * 0.496_858_407_346_410_2
 }
 
+/// The kept end's value `f` scaled by Anderson–Björck's factor `m` (or `1/2` when `m ≤ 0`),
+/// unless that would leave the normal numbers: a value scaled toward underflow over hundreds
+/// of steps (a root far smaller than the bracket) would lose its sign at zero.
+#[inline]
+fn anderson_bjorck(f: f64, m: f64) -> f64 {
+    let scaled = f * if m > 0.0 { m } else { 0.5 };
+    if scaled.is_normal() {
+        scaled
+    } else {
+        f
+    }
+}
+
 /// Anderson–Björck false position for the root of `q` in `[a, b]`, where `fa`, `fb` have
 /// opposite signs (neither zero); a step that fails to halve the bracket is followed by a
 /// bisection step. Returns a point of the final bracket.
@@ -210,7 +226,7 @@ pub(crate) fn false_position(
         if (fx < 0.0) == (fa < 0.0) {
             if side == -1 {
                 let m = 1.0 - fx / fa;
-                fb *= if m > 0.0 { m } else { 0.5 };
+                fb = anderson_bjorck(fb, m);
             }
             a = x;
             fa = fx;
@@ -218,7 +234,7 @@ pub(crate) fn false_position(
         } else {
             if side == 1 {
                 let m = 1.0 - fx / fb;
-                fa *= if m > 0.0 { m } else { 0.5 };
+                fa = anderson_bjorck(fa, m);
             }
             b = x;
             fb = fx;
@@ -278,11 +294,27 @@ impl Shifted {
 
 /// A bracket `[a, b]` (in `T`) of a simple root of `P`, checked: `P` beyond three times its
 /// rounding bound at both ends, with opposite signs. The refined root, or `None`.
-fn checked_root(c: &[f64], a: f64, b: f64, obs: &mut impl Observer) -> Option<f64> {
-    let (fa, fb) = (horner(c, a), horner(c, b));
+///
+/// A bracket around 0 whose root lies far closer to 0 than to its ends (`|P(0)|` below
+/// `2⁻⁴⁰·|P′(0)|` times its width) is first cut at 0, where `P(0) = c₀` exactly: false
+/// position, which stops on a width relative to the bracket's ends, cannot otherwise reach a
+/// root at `1e-177` from ends near 1 (it would stop near `1e-153`).
+fn checked_root(c: &[f64], mut a: f64, mut b: f64, obs: &mut impl Observer) -> Option<f64> {
+    let (mut fa, mut fb) = (horner(c, a), horner(c, b));
     let sure = |f: f64, t: f64| f.abs() > 3.0 * bound(c, t.abs());
     if !(sure(fa, a) && sure(fb, b)) || (fa < 0.0) == (fb < 0.0) {
         return None;
+    }
+    if a < 0.0 && b > 0.0 && c[0].abs() < NEAR_ZERO * c[1].abs() * (b - a) {
+        let f0 = c[0];
+        if f0 == 0.0 {
+            return Some(0.0);
+        }
+        if (f0 < 0.0) == (fa < 0.0) {
+            (a, fa) = (0.0, f0);
+        } else {
+            (b, fb) = (0.0, f0);
+        }
     }
     Some(false_position(c, a, b, fa, fb, 0.0, obs))
 }

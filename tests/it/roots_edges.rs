@@ -208,6 +208,16 @@ fn a_cluster_near_zero_is_resolved_relative_to_its_size() {
 }
 
 #[test]
+fn a_tiny_root_in_a_sturm_bracket_around_zero() {
+    // Found by the property test below: the Sturm bracket of the root 2.34e-91 reaches from
+    // −0.8 to 0.07 (in the prepared variable, where the root is 3.8e-177); false position
+    // alone stopped near 1e-153.
+    let roots = [-5.1828501404752125e85, 2.3414133846120175e-91];
+    let c = from_roots(1.0, &roots);
+    check_relative(&c, -2.0 * roots[0].abs(), 1.2406340138763684e180, &roots);
+}
+
+#[test]
 fn huge_and_tiny_coefficients_in_one_polynomial() {
     // 1e-300·t² − t + 1e-300: roots 1e-300 and 1e300 (to a relative 1e-600).
     let c = [1e-300, -1.0, 1e-300];
@@ -288,7 +298,7 @@ fn the_issue_commands_print_the_right_roots() {
     assert_eq!(lines.len(), 1);
     assert_eq!(lines[0].parse::<f64>().unwrap(), 0.0);
     // A root read back in the form it was printed: t ∓ r has the root ±r.
-    let r = 1.7320508075688771e-70;
+    let r = 1.732_050_807_568_877e-70;
     for (c0, root) in [
         ("1.7320508075688771e-70", -r),
         ("-1.7320508075688771e-70", r),
