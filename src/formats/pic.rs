@@ -4,9 +4,11 @@
 //! surf draws the surface scaled by `1/scale_x` … (so a surface point `p` is at `p/scale` on
 //! the screen), turned by its `rotate` statements in order, clipped to the ball of `radius`
 //! about the origin, and seen along −z by a parallel projection of the window −10…10; lights
-//! sit in the screen's coordinates. kardia writes the same: the surface as an `IMPLICIT`
-//! equation whose basis is the rotation's columns over the scales, `BOUND radius·scale`, an
-//! orthographic camera 20 units tall. `double` names become `LET` names, `poly` names are
+//! sit in the screen's coordinates, whose y runs downwards. kardia writes the same: the
+//! surface as an `IMPLICIT` equation whose basis is the rotation's columns over the scales
+//! with y turned upwards, `BOUND radius·scale`, an orthographic camera 20 units tall. (The
+//! conventions — `rotate` by −angle about a right-handed axis, y down — are those whose
+//! pictures match the ones surf draws of its gallery.) `double` names become `LET` names, `poly` names are
 //! written out in the equation. docs/surfer.md lists every statement.
 
 use std::collections::BTreeMap;
@@ -332,7 +334,7 @@ impl Script<'_> {
             }
         };
         let angle = self.value(angle, line)?;
-        self.rotation = mat_mul(&rotation(axis, angle), &self.rotation);
+        self.rotation = mat_mul(&rotation(axis, -angle), &self.rotation);
         Ok(())
     }
 
@@ -474,9 +476,10 @@ pub fn translate(text: &str, file: &str) -> Result<Translation, SceneError> {
         if light.iter().all(|&c| c <= 0.0) {
             continue;
         }
+        // Screen y runs down; kardia's up.
         let position = [
             s.number(&key("x"), -100.0),
-            s.number(&key("y"), 100.0),
+            -s.number(&key("y"), 100.0),
             s.number(&key("z"), 100.0),
         ];
         out.push(
@@ -502,13 +505,21 @@ pub fn translate(text: &str, file: &str) -> Result<Translation, SceneError> {
     for (axis, name) in ["rot_x", "rot_y", "rot_z"].iter().enumerate() {
         let angle = s.number(name, 0.0);
         if angle != 0.0 {
-            rotation = mat_mul(&self::rotation(axis, angle), &rotation);
+            rotation = mat_mul(&self::rotation(axis, -angle), &rotation);
         }
     }
     // Screen = rotation · surface / scale: the images of x, y and z are the columns over the
-    // scales.
-    let basis: [[f64; 3]; 3] =
-        std::array::from_fn(|j| std::array::from_fn(|i| rotation[i][j] / scale[j]));
+    // scales, with the screen's y (down) turned up.
+    let basis: [[f64; 3]; 3] = std::array::from_fn(|j| {
+        std::array::from_fn(|i| {
+            let c = rotation[i][j] / scale[j];
+            if i == 1 {
+                -c
+            } else {
+                c
+            }
+        })
+    });
     let radius = s.number("radius", 10.0);
     if !(radius > 0.0 && radius.is_finite()) {
         return Err(s.error(
