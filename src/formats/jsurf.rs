@@ -286,7 +286,7 @@ pub fn translate(text: &str, file: &str) -> Result<Translation, SceneError> {
     match camera_type {
         "ORTHOGRAPHIC_CAMERA" | "ORTHOGRAPHIC" => {
             let height = r.number("camera_height", 2.0)?;
-            if !(height > 0.0) {
+            if height.is_nan() || height <= 0.0 {
                 return Err(r.error(
                     "camera_height",
                     format!("camera_height must be greater than 0, not {height}"),
@@ -422,7 +422,7 @@ pub fn translate(text: &str, file: &str) -> Result<Translation, SceneError> {
         None => r.number("front_material_specular_intensity", 0.5)?,
     };
     let shininess = r.number("front_material_shininess", 30.0)?.max(1.0);
-    let mut surface = format!("{}", vector(front));
+    let mut surface = vector(front);
     if specular > 0.0 {
         surface += &format!(" SPECULAR {} {}", num(specular), num(shininess));
     }
