@@ -196,7 +196,7 @@ const BAD: &[(&str, usize, usize, &str)] = &[
     ("x + w", 4, 1, "unknown variable 'w'"),
     ("sin(x) + y", 4, 1, "sin(…) of x, y or z"),
     ("sine(2) + y", 0, 4, "unknown function 'sine'"),
-    ("sqrt(2) + y;;x", 13, 1, "nothing may follow"),
+    ("sqrt(2) + y;;x", 11, 1, "nothing may follow"),
     ("(x + y", 0, 1, "never closed"),
     ("x + y)", 5, 1, "unmatched ')'"),
     ("((x+y)^2", 0, 1, "never closed"),
