@@ -1,4 +1,4 @@
-//! The pinhole camera.
+//! The camera: a pinhole (perspective) camera, or an orthographic one (parallel rays).
 
 use crate::geometry::{Aabb, DVec3, Ray, SolidEllipsoid, LANES};
 
@@ -17,11 +17,17 @@ pub enum CameraError {
     /// fov outside (0, 180).
     #[error("the field of view must be greater than 0 and less than 180 degrees, not {0}")]
     BadFov(f64),
+    /// An orthographic view height that is not finite and greater than 0.
+    #[error("the orthographic view height must be greater than 0, not {0}")]
+    BadHeight(f64),
 }
 
-/// A pinhole camera at `eye` looking at `look_at`, with `fov` the FULL horizontal field of view
-/// in degrees. Image-plane coordinates run from the top-left corner `(0, 0)` to
-/// `(width, height)`; the vertical extent follows the image's aspect ratio.
+/// A camera at `eye` looking at `look_at`. A pinhole camera ([`Camera::new`]) has `fov` the
+/// FULL horizontal field of view in degrees, its rays leaving `eye`; an orthographic camera
+/// ([`Camera::orthographic`]) sends parallel rays along the view direction from the plane
+/// through `eye` perpendicular to it, over a view `height` world units tall. Image-plane
+/// coordinates run from the top-left corner `(0, 0)` to `(width, height)`; the other extent
+/// follows the image's aspect ratio.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Camera {
     /// Eye position.
@@ -30,8 +36,12 @@ pub struct Camera {
     pub look_at: DVec3,
     /// Approximate up direction.
     pub up: DVec3,
-    /// Full horizontal field of view, degrees, in (0, 180).
+    /// Full horizontal field of view, degrees, in (0, 180) (of a pinhole camera; an
+    /// orthographic camera keeps the one it was made with and does not use it).
     pub fov_degrees: f64,
+    /// The full height of an orthographic camera's view in world units (> 0); `None` for a
+    /// pinhole camera.
+    orthographic_height: Option<f64>,
     forward: DVec3,
     right: DVec3,
     true_up: DVec3,
@@ -72,7 +82,40 @@ impl Camera {
             right,
             true_up,
             half_width: (fov_degrees.to_radians() * 0.5).tan(),
+            orthographic_height: None,
         })
+    }
+
+    /// An orthographic camera: rays parallel to `look_at − eye`, starting on the plane through
+    /// `eye` perpendicular to it, over a view `height` world units tall (its width follows the
+    /// image's aspect ratio); or why it is degenerate.
+    pub fn orthographic(
+        eye: DVec3,
+        look_at: DVec3,
+        up: DVec3,
+        height: f64,
+    ) -> Result<Self, CameraError> {
+        if !(height > 0.0 && height.is_finite()) {
+            return Err(CameraError::BadHeight(height));
+        }
+        let mut camera = Camera::new(eye, look_at, up, 40.0)?;
+        camera.orthographic_height = Some(height);
+        Ok(camera)
+    }
+
+    /// The same kind of camera (pinhole with its field of view, or orthographic with its
+    /// height) placed at another eye, look-at point and up vector.
+    pub fn moved(&self, eye: DVec3, look_at: DVec3, up: DVec3) -> Result<Self, CameraError> {
+        match self.orthographic_height {
+            Some(h) => Camera::orthographic(eye, look_at, up, h),
+            None => Camera::new(eye, look_at, up, self.fov_degrees),
+        }
+    }
+
+    /// The full height of the view in world units of an orthographic camera; `None` for a
+    /// pinhole camera.
+    pub fn orthographic_height(&self) -> Option<f64> {
+        self.orthographic_height
     }
 
     /// Unit vector from the eye toward `look_at`.
@@ -82,21 +125,40 @@ impl Camera {
 
     /// The primary ray through image-plane point `(x, y)` (pixels; `(0,0)` the top-left corner
     /// of the image, `(x + 0.5, y + 0.5)` the centre of pixel `(x, y)`) of a `width × height`
-    /// image. The direction is unit length.
+    /// image. The direction is unit length (for an orthographic camera, the view direction).
     pub fn ray(&self, x: f64, y: f64, width: u32, height: u32) -> Ray {
         let plane = self.plane(width, height);
+        if self.orthographic_height.is_some() {
+            return Ray::new(self.on_plane(plane.sx(x), plane.sy(y)), self.forward);
+        }
         Ray::new(self.eye, self.through(plane.sx(x), plane.sy(y)).normalize())
     }
 
-    /// The image plane of a `width × height` image.
+    /// The image plane of a `width × height` image: at unit distance for a pinhole camera, in
+    /// world units on the eye's plane for an orthographic one.
     fn plane(&self, width: u32, height: u32) -> ImagePlane {
         let (w, h) = (width as f64, height as f64);
-        ImagePlane {
-            half_width: self.half_width,
-            half_height: self.half_width * h / w,
-            width: w,
-            height: h,
+        match self.orthographic_height {
+            Some(view_height) => ImagePlane {
+                half_width: 0.5 * view_height * w / h,
+                half_height: 0.5 * view_height,
+                width: w,
+                height: h,
+            },
+            None => ImagePlane {
+                half_width: self.half_width,
+                half_height: self.half_width * h / w,
+                width: w,
+                height: h,
+            },
         }
+    }
+
+    /// An orthographic ray's origin: the point `(sx, sy)` world units right of and above the
+    /// eye on the plane perpendicular to the view.
+    #[inline]
+    fn on_plane(&self, sx: f64, sy: f64) -> DVec3 {
+        self.eye + sx * self.right + sy * self.true_up
     }
 
     /// The direction (not normalised) from the eye through the image-plane point `(sx, sy)`
@@ -118,6 +180,14 @@ impl Camera {
         height: u32,
     ) -> [Ray; LANES] {
         let plane = self.plane(width, height);
+        if self.orthographic_height.is_some() {
+            return std::array::from_fn(|i| {
+                Ray::new(
+                    self.on_plane(plane.sx(xs[i]), plane.sy(ys[i])),
+                    self.forward,
+                )
+            });
+        }
         // Each step lane by lane over arrays, in the operation order of `ray` (and of glam's
         // `normalize`: the reciprocal of the square root of the dot product, then a product).
         let dirs: [DVec3; LANES] =
@@ -140,12 +210,27 @@ impl Camera {
 
     /// [`Camera::image_rect`] for the convex hull of `points` (the corners of a
     /// [`crate::geometry::Hexahedron`], say): every point whose primary ray meets the hull lies in the rectangle; `None` when
-    /// a point is not in front of the eye (or is not finite).
+    /// a point is not in front of the eye (or is not finite). An orthographic camera projects
+    /// along parallel lines, so any point will do there (a point behind its plane is only
+    /// never seen).
     pub fn hull_rect(&self, points: &[DVec3], width: u32, height: u32) -> Option<ImageRect> {
         let plane = self.plane(width, height);
         let mut rect = ImageRect::NOTHING;
         for &c in points {
             let v = c - self.eye;
+            if self.orthographic_height.is_some() {
+                // The parallel projection of the hull is the hull of its points' projections.
+                let x = plane.column(v.dot(self.right));
+                let y = plane.row(v.dot(self.true_up));
+                if !(x.is_finite() && y.is_finite()) {
+                    return None;
+                }
+                rect = rect.union(ImageRect {
+                    x: (x, x),
+                    y: (y, y),
+                });
+                continue;
+            }
             let depth = v.dot(self.forward);
             // Well in front of the eye: the projection of the hull is then the hull of its
             // points' projections (a convex set seen from outside its half-space).
@@ -170,23 +255,45 @@ impl Camera {
     /// The outline of a solid ellipsoid's image on the image plane of a `width × height`
     /// image (an ellipse), to find which points of each row see it
     /// ([`EllipseImage::row_span`]) or the rectangle around it ([`EllipseImage::rect`]);
-    /// `None` when part of the ellipsoid is not in front of the eye (or it is not finite, or
-    /// flat).
+    /// `None` when part of the ellipsoid is not in front of the eye of a pinhole camera (or
+    /// it is not finite, or flat).
     pub fn ellipsoid_image(
         &self,
         e: &SolidEllipsoid,
         width: u32,
         height: u32,
     ) -> Option<EllipseImage> {
-        // All of it in front: its nearest depth, (c − eye)·forward − |axesᵀ·forward|, > 0.
-        let depth = (e.centre - self.eye).dot(self.forward);
-        let in_front = depth - (e.axes.transpose() * self.forward).length() > 1e-9 * depth.abs();
-        if !in_front || !e.centre.is_finite() {
+        if self.orthographic_height.is_none() {
+            // All of it in front: its nearest depth, (c − eye)·forward − |axesᵀ·forward|, > 0.
+            let depth = (e.centre - self.eye).dot(self.forward);
+            let in_front =
+                depth - (e.axes.transpose() * self.forward).length() > 1e-9 * depth.abs();
+            if !in_front {
+                return None;
+            }
+        }
+        if !e.centre.is_finite() {
             return None;
         }
         let inv = e.axes.inverse();
         if !inv.is_finite() {
             return None;
+        }
+        if self.orthographic_height.is_some() {
+            // The line from eye + sx·right + sy·up along forward, in the unit ball's
+            // coordinates: (o + sx·R + sy·T) + λ·F. It meets the ball iff
+            // D = (O·F)² − |F|²(|O|² − 1) ≥ 0, again a quadratic form in (sx, sy).
+            let o = inv * (self.eye - e.centre);
+            let (f, r, t) = (inv * self.forward, inv * self.right, inv * self.true_up);
+            let ff = f.dot(f);
+            let (a0, a1, a2) = (o.dot(f), r.dot(f), t.dot(f));
+            let p = [
+                [a1 * a1 - ff * r.dot(r), a1 * a2 - ff * r.dot(t)],
+                [a1 * a2 - ff * r.dot(t), a2 * a2 - ff * t.dot(t)],
+            ];
+            let q = [a0 * a1 - ff * o.dot(r), a0 * a2 - ff * o.dot(t)];
+            let r0 = a0 * a0 - ff * (o.length_squared() - 1.0);
+            return EllipseImage::from_form(p, q, r0, self.plane(width, height));
         }
         // In the unit ball's coordinates the ray from the eye towards f + sx·r + sy·t is
         // o + λ·(F + sx·R + sy·T); it meets the ball iff D = (o·w)² − |w|²(|o|² − 1) ≥ 0,
@@ -201,6 +308,14 @@ impl Camera {
         ];
         let q = [a0 * a1 - k * f.dot(r), a0 * a2 - k * f.dot(t)];
         let r0 = a0 * a0 - k * f.dot(f);
+        EllipseImage::from_form(p, q, r0, self.plane(width, height))
+    }
+}
+
+impl EllipseImage {
+    /// The image where D(s) = sᵀPs + 2qᵀs + r₀ ≥ 0, the image-plane points `s = (sx, sy)`
+    /// whose rays meet the ellipsoid; `None` unless it is a bounded ellipse.
+    fn from_form(p: [[f64; 2]; 2], q: [f64; 2], r0: f64, plane: ImagePlane) -> Option<Self> {
         // D = δ − (s − c)ᵀG(s − c) with G = −P (positive definite for a bounded image).
         let g = [[-p[0][0], -p[0][1]], [-p[1][0], -p[1][1]]];
         let det = g[0][0] * g[1][1] - g[0][1] * g[1][0];
@@ -228,7 +343,7 @@ impl Camera {
             u_reach: (delta * g_inv[0][0]).sqrt(),
             v_reach: (delta * g_inv[1][1]).sqrt(),
             sy_of_rightmost: g_inv[1][0] * (delta / g_inv[0][0]).sqrt(),
-            plane: self.plane(width, height),
+            plane,
         })
     }
 }
@@ -390,12 +505,17 @@ mod tests {
     use crate::testing::uniform_stream;
 
     /// A camera a few units up the z axis, looking near the origin, tilted, with a field of
-    /// view of 20–120°.
-    fn random_camera(next: &mut impl FnMut() -> f64) -> Camera {
+    /// view of 20–120° (or, `orthographic`, a view 1–7 units tall).
+    fn random_camera(next: &mut impl FnMut() -> f64, orthographic: bool) -> Camera {
         let eye = DVec3::new(next() * 4.0 - 2.0, next() * 4.0 - 2.0, 6.0 + next());
         let look = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5);
         let up = DVec3::new(next() - 0.5, 1.0, 0.0);
-        Camera::new(eye, look, up, 20.0 + 100.0 * next()).unwrap()
+        let size = next();
+        if orthographic {
+            Camera::orthographic(eye, look, up, 1.0 + 6.0 * size).unwrap()
+        } else {
+            Camera::new(eye, look, up, 20.0 + 100.0 * size).unwrap()
+        }
     }
 
     /// A random ellipsoid near the origin (three random conjugate semi-axes of up to about
@@ -409,9 +529,15 @@ mod tests {
 
     #[test]
     fn rays_in_lanes_are_the_single_rays_bit_for_bit() {
+        for orthographic in [false, true] {
+            rays_in_lanes_are_the_single_rays_bit_for_bit_for(orthographic);
+        }
+    }
+
+    fn rays_in_lanes_are_the_single_rays_bit_for_bit_for(orthographic: bool) {
         let mut next = uniform_stream(0x5eed_cafe);
         for _ in 0..500 {
-            let camera = random_camera(&mut next);
+            let camera = random_camera(&mut next, orthographic);
             let (width, height) = (1 + (next() * 2000.0) as u32, 1 + (next() * 2000.0) as u32);
             let xs: [f64; LANES] = std::array::from_fn(|_| next() * width as f64);
             let ys: [f64; LANES] = std::array::from_fn(|_| next() * height as f64);
@@ -443,11 +569,39 @@ mod tests {
     /// The image point (pixels of a `w × h` image) whose ray passes through `p`, in front.
     fn image_point(cam: &Camera, p: DVec3, w: u32, h: u32) -> (f64, f64) {
         let v = p - cam.eye;
+        let plane = cam.plane(w, h);
+        let (u, t) = (v.dot(cam.right), v.dot(cam.true_up));
+        if cam.orthographic_height.is_some() {
+            return (plane.column(u), plane.row(t));
+        }
         let depth = v.dot(cam.forward);
-        let x = (v.dot(cam.right) / depth / cam.half_width + 1.0) * 0.5 * w as f64;
-        let half_h = cam.half_width * h as f64 / w as f64;
-        let y = (1.0 - v.dot(cam.true_up) / depth / half_h) * 0.5 * h as f64;
-        (x, y)
+        (plane.column(u / depth), plane.row(t / depth))
+    }
+
+    #[test]
+    fn an_orthographic_camera_sends_parallel_rays_over_its_height() {
+        let eye = DVec3::new(1.0, 2.0, 3.0);
+        let cam = Camera::orthographic(eye, DVec3::new(1.0, 12.0, 3.0), DVec3::Z, 4.0).unwrap();
+        assert_eq!(cam.orthographic_height(), Some(4.0));
+        let centre = cam.ray(50.0, 25.0, 100, 50);
+        assert_eq!(centre.origin, eye);
+        assert_eq!(centre.dir, DVec3::Y);
+        // 4 units tall, so 8 wide at 2:1; +x is right and +z up looking along +y.
+        let top_left = cam.ray(0.0, 0.0, 100, 50);
+        assert!((top_left.origin - (eye + DVec3::new(-4.0, 0.0, 2.0))).length() < 1e-12);
+        assert_eq!(top_left.dir, DVec3::Y);
+        let bottom_right = cam.ray(100.0, 50.0, 100, 50);
+        assert!((bottom_right.origin - (eye + DVec3::new(4.0, 0.0, -2.0))).length() < 1e-12);
+        // Moved, it stays orthographic with its height; a bad height is refused.
+        let moved = cam.moved(DVec3::ZERO, DVec3::X, DVec3::Z).unwrap();
+        assert_eq!(moved.orthographic_height(), Some(4.0));
+        assert_eq!(moved.ray(50.0, 25.0, 100, 50).dir, DVec3::X);
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert!(matches!(
+                Camera::orthographic(eye, DVec3::ZERO, DVec3::Z, bad),
+                Err(CameraError::BadHeight(_))
+            ));
+        }
     }
 
     #[test]
@@ -470,13 +624,19 @@ mod tests {
 
     #[test]
     fn no_ray_from_outside_a_box_or_parallelepiped_image_rect_meets_it() {
+        for orthographic in [false, true] {
+            no_ray_from_outside_a_box_or_parallelepiped_image_rect_meets_it_for(orthographic);
+        }
+    }
+
+    fn no_ray_from_outside_a_box_or_parallelepiped_image_rect_meets_it_for(orthographic: bool) {
         // Small deterministic generator: boxes in front of tilted cameras, then image points
         // all over (and beyond) the image.
         let mut next = uniform_stream(0x2545_f491_4f6c_dd1du64);
         let (w, h) = (64, 48);
         let (mut outside, mut skewed_outside) = (0, 0);
         for _ in 0..300 {
-            let cam = random_camera(&mut next);
+            let cam = random_camera(&mut next, orthographic);
             let eye = cam.eye;
             let centre = DVec3::new(next() * 2.0 - 1.0, next() * 2.0 - 1.0, next() * 2.0 - 1.0);
             let half = DVec3::new(next(), next(), next()) * 1.5 + DVec3::splat(0.01);
@@ -488,11 +648,15 @@ mod tests {
                 continue;
             };
             // The box's centre is seen inside the rectangle.
-            let v = centre - eye;
-            let dir = v / v.length();
-            assert!(bounds
-                .clip(&Ray::new(eye, dir), 0.0, f64::INFINITY)
-                .is_some());
+            let (cx, cy) = image_point(&cam, centre, w, h);
+            assert!(holds(&rect, cx, cy), "({cx}, {cy}) not in {rect:?}");
+            if !orthographic {
+                let v = centre - eye;
+                let dir = v / v.length();
+                assert!(bounds
+                    .clip(&Ray::new(eye, dir), 0.0, f64::INFINITY)
+                    .is_some());
+            }
             for _ in 0..200 {
                 let (x, y) = (
                     next() * 1.4 * w as f64 - 0.2 * w as f64,
@@ -556,11 +720,17 @@ mod tests {
 
     #[test]
     fn no_ray_from_outside_an_ellipsoid_image_rect_meets_the_ellipsoid() {
+        for orthographic in [false, true] {
+            no_ray_from_outside_an_ellipsoid_image_rect_meets_the_ellipsoid_for(orthographic);
+        }
+    }
+
+    fn no_ray_from_outside_an_ellipsoid_image_rect_meets_the_ellipsoid_for(orthographic: bool) {
         let mut next = uniform_stream(0x9e37_79b9_7f4a_7c15u64);
         let (w, h) = (640, 480);
         let (mut outside, mut tight) = (0, 0);
         for _ in 0..300 {
-            let cam = random_camera(&mut next);
+            let cam = random_camera(&mut next, orthographic);
             let Some(e) = random_ellipsoid(&mut next) else {
                 continue;
             };
@@ -614,11 +784,17 @@ mod tests {
 
     #[test]
     fn no_ray_from_outside_an_ellipsoid_row_span_meets_the_ellipsoid() {
+        for orthographic in [false, true] {
+            no_ray_from_outside_an_ellipsoid_row_span_meets_the_ellipsoid_for(orthographic);
+        }
+    }
+
+    fn no_ray_from_outside_an_ellipsoid_row_span_meets_the_ellipsoid_for(orthographic: bool) {
         let mut next = uniform_stream(0x1234_5678_9abc_def1u64);
         let (w, h) = (320, 240);
         let (mut outside, mut images, mut narrower) = (0, 0, 0);
         for _ in 0..200 {
-            let cam = random_camera(&mut next);
+            let cam = random_camera(&mut next, orthographic);
             let Some(e) = random_ellipsoid(&mut next) else {
                 continue;
             };

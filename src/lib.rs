@@ -9,6 +9,7 @@ pub mod camera;
 pub mod cli;
 pub mod explore;
 pub mod film;
+pub mod formats;
 pub mod geometry;
 pub mod integrator;
 pub mod lights;

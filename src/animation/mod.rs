@@ -121,13 +121,9 @@ pub fn orbit(camera: &Camera, frame: u32, count: u32) -> Camera {
     // Rodrigues' rotation of the offset about the axis.
     let (sin, cos) = angle.sin_cos();
     let turned = offset * cos + axis.cross(offset) * sin + axis * axis.dot(offset) * (1.0 - cos);
-    Camera::new(
-        camera.look_at + turned,
-        camera.look_at,
-        camera.up,
-        camera.fov_degrees,
-    )
-    .unwrap_or_else(|_| camera.clone())
+    camera
+        .moved(camera.look_at + turned, camera.look_at, camera.up)
+        .unwrap_or_else(|_| camera.clone())
 }
 
 /// A scene text to be read at many frames.
@@ -245,10 +241,13 @@ impl FrameJob {
             self.options.solver.name(),
             self.count,
             self.turntable,
-            request
-                .camera
-                .as_ref()
-                .map(|c| (c.eye, c.look_at, c.up, c.fov_degrees)),
+            request.camera.as_ref().map(|c| (
+                c.eye,
+                c.look_at,
+                c.up,
+                c.fov_degrees,
+                c.orthographic_height()
+            )),
         );
         if request.alpha {
             settings.push_str(" alpha");

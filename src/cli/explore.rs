@@ -35,21 +35,18 @@ pub fn run(args: ExploreArgs, interrupt: &CancelToken) -> i32 {
         ..Options::default()
     };
     if let Some(path) = &args.scene {
-        // Read once here: the server never reads a file a page names.
-        let text = match std::fs::read_to_string(path) {
-            Ok(t) => t,
+        // Read once here: the server never reads a file a page names. A .jsurf or .pic file
+        // is shown as the kardia scene it translates to.
+        let loaded = match crate::formats::load(path, &Default::default()) {
+            Ok(loaded) => loaded,
             Err(e) => {
-                eprintln!("kardia: cannot read scene file {}: {e}", path.display());
+                eprintln!("{:?}", miette::Report::new(e));
                 return 1;
             }
         };
-        if let Err(e) = crate::scene::parse(&text, &path.display().to_string(), &Default::default())
-        {
-            eprintln!("{:?}", miette::Report::new(e));
-            return 1;
-        }
+        super::convert::print_warnings(path, &loaded.warnings);
         options.scene_name = path.display().to_string();
-        options.scene_text = text;
+        options.scene_text = loaded.text;
     }
     if !args.host.is_loopback() {
         eprintln!(

@@ -4,6 +4,7 @@
 
 mod animate;
 mod assemble;
+mod convert;
 mod explore;
 mod probe;
 mod render;
@@ -34,6 +35,8 @@ enum Command {
     Explore(explore::ExploreArgs),
     /// Join part files (rendered with --tile or --region) into the whole image.
     Assemble(assemble::AssembleArgs),
+    /// Write kardia's scene text for a SURFER .jsurf or surf .pic file.
+    Convert(convert::ConvertArgs),
 }
 
 /// Runs the command line and returns the process exit code. `interrupt` is the binary's
@@ -48,5 +51,6 @@ pub fn main(interrupt: &CancelToken) -> i32 {
         Some(Command::Probe(a)) => probe::run(a),
         Some(Command::Explore(a)) => explore::run(a, interrupt),
         Some(Command::Assemble(a)) => assemble::run(a),
+        Some(Command::Convert(a)) => convert::run(a),
     }
 }

@@ -215,7 +215,12 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
     }
     let options = args.load_options();
     let scene = match &args.scene {
-        Some(path) => scene::parse_file(path, &options),
+        Some(path) => crate::formats::load(path, &options).map(|loaded| {
+            if !args.quiet {
+                super::convert::print_warnings(path, &loaded.warnings);
+            }
+            loaded.scene
+        }),
         None => scene::parse(scene::DEFAULT_SCENE, "scenes/heart.scene", &options),
     }
     .map_err(fail)?;

@@ -34,6 +34,9 @@ const FUNCTIONS: &[(&str, usize, usize)] = &[
     ("cos", 1, 1),
     ("tan", 1, 1),
     ("sqrt", 1, 1),
+    ("cbrt", 1, 1),
+    ("exp", 1, 1),
+    ("log", 1, 1),
     ("abs", 1, 1),
     ("min", 2, usize::MAX),
     ("max", 2, usize::MAX),
@@ -102,7 +105,7 @@ impl Names {
             "clock" => Some((t.clock(), true)),
             "frame" => Some((f64::from(t.frame), true)),
             "frames" => Some((f64::from(t.count), true)),
-            "pi" => Some((std::f64::consts::PI, false)),
+            "pi" | "PI" | "Pi" | "pI" => Some((std::f64::consts::PI, false)),
             _ => self.lets.get(name).map(|d| (d.value, d.uses_time)),
         }
     }
@@ -557,6 +560,17 @@ impl Reader<'_> {
             "cos" => a.cos(),
             "tan" => a.tan(),
             "abs" => a.abs(),
+            "cbrt" => a.cbrt(),
+            "exp" => a.exp(),
+            "log" => {
+                if a <= 0.0 {
+                    return Err(Fail::Value {
+                        span: a_span,
+                        message: format!("log of a number that is not positive ({a})"),
+                    });
+                }
+                a.ln()
+            }
             "sqrt" => {
                 if a < 0.0 {
                     return Err(Fail::Value {
@@ -764,7 +778,14 @@ pub(super) fn let_statement(cur: &mut Cursor) -> Result<(String, f64, bool, Span
     if is_reserved(&name) {
         return Err(cur.fail(
             name_span,
-            format!("`{name}` is a built-in name and cannot be defined by LET"),
+            format!(
+                "`{name}` is a built-in name and cannot be defined by LET{}",
+                if name.eq_ignore_ascii_case("pi") {
+                    " (it is already π: remove this line)"
+                } else {
+                    ""
+                }
+            ),
             "reserved name",
         ));
     }
@@ -895,6 +916,9 @@ mod tests {
     #[test]
     fn functions_take_radians() {
         assert!((eval("sin(pi/6)") - 0.5).abs() < 1e-15);
+        assert_eq!(eval("cos(PI)"), -1.0);
+        assert_eq!(eval("cbrt(-27)"), -3.0);
+        assert_eq!(eval("exp(0) + log(1)"), 1.0);
         assert!((eval("cos(pi)") + 1.0).abs() < 1e-15);
         assert!((eval("tan(pi/4)") - 1.0).abs() < 1e-15);
         assert_eq!(eval("sqrt(16)"), 4.0);

@@ -160,7 +160,8 @@ pub const FIELD_OF_VIEW: Limits = Limits::open(0.0, 180.0);
 pub const COLOUR: Limits = Limits::closed(0.0, 1e6);
 /// Each component of a light's intensity.
 pub const INTENSITY: Limits = Limits::closed(0.0, 1e6);
-/// A sphere's radius, a checker's cell size, an implicit surface's BOUND, a torus radius.
+/// A sphere's radius, a checker's cell size, an implicit surface's BOUND, a torus radius, an
+/// orthographic camera's view height.
 pub const LENGTH: Limits = Limits::closed(1e-6, 1e6);
 /// A light's radius (0: a point light).
 pub const LIGHT_RADIUS: Limits = Limits::closed(0.0, 1e6);
@@ -209,7 +210,7 @@ pub const TABLE: &[(&str, Limits)] = &[
     ("`LIGHT` radius (0: a point light)", LIGHT_RADIUS),
     ("`LIGHT` … `SAMPLES n`", LIGHT_SAMPLES),
     (
-        "`SPHERE` radius, `CHECKER` cell size, `BOUND r`, `torus` R and r",
+        "`SPHERE` radius, `CHECKER` cell size, `BOUND r`, `torus` R and r, `ORTHOGRAPHIC` height",
         LENGTH,
     ),
     ("`POLYGON` vertex count n", POLYGON_VERTICES),

@@ -45,7 +45,7 @@ pub(super) const STATEMENTS: &[Statement] = &[
     },
     Statement {
         keyword: "CAMERA",
-        usage: "CAMERA (eye) (look_at) (up) fov",
+        usage: "CAMERA (eye) (look_at) (up) fov\n   or: CAMERA (eye) (look_at) (up) ORTHOGRAPHIC height",
         read: Builder::camera,
     },
     Statement {
@@ -247,9 +247,24 @@ impl Builder {
         let eye = cur.point("the eye position")?;
         let look = cur.point("the look-at point")?;
         let up = cur.direction("the up vector")?;
-        let (fov, fov_span) = cur.number("the field of view in degrees")?;
+        let orthographic = cur
+            .peek_word()
+            .is_some_and(|w| w.eq_ignore_ascii_case("ORTHOGRAPHIC"));
+        if orthographic {
+            cur.pos += 1;
+        }
+        let (size, size_span) = if orthographic {
+            cur.number_in("the orthographic view height", &limits::LENGTH)?
+        } else {
+            cur.number("the field of view in degrees")?
+        };
         cur.end()?;
-        let camera = Camera::new(eye.v, look.v, up.v, fov).map_err(|e| {
+        let camera = if orthographic {
+            Camera::orthographic(eye.v, look.v, up.v, size)
+        } else {
+            Camera::new(eye.v, look.v, up.v, size)
+        };
+        let camera = camera.map_err(|e| {
             let (span, label) = match e {
                 CameraError::NotFinite => (cur.statement_span(), "not finite"),
                 CameraError::NoViewDirection => (
@@ -257,7 +272,8 @@ impl Builder {
                     "eye and look-at are the same point",
                 ),
                 CameraError::BadUp => (up.span.clone(), "parallel to the view direction"),
-                CameraError::BadFov(_) => (fov_span.clone(), "must be in (0, 180)"),
+                CameraError::BadFov(_) => (size_span.clone(), "must be in (0, 180)"),
+                CameraError::BadHeight(_) => (size_span.clone(), "must be greater than 0"),
             };
             cur.fail(span, format!("degenerate camera: {e}"), label)
         })?;

@@ -10,6 +10,7 @@ mod cli_render;
 mod explore;
 mod explore_browser;
 mod farm;
+mod formats_surfer;
 mod fuzz_scenes;
 mod heart_geometry;
 mod heart_hard_cases;

@@ -64,7 +64,8 @@ const srgbToLinear = (hex) => {
 
 // ---------- the scene text ----------
 function cameraLine(c) {
-  return `CAMERA ${vec(c.eye)} ${vec(c.look)} ${vec(c.up)} ${fmt(c.fov)}`;
+  const size = c.orthographic ? `ORTHOGRAPHIC ${fmt(c.fov)}` : fmt(c.fov);
+  return `CAMERA ${vec(c.eye)} ${vec(c.look)} ${vec(c.up)} ${size}`;
 }
 
 function isCameraLine(line) {
@@ -77,7 +78,8 @@ function cameraFromText(text) {
   if (!line) return null;
   const nums = (line.split("#")[0].match(/[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?/g) || []).map(Number);
   if (nums.length !== 10 || nums.some((n) => !Number.isFinite(n))) return null;
-  return { eye: nums.slice(0, 3), look: nums.slice(3, 6), up: nums.slice(6, 9), fov: nums[9] };
+  const orthographic = /\borthographic\b/i.test(line.split("#")[0]);
+  return { eye: nums.slice(0, 3), look: nums.slice(3, 6), up: nums.slice(6, 9), fov: nums[9], orthographic };
 }
 
 function withCamera(text, camera) {

@@ -4,14 +4,19 @@
 //! Grammar (`x`, `y`, `z` also in upper case; juxtaposition multiplies, so `2x y` = `2*x*y`):
 //!
 //! ```text
-//! equation := sum [ '=' sum ]
+//! equation := sum [ '=' sum ] [ ';' ]
 //! sum      := term { ('+' | '-') term }
 //! term     := unary { ['*' | '/'] unary }          (no operator: implicit '*')
 //! unary    := '-' unary | '+' unary | power
-//! power    := primary [ '^' unary ]                (right associative: x^2^3 = x^(2^3))
-//! primary  := number | 'x' | 'y' | 'z' | '(' sum ')'
+//! power    := primary [ ('^' | '**') unary ]       (right associative: x^2^3 = x^(2^3))
+//! primary  := number | 'x' | 'y' | 'z' | 'pi' | function '(' sum ')' | '(' sum ')'
+//! function := 'sqrt' | 'cbrt' | 'sin' | 'cos' | 'tan' | 'exp' | 'log'
 //! number   := digits ['.' digits] [('e'|'E') ['+'|'-'] digits]   (or '.' digits …)
 //! ```
+//!
+//! `pi` (any case) is π unless the caller's constants name it. Functions, and powers with a
+//! negative or non-whole exponent, are folded to numbers when expanded ([`super::poly`]); they
+//! may hold no x, y or z.
 
 use super::coef::Coef;
 use super::EquationError;
@@ -60,6 +65,81 @@ pub enum Node {
     Product(Vec<(bool, Expr)>),
     /// `a ^ b`.
     Pow(Box<Expr>, Box<Expr>),
+    /// `f(a)`, a function of a constant.
+    Call(Function, Box<Expr>),
+}
+
+/// A function an equation may apply to a constant (angles in radians, `log` natural).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Function {
+    /// Square root of a value ≥ 0.
+    Sqrt,
+    /// Real cube root (of any sign).
+    Cbrt,
+    /// Sine.
+    Sin,
+    /// Cosine.
+    Cos,
+    /// Tangent.
+    Tan,
+    /// e to the power.
+    Exp,
+    /// Natural logarithm of a value > 0.
+    Log,
+}
+
+impl Function {
+    /// Every function with the name it is written by.
+    pub const ALL: [(&'static str, Function); 7] = [
+        ("sqrt", Function::Sqrt),
+        ("cbrt", Function::Cbrt),
+        ("sin", Function::Sin),
+        ("cos", Function::Cos),
+        ("tan", Function::Tan),
+        ("exp", Function::Exp),
+        ("log", Function::Log),
+    ];
+
+    /// The function written `name` (lower case, or `ln` for `log`).
+    pub fn named(name: &str) -> Option<Function> {
+        if name == "ln" {
+            return Some(Function::Log);
+        }
+        Self::ALL.iter().find(|(n, _)| *n == name).map(|(_, f)| *f)
+    }
+
+    /// Its name as written.
+    pub fn name(self) -> &'static str {
+        Self::ALL
+            .iter()
+            .find(|(_, f)| *f == self)
+            .map(|(n, _)| *n)
+            .expect("every function is named")
+    }
+
+    /// `f(a)`, or why it has no real value.
+    pub fn apply(self, a: f64) -> Result<f64, String> {
+        let v = match self {
+            Function::Sqrt if a < 0.0 => {
+                return Err(format!("sqrt of a negative number ({a})"));
+            }
+            Function::Log if a <= 0.0 => {
+                return Err(format!("log of a number that is not positive ({a})"));
+            }
+            Function::Sqrt => a.sqrt(),
+            Function::Cbrt => a.cbrt(),
+            Function::Sin => a.sin(),
+            Function::Cos => a.cos(),
+            Function::Tan => a.tan(),
+            Function::Exp => a.exp(),
+            Function::Log => a.ln(),
+        };
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(format!("{}({a}) is not a finite number", self.name()))
+        }
+    }
 }
 
 /// Deepest nesting of parentheses, unary signs and powers accepted.
@@ -93,7 +173,15 @@ impl Expr {
                     acc * f.eval(p)
                 }
             }),
-            Node::Pow(a, b) => a.eval(p).powi(b.eval(p) as i32),
+            Node::Pow(a, b) => {
+                let e = b.eval(p);
+                if e.fract() == 0.0 && e.abs() <= f64::from(i32::MAX) {
+                    a.eval(p).powi(e as i32)
+                } else {
+                    a.eval(p).powf(e)
+                }
+            }
+            Node::Call(f, a) => f.apply(a.eval(p)).unwrap_or(f64::NAN),
         }
     }
 }
@@ -132,6 +220,11 @@ impl<'a> Lexer<'a> {
             let single = match c {
                 b'+' => Some(Tok::Plus),
                 b'-' => Some(Tok::Minus),
+                b'*' if bytes.get(i + 1) == Some(&b'*') => {
+                    lx.push(Tok::Caret, start, start + 2);
+                    i += 2;
+                    continue;
+                }
                 b'*' => Some(Tok::Star),
                 b'/' => Some(Tok::Slash),
                 b'^' => Some(Tok::Caret),
@@ -145,6 +238,19 @@ impl<'a> Lexer<'a> {
                 i += 1;
             } else if c.is_ascii_whitespace() {
                 i += 1;
+            } else if c == b';' {
+                // A trailing ';' (as surf and SURFER users end a statement) ends the equation.
+                if text[i..]
+                    .trim_start_matches([';', ' ', '\t', '\r', '\n'])
+                    .is_empty()
+                {
+                    break;
+                }
+                return Err(Span {
+                    start,
+                    end: start + 1,
+                }
+                .error("';' ends the equation: nothing may follow it (write one equation)"));
             } else if c.is_ascii_digit() || c == b'.' {
                 i = lx.number(start)?;
             } else if c.is_ascii_alphabetic() || c == b'_' {
@@ -296,7 +402,54 @@ fn constant(value: f64, span: Span) -> Result<Expr, EquationError> {
     })
 }
 
+/// The error for a function the language lacks, with what to write instead.
+fn unknown_function(name: &str) -> String {
+    let names: Vec<&str> = Function::ALL.iter().map(|(n, _)| *n).collect();
+    let instead = match name.to_ascii_lowercase().as_str() {
+        "abs" => " (abs is not a polynomial: for abs(p) = c write p^2 = c^2)",
+        "pow" => " (write a^b)",
+        "sqr" => " (write a^2)",
+        "exp2" | "log2" | "log10" => " (write the power or divide by log(2) or log(10))",
+        _ => "",
+    };
+    format!(
+        "unknown function '{name}'{instead}: an equation is a polynomial in x, y and z; \
+         only constants may go inside the functions {}",
+        names.join(", ")
+    )
+}
+
 impl Parser<'_> {
+    /// `f ( sum )`, after the name: the argument may not be empty.
+    fn call(&mut self, f: Function, name: Span) -> Result<Expr, EquationError> {
+        let open = self.next().1;
+        self.deeper(open)?;
+        let r = self.call_inner(f, name, open);
+        self.depth -= 1;
+        r
+    }
+
+    fn call_inner(&mut self, f: Function, name: Span, open: Span) -> Result<Expr, EquationError> {
+        if self.peek().0 == Tok::RParen {
+            return Err(open.to(self.peek().1).error(format!(
+                "{} needs a value: {}(2)",
+                f.name(),
+                f.name()
+            )));
+        }
+        let arg = self.sum()?;
+        match self.peek() {
+            (Tok::RParen, close) => {
+                self.next();
+                Ok(Expr {
+                    node: Node::Call(f, Box::new(arg)),
+                    span: name.to(close),
+                })
+            }
+            _ => Err(open.error("unbalanced parentheses: this '(' is never closed")),
+        }
+    }
+
     fn peek(&self) -> (Tok, Span) {
         self.toks[self.pos]
     }
@@ -441,10 +594,14 @@ impl Parser<'_> {
                 if let Some(value) = (self.constants)(name) {
                     return constant(value, span);
                 }
+                if name.eq_ignore_ascii_case("pi") {
+                    return constant(std::f64::consts::PI, span);
+                }
                 if self.peek().0 == Tok::LParen {
-                    Err(span.error(format!(
-                        "unknown function '{name}': only polynomials are allowed (+, -, *, / by a constant, ^ with a whole-number exponent)"
-                    )))
+                    if let Some(f) = Function::named(&name.to_ascii_lowercase()) {
+                        return self.call(f, span);
+                    }
+                    Err(span.error(unknown_function(name)))
                 } else {
                     Err(span.error(format!(
                         "unknown variable '{name}': the variables are x, y and z (write products as x*y)"
@@ -477,5 +634,116 @@ impl Parser<'_> {
                 &self.text[span.start..span.end]
             ))),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{expand, expand_with};
+
+    /// The expanded polynomial's coefficient of `xⁱ yʲ zᵏ` as an `f64`.
+    fn coefficient(equation: &str, exps: [u8; 3]) -> f64 {
+        let p = expand(equation).unwrap_or_else(|e| panic!("{equation}: {}", e.message));
+        p.terms.get(&exps).map_or(0.0, |c| c.to_f64())
+    }
+
+    fn error(equation: &str) -> String {
+        match expand(equation) {
+            Ok(_) => panic!("{equation} was accepted"),
+            Err(e) => e.message,
+        }
+    }
+
+    #[test]
+    fn functions_of_constants_are_folded() {
+        let cases: [(&str, f64); 9] = [
+            ("sqrt(2)*x", 2f64.sqrt()),
+            ("sqrt(5 - sqrt(5))*x", (5.0 - 5f64.sqrt()).sqrt()),
+            ("cbrt(-8)*x", -2.0),
+            ("sin(1)*x", 1f64.sin()),
+            ("cos(2*PI/5)*x", (2.0 * std::f64::consts::PI / 5.0).cos()),
+            ("tan(0.5)*x", 0.5f64.tan()),
+            ("exp(1)*x", std::f64::consts::E),
+            ("log(10)*x", 10f64.ln()),
+            ("SQRT(9) x", 3.0),
+        ];
+        for (eq, want) in cases {
+            let got = coefficient(eq, [1, 0, 0]);
+            assert!(
+                (got - want).abs() <= 1e-15 * want.abs(),
+                "{eq}: {got} vs {want}"
+            );
+        }
+        // A folded whole number stays exact: sqrt(4)^2 is 4, not 4.000…1.
+        assert_eq!(coefficient("sqrt(4)^2*x", [1, 0, 0]), 4.0);
+    }
+
+    #[test]
+    fn powers_of_constants_may_be_negative_or_not_whole() {
+        assert_eq!(coefficient("2^(1/2)*x", [1, 0, 0]), 2f64.sqrt());
+        assert_eq!(coefficient("(1/4)^-1*x", [1, 0, 0]), 4.0);
+        assert_eq!(coefficient("2^-2*x", [1, 0, 0]), 0.25);
+        assert_eq!(coefficient("x**2 + 2**3", [0, 0, 0]), 8.0);
+        assert_eq!(coefficient("x**2 + 2**3", [2, 0, 0]), 1.0);
+    }
+
+    #[test]
+    fn pi_in_any_case_is_pi_unless_a_constant_names_it() {
+        for eq in ["pi*x", "PI*x", "Pi x", "2*pi/2*x"] {
+            assert_eq!(coefficient(eq, [1, 0, 0]), std::f64::consts::PI, "{eq}");
+        }
+        let p = expand_with("pi*x", &|n| (n == "pi").then_some(3.0)).expect("accepted");
+        assert_eq!(p.terms[&[1, 0, 0]].to_f64(), 3.0);
+    }
+
+    #[test]
+    fn a_trailing_semicolon_ends_the_equation() {
+        assert_eq!(coefficient("x^2 + y^2 - 1;", [0, 0, 0]), -1.0);
+        assert_eq!(coefficient("x^2 + y^2 - 1 ; ;\n", [2, 0, 0]), 1.0);
+        assert!(error("x^2; y").contains("nothing may follow"));
+    }
+
+    #[test]
+    fn what_stays_unsupported_says_what_to_write() {
+        let e = error("sqrt(x) - 1");
+        assert!(e.contains("only constants may go inside"), "{e}");
+        let e = error("x^(1/2) - 1");
+        assert!(e.contains("raise both sides"), "{e}");
+        let e = error("x^-1 - 1");
+        assert!(e.contains("multiply both sides"), "{e}");
+        let e = error("abs(x) - 1");
+        assert!(e.contains("p^2 = c^2"), "{e}");
+        let e = error("sqrt(-2)*x");
+        assert!(e.contains("negative"), "{e}");
+        let e = error("log(0)*x");
+        assert!(e.contains("not positive"), "{e}");
+        let e = error("(-2)^(1/2)*x");
+        assert!(e.contains("no real value"), "{e}");
+        let e = error("0^-1*x");
+        assert!(e.contains("divides by zero"), "{e}");
+        let e = error("sqrt()*x");
+        assert!(e.contains("needs a value"), "{e}");
+        let e = error("exp(1000)*x");
+        assert!(e.contains("not a finite number"), "{e}");
+    }
+
+    #[test]
+    fn direct_evaluation_agrees_with_the_folded_expansion() {
+        let eq = "sqrt(2)*x^2 + 2^(1/2)*y - (1/4)^-1*z + cos(pi/3)";
+        let expr = super::parse(eq).expect("parses");
+        let poly = expand(eq).expect("expands");
+        let p = [0.3, -1.7, 2.2];
+        let direct = expr.eval(p);
+        let expanded: f64 = poly
+            .terms
+            .iter()
+            .map(|(e, c)| {
+                c.to_f64()
+                    * p[0].powi(e[0].into())
+                    * p[1].powi(e[1].into())
+                    * p[2].powi(e[2].into())
+            })
+            .sum();
+        assert!((direct - expanded).abs() < 1e-12, "{direct} vs {expanded}");
     }
 }

@@ -89,6 +89,17 @@ pub fn preset(name: &str, params: &[f64]) -> Result<Preset, String> {
 /// is only known to about this relative accuracy (double roots: ~√ε).
 const SELF_HIT_GUARD: f64 = 1e-7;
 
+/// How far past the clip sphere, as a fraction of the half chord, the search for roots runs:
+/// a surface that meets or lies on its clip sphere has its roots at the chord's ends, where
+/// rounding puts them on either side of `s = ±1`. Searching `[-(1 + CLIP_SLACK), 1 +
+/// CLIP_SLACK]` counts such a hit once on every ray, and keeps it off the search's ends (where
+/// the solver could not tell its sign, and slowed down), while a hit it adds lies within
+/// `CLIP_SLACK · BOUND` of the sphere, far below a pixel.
+const CLIP_SLACK: f64 = 1.0 / (1u64 << 26) as f64;
+
+/// The far end of the search in `s` (see [`CLIP_SLACK`]).
+const S_REACH: f64 = 1.0 + CLIP_SLACK;
+
 /// Largest residual `|p(s)|`, relative to `Σ |c_k sᵏ|` (the scale of rounding in evaluating
 /// `p`), accepted from the solver as a root. Rounding alone gives ~1e-15; a polished multiple
 /// root a few orders more. A larger residual means the solver reported a non-root, which is
@@ -769,8 +780,9 @@ impl ImplicitShape {
         } else {
             t_min
         };
-        let lo_t = max_or_first(guard, t_mid - t_half);
-        let hi_t = min_or_first(t_max, t_mid + t_half);
+        let reach = t_half * S_REACH;
+        let lo_t = max_or_first(guard, t_mid - reach);
+        let hi_t = min_or_first(t_max, t_mid + reach);
         if lo_t.is_nan() || hi_t.is_nan() || lo_t >= hi_t {
             return None;
         }
@@ -859,8 +871,9 @@ impl ImplicitShape {
         let above = pick(_mm256_cmp_pd::<_CMP_GT_OQ>(g, t_min), g, t_min);
         let guard = pick(_mm256_cmp_pd::<_CMP_GE_OQ>(t_min, zero), above, t_min);
         // `max_or_first` and `min_or_first`.
-        let low = _mm256_sub_pd(t_mid, t_half);
-        let high = _mm256_add_pd(t_mid, t_half);
+        let reach = _mm256_mul_pd(t_half, _mm256_set1_pd(S_REACH));
+        let low = _mm256_sub_pd(t_mid, reach);
+        let high = _mm256_add_pd(t_mid, reach);
         let mut lo_t = pick(
             _mm256_or_pd(
                 _mm256_cmp_pd::<_CMP_GT_OQ>(guard, low),
@@ -945,8 +958,9 @@ impl ImplicitShape {
                 t_min[i]
             }
         });
-        let mut lo_t = lanes(|i| max_or_first(guard[i], t_mid[i] - t_half[i]));
-        let mut hi_t = lanes(|i| min_or_first(t_max[i], t_mid[i] + t_half[i]));
+        let reach = lanes(|i| t_half[i] * S_REACH);
+        let mut lo_t = lanes(|i| max_or_first(guard[i], t_mid[i] - reach[i]));
+        let mut hi_t = lanes(|i| min_or_first(t_max[i], t_mid[i] + reach[i]));
         let mut alive: [bool; LANES] = std::array::from_fn(|i| {
             (t_max[i] > t_min[i])
                 & (dd[i] > 0.0)
@@ -1343,12 +1357,12 @@ impl Span {
 }
 
 /// The span `(lo_t, hi_t)` of the chord `t = t_mid + s·t_half` in `s`, the upper end at most
-/// 1 (`.min(1.0)`, 1 for a NaN, in one comparison).
+/// [`S_REACH`] (`.min(S_REACH)`, `S_REACH` for a NaN, in one comparison).
 #[inline(always)]
 fn search_interval(lo_t: f64, hi_t: f64, t_mid: f64, t_half: f64) -> (f64, f64) {
     let s_lo = (lo_t - t_mid) / t_half;
     let s_hi = (hi_t - t_mid) / t_half;
-    (s_lo, if s_hi < 1.0 { s_hi } else { 1.0 })
+    (s_lo, if s_hi < S_REACH { s_hi } else { S_REACH })
 }
 
 /// What the generic path hands the solver for one ray beside the normalised ray polynomial
@@ -1917,6 +1931,64 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// A sphere clipped by its own radius, and by radii one ulp either side, is hit at its
+    /// near side by every ray that meets it (none drops the hit at the chord's end and
+    /// shows the far side, none misses), one ray at a time and four at once alike.
+    #[test]
+    fn a_surface_on_its_clip_sphere_is_hit_once_on_every_ray() {
+        use crate::shapes::Shape;
+        let radius: f64 = 6.0;
+        let bounds = [
+            radius,
+            f64::from_bits(radius.to_bits() - 1),
+            f64::from_bits(radius.to_bits() + 1),
+        ];
+        let mut uniform = crate::testing::uniform_stream(0x0c11_9e5f_0a7e_5eed);
+        for bound in bounds {
+            let shape = Implicit::new("x^2 + y^2 + z^2 = 36", Frame::identity(), Some(bound))
+                .unwrap_or_else(|e| panic!("BOUND {bound}: {}", e.message));
+            let (mut hits, mut rays) = (0, 0);
+            for k in 0..4000 {
+                // Parallel rays along a random direction through points of the disc of radius
+                // 0.99·6 across it (as an orthographic camera sends them), and rays from a
+                // point 20 away through points of that disc (as a pinhole does).
+                let mut v = || 2.0 * uniform() - 1.0;
+                let axis = DVec3::new(v(), v(), v()).normalize_or(DVec3::Z);
+                let side = axis.any_orthonormal_pair();
+                let (a, b) = (v(), v());
+                let offset = (side.0 * a + side.1 * b) * radius * 0.99 / 2f64.sqrt();
+                let ray = if k % 2 == 0 {
+                    Ray::new(offset - axis * 20.0, axis)
+                } else {
+                    let eye = -axis * 20.0;
+                    Ray::new(eye, (offset - eye).normalize())
+                };
+                rays += 1;
+                // The near intersection of the ray's line with the sphere.
+                let (b, c) = (ray.origin.dot(ray.dir), ray.origin.length_squared() - 36.0);
+                let near = -b - (b * b - c).sqrt();
+                let Some(t) = shape.intersect(&ray, 0.0, f64::INFINITY) else {
+                    panic!("BOUND {bound}: ray {k} ({ray:?}) misses the sphere");
+                };
+                assert!(
+                    (t - near).abs() < 1e-6,
+                    "BOUND {bound}: ray {k} hits at {t}, not at the near side {near}"
+                );
+                let lanes =
+                    shape.intersect_lanes(&[ray; LANES], [0.0; LANES], [f64::INFINITY; LANES]);
+                for hit in lanes {
+                    assert_eq!(
+                        hit.map(f64::to_bits),
+                        Some(t.to_bits()),
+                        "BOUND {bound}: ray {k}"
+                    );
+                }
+                hits += 1;
+            }
+            assert_eq!(hits, rays);
         }
     }
 

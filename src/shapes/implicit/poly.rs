@@ -22,6 +22,46 @@ fn degree_of(e: &Exps) -> usize {
     e.iter().map(|&k| k as usize).sum()
 }
 
+/// A folded value as a coefficient: exact when it is a whole number, else its `f64`.
+fn folded(v: f64) -> Coef {
+    if v.fract() == 0.0 && v.abs() < 1e15 {
+        Coef::int(v as i128)
+    } else {
+        Coef::Approx(v)
+    }
+}
+
+/// `k^c` for constants: exact for a whole exponent (a negative one inverts), by `powf` for
+/// any other, with an error where the power has no real value.
+fn constant_power(k: Coef, c: Coef, whole: Span, exp: Span) -> Result<Coef, EquationError> {
+    if let Some(n) = c.as_integer() {
+        let m =
+            u32::try_from(n.unsigned_abs()).map_err(|_| exp.error("this exponent is too large"))?;
+        if n >= 0 {
+            return Ok(k.pow(m));
+        }
+        if k.is_zero() {
+            return Err(whole.error(format!("0 to a negative power ({n}) divides by zero")));
+        }
+        return Ok(Coef::ONE.over(k.pow(m)));
+    }
+    let (kv, cv) = (k.to_f64(), c.to_f64());
+    if kv < 0.0 {
+        return Err(whole.error(format!(
+            "a negative number ({kv}) to the non-whole power {cv} has no real value \
+             (for an odd root write cbrt)"
+        )));
+    }
+    if kv == 0.0 && cv < 0.0 {
+        return Err(whole.error(format!("0 to a negative power ({cv}) divides by zero")));
+    }
+    let v = kv.powf(cv);
+    if !v.is_finite() {
+        return Err(whole.error(format!("{kv}^{cv} is too large")));
+    }
+    Ok(folded(v))
+}
+
 impl Poly {
     /// The constant `c`.
     pub fn constant(c: Coef) -> Poly {
@@ -110,8 +150,9 @@ impl Poly {
     }
 
     /// Expands a syntax tree, checking every rule of the equation language on the way:
-    /// division only by constants, whole non-negative exponents, total degree ≤ 16 for every
-    /// sub-expression.
+    /// division only by constants, whole non-negative exponents on anything holding x, y or z,
+    /// functions only of constants (folded to their `f64` value, as are powers of constants
+    /// with a negative or non-whole exponent), total degree ≤ 16 for every sub-expression.
     pub fn expand(e: &Expr) -> Result<Poly, EquationError> {
         let too_high = |d: i128| {
             e.span.error(format!(
@@ -168,21 +209,21 @@ impl Poly {
                         "the exponent must be a whole number, not an expression in x, y or z",
                     ));
                 };
+                if let Some(k) = pa.as_constant() {
+                    return constant_power(k, c, e.span, b.span).map(Poly::constant);
+                }
                 let Some(n) = c.as_integer() else {
                     return Err(b.span.error(format!(
-                        "the exponent must be a whole number, not {}",
+                        "the exponent of an expression in x, y or z must be a whole number, not {} \
+                         (a root of x, y or z is not a polynomial: raise both sides to a power instead)",
                         c.to_f64()
                     )));
                 };
                 if n < 0 {
-                    return Err(b
-                        .span
-                        .error(format!("the exponent must not be negative ({n})")));
-                }
-                if let Some(k) = pa.as_constant() {
-                    let n =
-                        u32::try_from(n).map_err(|_| b.span.error("this exponent is too large"))?;
-                    return Ok(Poly::constant(k.pow(n)));
+                    return Err(b.span.error(format!(
+                        "the exponent of an expression in x, y or z must not be negative ({n}): \
+                         multiply both sides by the denominator instead"
+                    )));
                 }
                 let d = (pa.degree() as i128).saturating_mul(n);
                 if d > MAX_DEGREE as i128 {
@@ -193,6 +234,19 @@ impl Poly {
                     r = r.mul(&pa);
                 }
                 r
+            }
+            Node::Call(f, a) => {
+                let pa = Poly::expand(a)?;
+                let Some(c) = pa.as_constant() else {
+                    return Err(a.span.error(format!(
+                        "{}(…) of x, y or z is not a polynomial: only constants may go inside \
+                         (such as {}(2)); write the surface without it, e.g. square both sides",
+                        f.name(),
+                        f.name()
+                    )));
+                };
+                let v = f.apply(c.to_f64()).map_err(|m| e.span.error(m))?;
+                Poly::constant(folded(v))
             }
         })
     }
