@@ -898,6 +898,57 @@ mod tests {
     }
 
     #[test]
+    fn an_objects_rows_hold_every_row_that_sees_its_box() {
+        // Bounds at and between whole rows, beyond the region and NaN, for a region that
+        // starts below the image's top.
+        let region = Region {
+            x: 0,
+            y: 7,
+            width: 4,
+            height: 20,
+        };
+        let bounds = [
+            f64::NAN,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            -3.0,
+            0.0,
+            6.5,
+            7.0,
+            8.0,
+            8.25,
+            15.0,
+            26.0,
+            27.0,
+            26.999,
+            40.0,
+        ];
+        for &y0 in &bounds {
+            for &y1 in &bounds {
+                let (first, last) = box_rows((y0, y1), region);
+                for row in 0..region.height as usize {
+                    let y = f64::from(region.y) + row as f64;
+                    let sees = y + 1.0 >= y0 && y <= y1;
+                    let whole = y0.is_nan() || y1.is_nan();
+                    if sees || whole {
+                        assert!(
+                            first <= row && row <= last,
+                            "{y0} {y1}: row {row} not in {first}..={last}"
+                        );
+                    }
+                }
+                // Not much more than the rows that see it.
+                if !(y0.is_nan() || y1.is_nan()) && first <= last {
+                    assert!(
+                        last - first <= ((y1 - y0).max(0.0) + 4.0) as usize,
+                        "{y0} {y1}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
     fn every_run_of_columns_marks_exactly_its_pixels() {
         // Every pair of whole-number bounds around a region three words wide, against the
         // pixels one by one.

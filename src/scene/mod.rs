@@ -147,9 +147,26 @@ impl Scene {
     /// `self.intersect(ray, t_min, t_max).is_some()`, but it stops at the first object hit and
     /// computes no normal (an any-hit query, for shadow rays).
     pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
-        if let Some(built) = self.indexed() {
-            return self.occluded_by_index(built, ray, t_min, t_max);
+        if self.may_use_index() {
+            return self.occluded_many(ray, t_min, t_max);
         }
+        self.occluded_in_order(ray, t_min, t_max)
+    }
+
+    /// [`Scene::occluded`] of a scene that may use its index: by the index when it is built
+    /// from these objects, else in order. Out of line, so that the small scenes' path
+    /// compiles as it would without the index.
+    #[inline(never)]
+    fn occluded_many(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        match self.index.get(&self.objects) {
+            Some(built) => self.occluded_by_index(built, ray, t_min, t_max),
+            None => self.occluded_in_order(ray, t_min, t_max),
+        }
+    }
+
+    /// [`Scene::occluded`], asking the objects in order.
+    #[inline(always)]
+    fn occluded_in_order(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
         // `intersect` asks each object with the whole (t_min, t_max) until the first one
         // answers, so that first answer alone decides whether it returns a hit.
         self.objects
@@ -168,9 +185,35 @@ impl Scene {
         t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [bool; LANES] {
-        if let Some(built) = self.indexed() {
-            return self.occluded_lanes_by_index(built, rays, t_min, t_max);
+        if self.may_use_index() {
+            return self.occluded_lanes_many(rays, t_min, t_max);
         }
+        self.occluded_lanes_in_order(rays, t_min, t_max)
+    }
+
+    /// [`Scene::occluded_lanes`] of a scene that may use its index (see
+    /// [`Scene::occluded_many`]).
+    #[inline(never)]
+    fn occluded_lanes_many(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [bool; LANES] {
+        match self.index.get(&self.objects) {
+            Some(built) => self.occluded_lanes_by_index(built, rays, t_min, t_max),
+            None => self.occluded_lanes_in_order(rays, t_min, t_max),
+        }
+    }
+
+    /// [`Scene::occluded_lanes`], asking the objects in order.
+    #[inline(always)]
+    fn occluded_lanes_in_order(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [bool; LANES] {
         let mut blocked = [false; LANES];
         for obj in &self.objects {
             let mut ask = [f64::NEG_INFINITY; LANES];
@@ -262,9 +305,10 @@ impl Scene {
         t_min: f64,
         t_max: f64,
     ) -> [Option<SceneHit>; LANES] {
-        let best = match self.indexed() {
-            Some(built) => self.nearest_lanes_by_index(built, rays, t_min, t_max),
-            None => self.nearest_lanes_in_order(rays, t_min, t_max),
+        let best = if self.may_use_index() {
+            self.nearest_lanes_many(rays, t_min, t_max)
+        } else {
+            self.nearest_lanes_in_order(rays, t_min, t_max)
         };
         // Where every lane that hit met the same object, and that object's normals cost less
         // asked together, they are (the same answers as `hit` gives one at a time).
@@ -278,9 +322,24 @@ impl Scene {
         std::array::from_fn(|lane| best[lane].map(|(object, t)| self.hit(&rays[lane], object, t)))
     }
 
+    /// [`Scene::nearest_lanes_in_order`]'s answers for a scene that may use its index (see
+    /// [`Scene::occluded_many`]).
+    #[inline(never)]
+    fn nearest_lanes_many(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+    ) -> [Option<(usize, f64)>; LANES] {
+        match self.index.get(&self.objects) {
+            Some(built) => self.nearest_lanes_by_index(built, rays, t_min, t_max),
+            None => self.nearest_lanes_in_order(rays, t_min, t_max),
+        }
+    }
+
     /// Each lane's nearest object and `t`, asking the objects in order, shrinking each lane's
     /// range as hits are found.
-    #[inline]
+    #[inline(always)]
     fn nearest_lanes_in_order(
         &self,
         rays: &[Ray; LANES],
@@ -361,16 +420,27 @@ impl Scene {
     /// The nearest hit with `t_min < t < t_max`, if any. Where two objects are met at the same
     /// `t`, the one written first.
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SceneHit> {
-        let best = match self.indexed() {
-            Some(built) => self.nearest_by_index(built, ray, t_min, t_max),
-            None => self.nearest_in_order(ray, t_min, t_max),
+        let best = if self.may_use_index() {
+            self.nearest_many(ray, t_min, t_max)
+        } else {
+            self.nearest_in_order(ray, t_min, t_max)
         };
         best.map(|(object, t)| self.hit(ray, object, t))
     }
 
+    /// [`Scene::nearest_in_order`]'s answer for a scene that may use its index (see
+    /// [`Scene::occluded_many`]).
+    #[inline(never)]
+    fn nearest_many(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(usize, f64)> {
+        match self.index.get(&self.objects) {
+            Some(built) => self.nearest_by_index(built, ray, t_min, t_max),
+            None => self.nearest_in_order(ray, t_min, t_max),
+        }
+    }
+
     /// The nearest object and `t`, asking the objects in order and shrinking the range as
     /// hits are found.
-    #[inline]
+    #[inline(always)]
     fn nearest_in_order(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(usize, f64)> {
         let mut best: Option<(usize, f64)> = None;
         let mut t_far = t_max;
@@ -446,11 +516,18 @@ impl Scene {
     /// has fewer.
     pub const INDEX_MIN_OBJECTS: usize = 9;
 
+    /// Whether the scene has enough objects for the queries to use its index (they do where
+    /// it was built from these objects).
+    #[inline]
+    fn may_use_index(&self) -> bool {
+        self.objects.len() >= Self::INDEX_MIN_OBJECTS
+    }
+
     /// The index, when the queries use it: with at least [`Scene::INDEX_MIN_OBJECTS`]
     /// objects, and built from these.
-    #[inline]
+    #[cfg(test)]
     fn indexed(&self) -> Option<&index::Built> {
-        if self.objects.len() < Self::INDEX_MIN_OBJECTS {
+        if !self.may_use_index() {
             return None;
         }
         self.index.get(&self.objects)
