@@ -193,7 +193,7 @@ impl Bvh {
         }
         let area = half_area(bounds);
         let split_cost = TRAVERSAL_COST + best_cost / area.max(f64::MIN_POSITIVE);
-        if n <= MAX_LEAF && !(split_cost < n as f64) {
+        if n <= MAX_LEAF && (split_cost.is_nan() || split_cost >= n as f64) {
             return None;
         }
         if best_cost.is_infinite() {
@@ -237,7 +237,7 @@ impl Bvh {
                     let first = n.offset as usize;
                     for &id in &self.items[first..first + n.count as usize] {
                         visit(id, &mut t_max);
-                        if !(t_max >= t_min) {
+                        if t_max.is_nan() || t_min.is_nan() || t_max < t_min {
                             return;
                         }
                     }

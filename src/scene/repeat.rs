@@ -108,7 +108,7 @@ pub(super) fn header(cur: &mut Cursor) -> Result<Header> {
     } else {
         (span + 1e-9).floor() + 1.0
     };
-    if !(count <= MAX_ITERATIONS as f64) {
+    if count.is_nan() || count > MAX_ITERATIONS as f64 {
         return Err(cur.fail(
             Cursor::join(&t.span, &last_span),
             format!(
