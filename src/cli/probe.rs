@@ -308,6 +308,7 @@ mod tests {
             background: DVec3::ZERO,
             ambient: DVec3::ZERO,
             lights: Vec::new(),
+            index: Default::default(),
             objects: vec![
                 Object::new(
                     Box::new(Sphere::new(DVec3::new(0.0, 5.0, 0.0), 1.0).unwrap()),

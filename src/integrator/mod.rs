@@ -255,6 +255,7 @@ pub(crate) mod tests {
             background: DVec3::ZERO,
             ambient: DVec3::ZERO,
             lights: vec![],
+            index: Default::default(),
             objects: vec![Object::new(
                 Box::new(Sphere::new(DVec3::ZERO, 1.0).unwrap()),
                 Material::default(),

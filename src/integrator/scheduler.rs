@@ -358,6 +358,23 @@ fn pixel_bounds((x0, x1): (f64, f64)) -> (f64, f64) {
     ((x0 - 1.0).ceil(), x1.floor())
 }
 
+/// The region's rows `first ..= last` (counted from its top; empty when `first > last`)
+/// outside which no row's pixels `y` (full-image rows, spanning `[y, y + 1]`) have
+/// `y + 1 ≥ y0` and `y ≤ y1`: those rows and one more on each side (for the rounding of the
+/// bounds); a NaN bound does not narrow them.
+fn box_rows((y0, y1): (f64, f64), region: Region) -> (usize, usize) {
+    let last_row = region.height as f64 - 1.0;
+    let top = f64::from(region.y);
+    let lo = (y0 - 1.0 - top).ceil() - 1.0;
+    let hi = (y1 - top).floor() + 1.0;
+    // `f64::max` and `min` pass over a NaN: the whole region then.
+    let (lo, hi) = (lo.max(0.0), hi.min(last_row));
+    if lo > hi {
+        return (1, 0);
+    }
+    (lo as usize, hi as usize)
+}
+
 /// The pixels of `job`'s region whose camera rays may meet an object: those that see its
 /// bounding box and, where the object gives them, one of its enclosing ellipsoids and one of
 /// its enclosing cells. `None` when the camera does not see every box from in front.
@@ -378,9 +395,12 @@ fn seen_mask(job: &Job) -> Option<SeenMask> {
             .map(|e| camera.ellipsoid_image(e, w, h))
             .collect();
         let images = images.filter(|i| !i.is_empty());
-        // For each row, the columns outside which no camera ray meets the box or the
-        // ellipsoids.
-        let spans: Vec<(f64, f64)> = (0..region.height as usize)
+        // The rows that may see the box (all of them where its rectangle is NaN): only their
+        // spans are worked out, so an object costs its own rows, not the region's.
+        let (first, last) = box_rows(boxed.y, region);
+        // For each of those rows, the columns outside which no camera ray meets the box or
+        // the ellipsoids.
+        let spans: Vec<(f64, f64)> = (first..=last)
             .map(|row| {
                 let y = row_y(row);
                 let sees_box = y + 1.0 >= boxed.y.0 && y <= boxed.y.1;
@@ -398,6 +418,9 @@ fn seen_mask(job: &Job) -> Option<SeenMask> {
                 seen
             })
             .collect();
+        if spans.is_empty() {
+            continue;
+        }
         // The cells' images, if the camera sees them all.
         let cells: Option<Vec<_>> = object
             .shape
@@ -407,12 +430,11 @@ fn seen_mask(job: &Job) -> Option<SeenMask> {
             .collect();
         match cells.filter(|c| !c.is_empty()) {
             None => {
-                for (row, &span) in spans.iter().enumerate() {
-                    mask.mark(row, span);
+                for (k, &span) in spans.iter().enumerate() {
+                    mask.mark(first + k, span);
                 }
             }
             Some(rects) => {
-                let last_row = region.height as f64 - 1.0;
                 // Each row's and each rectangle's columns once, not once a pair.
                 let rows: Vec<(i64, i64)> = spans
                     .iter()
@@ -420,15 +442,17 @@ fn seen_mask(job: &Job) -> Option<SeenMask> {
                     .collect();
                 for rect in rects {
                     let (rect_lo, rect_hi) = mask.columns(pixel_bounds(rect.x));
-                    // The rows with `y + 1 ≥ rect.y.0` and `y ≤ rect.y.1`.
-                    let lo = (rect.y.0 - 1.0 - f64::from(region.y)).ceil().max(0.0);
-                    let hi = (rect.y.1 - f64::from(region.y)).floor().min(last_row);
+                    // The rows with `y + 1 ≥ rect.y.0` and `y ≤ rect.y.1`, among the box's.
+                    let lo = (rect.y.0 - 1.0 - f64::from(region.y))
+                        .ceil()
+                        .max(first as f64);
+                    let hi = (rect.y.1 - f64::from(region.y)).floor().min(last as f64);
                     if lo > hi {
                         continue;
                     }
-                    let rows = rows.iter().enumerate().take(hi as usize + 1);
-                    for (row, &(row_lo, row_hi)) in rows.skip(lo as usize) {
-                        mask.mark_columns(row, (row_lo.max(rect_lo), row_hi.min(rect_hi)));
+                    let rows = rows.iter().enumerate().take(hi as usize - first + 1);
+                    for (k, &(row_lo, row_hi)) in rows.skip(lo as usize - first) {
+                        mask.mark_columns(first + k, (row_lo.max(rect_lo), row_hi.min(rect_hi)));
                     }
                 }
             }
@@ -871,6 +895,56 @@ mod tests {
             }
         }
         assert!(marked > 100, "only {marked} cases marked anything");
+    }
+
+    #[test]
+    fn an_objects_rows_hold_every_row_that_sees_its_box() {
+        // Bounds at and between whole rows, beyond the region and NaN, for a region that
+        // starts below the image's top.
+        let region = Region {
+            x: 0,
+            y: 7,
+            width: 4,
+            height: 20,
+        };
+        let bounds = [
+            f64::NAN,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            -3.0,
+            0.0,
+            6.5,
+            7.0,
+            8.0,
+            8.25,
+            15.0,
+            26.0,
+            27.0,
+            26.999,
+            40.0,
+        ];
+        for &y0 in &bounds {
+            for &y1 in &bounds {
+                let (first, last) = box_rows((y0, y1), region);
+                for row in 0..region.height as usize {
+                    let y = f64::from(region.y) + row as f64;
+                    let sees = y + 1.0 >= y0 && y <= y1;
+                    if sees {
+                        assert!(
+                            first <= row && row <= last,
+                            "{y0} {y1}: row {row} not in {first}..={last}"
+                        );
+                    }
+                }
+                // Not much more than the rows that see it.
+                if !(y0.is_nan() || y1.is_nan()) && first <= last {
+                    assert!(
+                        last - first <= ((y1 - y0).max(0.0) + 4.0) as usize,
+                        "{y0} {y1}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -86,6 +86,7 @@ pub(crate) mod tests {
             background: DVec3::ZERO,
             ambient: DVec3::ZERO,
             lights: vec![],
+            index: Default::default(),
             objects: vec![
                 Object::new(
                     Box::new(Sphere::new(DVec3::new(2.0, 0.0, 0.1), 0.1).unwrap()),

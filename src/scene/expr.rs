@@ -46,7 +46,7 @@ const FUNCTIONS: &[(&str, usize, usize)] = &[
 const CONSTANTS: &[&str] = &["clock", "frame", "frames", "pi"];
 
 /// Names a `LET` may not take: the built-ins, the functions and the variables of equations.
-fn is_reserved(name: &str) -> bool {
+pub(super) fn is_reserved(name: &str) -> bool {
     let lower = name.to_ascii_lowercase();
     CONSTANTS.contains(&lower.as_str())
         || FUNCTIONS.iter().any(|f| f.0 == lower)
@@ -96,6 +96,17 @@ impl Names {
             lets: HashMap::new(),
             time,
         }
+    }
+
+    /// The line a `LET` (or a `REPEAT`) defined `name` on, if one did.
+    pub(super) fn defined_on(&self, name: &str) -> Option<usize> {
+        self.lets.get(name).map(|d| d.line)
+    }
+
+    /// Forgets the definition of `name` (a `REPEAT`'s variable after its loop, a `LET` of a
+    /// loop's body after each iteration).
+    pub(super) fn forget(&mut self, name: &str) {
+        self.lets.remove(name);
     }
 
     /// The value of `name` and whether it depends on the time, if it has one.

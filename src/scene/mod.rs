@@ -4,13 +4,16 @@
 mod cursor;
 mod error;
 mod expr;
+mod index;
 mod lexer;
 pub mod limits;
 mod parser;
+pub mod repeat;
 mod surface;
 
 pub use error::{InvalidScene, SceneError};
 pub use expr::FrameTime;
+pub use index::ObjectIndex;
 pub use parser::{parse, parse_animated, parse_file, DEFAULT_SIZE};
 
 use crate::camera::Camera;
@@ -130,6 +133,10 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// Objects, in the order written.
     pub objects: Vec<Object>,
+    /// The objects' bounding volume hierarchy, by which the queries skip the objects a ray
+    /// cannot meet (the loader builds it; `ObjectIndex::default()` builds it at the first
+    /// query).
+    pub index: ObjectIndex,
 }
 
 impl Scene {
@@ -140,6 +147,26 @@ impl Scene {
     /// `self.intersect(ray, t_min, t_max).is_some()`, but it stops at the first object hit and
     /// computes no normal (an any-hit query, for shadow rays).
     pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        if self.may_use_index() {
+            return self.occluded_many(ray, t_min, t_max);
+        }
+        self.occluded_in_order(ray, t_min, t_max)
+    }
+
+    /// [`Scene::occluded`] of a scene that may use its index: by the index when it is built
+    /// from these objects, else in order. Out of line, so that the small scenes' path
+    /// compiles as it would without the index.
+    #[inline(never)]
+    fn occluded_many(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        match self.index.get(&self.objects) {
+            Some(built) => self.occluded_by_index(built, ray, t_min, t_max),
+            None => self.occluded_in_order(ray, t_min, t_max),
+        }
+    }
+
+    /// [`Scene::occluded`], asking the objects in order.
+    #[inline(always)]
+    fn occluded_in_order(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
         // `intersect` asks each object with the whole (t_min, t_max) until the first one
         // answers, so that first answer alone decides whether it returns a hit.
         self.objects
@@ -153,6 +180,35 @@ impl Scene {
     /// meets its box (every such lane where [`Scene::box_tests_skipped`]), all at once
     /// ([`Shape::occludes_lanes`]).
     pub fn occluded_lanes(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [bool; LANES] {
+        if self.may_use_index() {
+            return self.occluded_lanes_many(rays, t_min, t_max);
+        }
+        self.occluded_lanes_in_order(rays, t_min, t_max)
+    }
+
+    /// [`Scene::occluded_lanes`] of a scene that may use its index (see
+    /// [`Scene::occluded_many`]).
+    #[inline(never)]
+    fn occluded_lanes_many(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [bool; LANES] {
+        match self.index.get(&self.objects) {
+            Some(built) => self.occluded_lanes_by_index(built, rays, t_min, t_max),
+            None => self.occluded_lanes_in_order(rays, t_min, t_max),
+        }
+    }
+
+    /// [`Scene::occluded_lanes`], asking the objects in order.
+    #[inline(always)]
+    fn occluded_lanes_in_order(
         &self,
         rays: &[Ray; LANES],
         t_min: [f64; LANES],
@@ -182,6 +238,63 @@ impl Scene {
         blocked
     }
 
+    /// [`Scene::occluded_lanes`] by the index: the unbounded objects, then those of the
+    /// hierarchy whose boxes a lane not yet blocked meets.
+    #[inline(never)]
+    fn occluded_lanes_by_index(
+        &self,
+        built: &index::Built,
+        rays: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [bool; LANES] {
+        let mut blocked = [false; LANES];
+        let ask_object = |i: usize, blocked: &mut [bool; LANES]| {
+            let obj = &self.objects[i];
+            let mut ask = [f64::NEG_INFINITY; LANES];
+            let mut any = false;
+            for lane in 0..LANES {
+                if !blocked[lane]
+                    && t_max[lane] > t_min[lane]
+                    && obj
+                        .bounds
+                        .clip(&rays[lane], t_min[lane], t_max[lane])
+                        .is_some()
+                {
+                    ask[lane] = t_max[lane];
+                    any = true;
+                }
+            }
+            if !any {
+                return;
+            }
+            let hits = obj.shape.occludes_lanes(rays, t_min, ask);
+            for lane in 0..LANES {
+                blocked[lane] |= hits[lane];
+            }
+        };
+        for &i in &built.unbounded {
+            ask_object(i as usize, &mut blocked);
+        }
+        // A blocked lane's walk ends: its range becomes empty.
+        let range = std::array::from_fn(|lane| {
+            if blocked[lane] || t_max[lane] <= t_min[lane] {
+                f64::NEG_INFINITY
+            } else {
+                t_max[lane]
+            }
+        });
+        built.bvh.walk_lanes(rays, t_min, range, |i, range| {
+            ask_object(i as usize, &mut blocked);
+            for lane in 0..LANES {
+                if blocked[lane] {
+                    range[lane] = f64::NEG_INFINITY;
+                }
+            }
+        });
+        blocked
+    }
+
     /// [`Scene::intersect`] for [`LANES`] rays at once (camera rays of neighbouring pixels):
     /// lane `i` is exactly `self.intersect(&rays[i], t_min, t_max)`. Each object is asked for
     /// the lanes whose ray meets its box (every lane where [`Scene::box_tests_skipped`]), all
@@ -192,6 +305,47 @@ impl Scene {
         t_min: f64,
         t_max: f64,
     ) -> [Option<SceneHit>; LANES] {
+        let best = if self.may_use_index() {
+            self.nearest_lanes_many(rays, t_min, t_max)
+        } else {
+            self.nearest_lanes_in_order(rays, t_min, t_max)
+        };
+        // Where every lane that hit met the same object, and that object's normals cost less
+        // asked together, they are (the same answers as `hit` gives one at a time).
+        let mut objects = best.iter().flatten().map(|&(object, _)| object);
+        let Some(first) = objects.next() else {
+            return [None; LANES];
+        };
+        if self.objects[first].normal_lanes_pays && objects.all(|object| object == first) {
+            return self.hits_on_one_object(rays, first, best);
+        }
+        std::array::from_fn(|lane| best[lane].map(|(object, t)| self.hit(&rays[lane], object, t)))
+    }
+
+    /// [`Scene::nearest_lanes_in_order`]'s answers for a scene that may use its index (see
+    /// [`Scene::occluded_many`]).
+    #[inline(never)]
+    fn nearest_lanes_many(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+    ) -> [Option<(usize, f64)>; LANES] {
+        match self.index.get(&self.objects) {
+            Some(built) => self.nearest_lanes_by_index(built, rays, t_min, t_max),
+            None => self.nearest_lanes_in_order(rays, t_min, t_max),
+        }
+    }
+
+    /// Each lane's nearest object and `t`, asking the objects in order, shrinking each lane's
+    /// range as hits are found.
+    #[inline(always)]
+    fn nearest_lanes_in_order(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+    ) -> [Option<(usize, f64)>; LANES] {
         let mut best: [Option<(usize, f64)>; LANES] = [None; LANES];
         let mut t_far = [t_max; LANES];
         for (i, obj) in self.objects.iter().enumerate() {
@@ -215,20 +369,79 @@ impl Scene {
                 }
             }
         }
-        // Where every lane that hit met the same object, and that object's normals cost less
-        // asked together, they are (the same answers as `hit` gives one at a time).
-        let mut objects = best.iter().flatten().map(|&(object, _)| object);
-        let Some(first) = objects.next() else {
-            return [None; LANES];
-        };
-        if self.objects[first].normal_lanes_pays && objects.all(|object| object == first) {
-            return self.hits_on_one_object(rays, first, best);
-        }
-        std::array::from_fn(|lane| best[lane].map(|(object, t)| self.hit(&rays[lane], object, t)))
+        best
     }
 
-    /// The nearest hit with `t_min < t < t_max`, if any.
+    /// [`Scene::nearest_lanes_in_order`]'s answers, asking only the objects of the index whose
+    /// boxes the lanes' rays meet ([`nearer_limit`] keeps the objects' order in ties).
+    #[inline(never)]
+    fn nearest_lanes_by_index(
+        &self,
+        built: &index::Built,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+    ) -> [Option<(usize, f64)>; LANES] {
+        let mut best: [Option<(usize, f64)>; LANES] = [None; LANES];
+        let ask_object = |i: usize, best: &mut [Option<(usize, f64)>; LANES]| {
+            let obj = &self.objects[i];
+            let mut ask = [f64::NEG_INFINITY; LANES];
+            let mut any = false;
+            for lane in 0..LANES {
+                let limit = nearer_limit(i, best[lane], t_max);
+                if obj.bounds.clip(&rays[lane], t_min, limit).is_some() {
+                    ask[lane] = limit;
+                    any = true;
+                }
+            }
+            if !any {
+                return;
+            }
+            let hits = obj.shape.intersect_lanes(rays, [t_min; LANES], ask);
+            for lane in 0..LANES {
+                if let Some(t) = hits[lane] {
+                    best[lane] = Some((i, t));
+                }
+            }
+        };
+        for &i in &built.unbounded {
+            ask_object(i as usize, &mut best);
+        }
+        let range = best.map(|hit| walk_limit(hit, t_max));
+        built
+            .bvh
+            .walk_lanes(rays, [t_min; LANES], range, |i, range| {
+                ask_object(i as usize, &mut best);
+                *range = best.map(|hit| walk_limit(hit, t_max));
+            });
+        best
+    }
+
+    /// The nearest hit with `t_min < t < t_max`, if any. Where two objects are met at the same
+    /// `t`, the one written first.
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SceneHit> {
+        let best = if self.may_use_index() {
+            self.nearest_many(ray, t_min, t_max)
+        } else {
+            self.nearest_in_order(ray, t_min, t_max)
+        };
+        best.map(|(object, t)| self.hit(ray, object, t))
+    }
+
+    /// [`Scene::nearest_in_order`]'s answer for a scene that may use its index (see
+    /// [`Scene::occluded_many`]).
+    #[inline(never)]
+    fn nearest_many(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(usize, f64)> {
+        match self.index.get(&self.objects) {
+            Some(built) => self.nearest_by_index(built, ray, t_min, t_max),
+            None => self.nearest_in_order(ray, t_min, t_max),
+        }
+    }
+
+    /// The nearest object and `t`, asking the objects in order and shrinking the range as
+    /// hits are found.
+    #[inline(always)]
+    fn nearest_in_order(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(usize, f64)> {
         let mut best: Option<(usize, f64)> = None;
         let mut t_far = t_max;
         for (i, obj) in self.objects.iter().enumerate() {
@@ -240,7 +453,84 @@ impl Scene {
                 best = Some((i, t));
             }
         }
-        best.map(|(object, t)| self.hit(ray, object, t))
+        best
+    }
+
+    /// [`Scene::nearest_in_order`]'s answer, asking only the objects of the index whose boxes
+    /// the ray meets ([`nearer_limit`] keeps the objects' order in ties).
+    #[inline(never)]
+    fn nearest_by_index(
+        &self,
+        built: &index::Built,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<(usize, f64)> {
+        let mut best: Option<(usize, f64)> = None;
+        let ask_object = |i: usize, best: &mut Option<(usize, f64)>| {
+            let obj = &self.objects[i];
+            let limit = nearer_limit(i, *best, t_max);
+            if obj.bounds.clip(ray, t_min, limit).is_none() {
+                return;
+            }
+            if let Some(t) = obj.shape.intersect(ray, t_min, limit) {
+                *best = Some((i, t));
+            }
+        };
+        for &i in &built.unbounded {
+            ask_object(i as usize, &mut best);
+        }
+        built
+            .bvh
+            .walk(ray, t_min, walk_limit(best, t_max), |i, range| {
+                ask_object(i as usize, &mut best);
+                *range = walk_limit(best, t_max);
+            });
+        best
+    }
+
+    /// [`Scene::occluded`] by the index: the unbounded objects, then those of the hierarchy
+    /// whose boxes the ray meets, until one blocks it.
+    #[inline(never)]
+    fn occluded_by_index(&self, built: &index::Built, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        let blocks = |i: u32| {
+            let obj = &self.objects[i as usize];
+            obj.bounds.clip(ray, t_min, t_max).is_some() && obj.shape.occludes(ray, t_min, t_max)
+        };
+        if built.unbounded.iter().any(|&i| blocks(i)) {
+            return true;
+        }
+        let mut blocked = false;
+        built.bvh.walk(ray, t_min, t_max, |i, range| {
+            if blocks(i) {
+                blocked = true;
+                *range = f64::NEG_INFINITY;
+            }
+        });
+        blocked
+    }
+
+    /// The fewest objects for which the queries walk the index rather than the objects in
+    /// order. Below it the walk in order costs less: on `scenes/heart.scene` (a heart and a
+    /// floor) the index cost 12 % more instructions (docs/performance.md). Every shipped scene
+    /// has fewer.
+    pub const INDEX_MIN_OBJECTS: usize = 9;
+
+    /// Whether the scene has enough objects for the queries to use its index (they do where
+    /// it was built from these objects).
+    #[inline]
+    fn may_use_index(&self) -> bool {
+        self.objects.len() >= Self::INDEX_MIN_OBJECTS
+    }
+
+    /// The index, when the queries use it: with at least [`Scene::INDEX_MIN_OBJECTS`]
+    /// objects, and built from these.
+    #[cfg(test)]
+    fn indexed(&self) -> Option<&index::Built> {
+        if !self.may_use_index() {
+            return None;
+        }
+        self.index.get(&self.objects)
     }
 
     /// Whether the scene's queries ask the objects without testing the ray against their
@@ -298,6 +588,161 @@ impl Scene {
             t,
             point,
             normal: self.objects[object].shape.normal(point),
+        }
+    }
+}
+
+/// The end of the range to ask object `i` about, given the nearest hit so far `best`
+/// (object, `t`) and the query's `t_max`: objects are met in any order, yet the answer must
+/// be the one the objects asked in order would give, where an object met at the same `t` as
+/// an earlier one does not replace it. So an object after the best one is asked up to its
+/// `t` (excluded), and one before it up to its `t` included (its next float, excluded):
+/// whatever hit the object then reports is nearer by `(t, index)`.
+#[inline]
+fn nearer_limit(i: usize, best: Option<(usize, f64)>, t_max: f64) -> f64 {
+    match best {
+        None => t_max,
+        Some((j, t)) if i < j => t.next_up(),
+        Some((_, t)) => t,
+    }
+}
+
+/// The end of the range within which a hierarchy's walk still looks for objects, given the
+/// nearest hit so far: its `t` included (an earlier object may meet the ray there too).
+#[inline]
+fn walk_limit(best: Option<(usize, f64)>, t_max: f64) -> f64 {
+    best.map_or(t_max, |(_, t)| t.next_up())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes::{Heart, Plane, Sphere};
+    use crate::testing::uniform_stream;
+
+    /// Spheres at random (every fifth one a copy of the one before, so that two objects meet
+    /// rays at the same `t`), two hearts and a floor: enough objects for the index.
+    fn crowded_scene(seed: u64, spheres: usize) -> Scene {
+        let mut u = uniform_stream(seed);
+        let mut r = move |lo: f64, hi: f64| lo + (hi - lo) * u();
+        let mut objects = Vec::new();
+        let object =
+            |shape: Box<dyn Shape>, keyword| Object::new(shape, Material::default(), keyword, 1);
+        let mut last = (DVec3::ZERO, 1.0);
+        for i in 0..spheres {
+            if i % 5 != 4 {
+                last = (
+                    DVec3::new(r(-3.0, 3.0), r(-3.0, 3.0), r(-3.0, 3.0)),
+                    r(0.05, 0.6),
+                );
+            }
+            objects.push(object(
+                Box::new(Sphere::new(last.0, last.1).unwrap()),
+                "SPHERE",
+            ));
+            if i == spheres / 2 {
+                objects.push(object(
+                    Box::new(Plane::new(DVec3::new(0.0, 0.0, -2.5), DVec3::Z).unwrap()),
+                    "PLANE",
+                ));
+            }
+        }
+        for p in [DVec3::new(0.0, 1.0, 0.0), DVec3::new(1.0, -1.0, 0.5)] {
+            let h = Heart::new(p, DVec3::X * 0.8, DVec3::Y * 0.8, DVec3::Z * 0.8).unwrap();
+            objects.push(object(Box::new(h), "HEART"));
+        }
+        Scene {
+            width: 10,
+            height: 10,
+            camera: Camera::new(DVec3::new(8.0, 0.0, 0.0), DVec3::ZERO, DVec3::Z, 40.0).unwrap(),
+            background: DVec3::ZERO,
+            ambient: DVec3::ZERO,
+            lights: Vec::new(),
+            index: ObjectIndex::of(&objects),
+            objects,
+        }
+    }
+
+    fn rays(seed: u64) -> impl FnMut() -> Ray {
+        let mut u = uniform_stream(seed);
+        move || {
+            let o = DVec3::new(8.0 * u() - 4.0, 8.0 * u() - 4.0, 8.0 * u() - 4.0) * 2.0;
+            let target = DVec3::new(6.0 * u() - 3.0, 6.0 * u() - 3.0, 6.0 * u() - 3.0);
+            Ray::new(o, target - o)
+        }
+    }
+
+    #[test]
+    fn the_index_gives_the_answers_of_the_walk_in_order_ties_to_the_first_object() {
+        for seed in 1..4 {
+            let scene = crowded_scene(seed, 60);
+            let built = scene.indexed().expect("the index is used");
+            assert_eq!(built.unbounded.len(), 1);
+            let mut ray = rays(seed + 10);
+            let mut ties = 0;
+            for _ in 0..3000 {
+                let r = ray();
+                let in_order = scene.nearest_in_order(&r, 0.0, f64::INFINITY);
+                let by_index = scene.nearest_by_index(built, &r, 0.0, f64::INFINITY);
+                assert_eq!(by_index, in_order, "{r:?}");
+                // A copied sphere met first: its original (the object before it) must win.
+                if let Some((i, t)) = in_order {
+                    if i + 1 < scene.objects.len()
+                        && scene.objects[i + 1].shape.intersect(&r, 0.0, f64::INFINITY) == Some(t)
+                    {
+                        ties += 1;
+                    }
+                }
+                let shadow_end = in_order.map_or(5.0, |(_, t)| t * 1.5);
+                let any_in_order = scene
+                    .objects
+                    .iter()
+                    .any(|o| o.shape.occludes(&r, 0.0, shadow_end));
+                assert_eq!(scene.occluded(&r, 0.0, shadow_end), any_in_order);
+            }
+            assert!(ties > 20, "only {ties} ties tested");
+        }
+    }
+
+    #[test]
+    fn the_index_lanes_answer_as_each_ray_alone() {
+        let scene = crowded_scene(9, 80);
+        let mut ray = rays(99);
+        for k in 0..1500 {
+            let rs: [Ray; LANES] = std::array::from_fn(|_| ray());
+            let alone = rs.map(|r| scene.intersect(&r, 0.0, f64::INFINITY));
+            assert_eq!(scene.intersect_lanes(&rs, 0.0, f64::INFINITY), alone);
+            let t_max = std::array::from_fn(|lane| {
+                if lane == k % LANES {
+                    0.0
+                } else {
+                    0.5 + lane as f64
+                }
+            });
+            let each: [bool; LANES] = std::array::from_fn(|lane| {
+                t_max[lane] > 0.0 && scene.occluded(&rs[lane], 0.0, t_max[lane])
+            });
+            assert_eq!(scene.occluded_lanes(&rs, [0.0; LANES], t_max), each);
+        }
+    }
+
+    #[test]
+    fn objects_replaced_after_the_index_was_built_are_walked_in_order() {
+        let mut scene = crowded_scene(4, 30);
+        let mut ray = rays(5);
+        let r0 = ray();
+        let _ = scene.intersect(&r0, 0.0, f64::INFINITY);
+        scene.objects.truncate(12);
+        assert!(scene.indexed().is_none());
+        for _ in 0..500 {
+            let r = ray();
+            let expected = scene.nearest_in_order(&r, 0.0, f64::INFINITY);
+            assert_eq!(
+                scene
+                    .intersect(&r, 0.0, f64::INFINITY)
+                    .map(|h| (h.object, h.t)),
+                expected
+            );
         }
     }
 }

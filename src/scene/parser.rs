@@ -8,10 +8,11 @@ use std::ops::Range;
 use super::cursor::{parse_number, shorten, suggest, Cursor, NumberError, Source, VecArg};
 use super::error::{ceil_boundary, floor_boundary};
 use super::expr::{self, Names};
-use super::lexer::{lex_line, Token, TokenKind};
+use super::lexer::{Token, TokenKind};
 use super::limits::{self, Limits};
+use super::repeat::{self, Header};
 use super::surface::{end_after_surface, is_reserved, property, surface, Materials};
-use super::{Animation, LoadOptions, Object, Scene, SceneError};
+use super::{Animation, LoadOptions, Object, ObjectIndex, Scene, SceneError};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::{DVec3, Frame, FrameError};
 use crate::lights::Light;
@@ -110,6 +111,16 @@ pub(super) const STATEMENTS: &[Statement] = &[
         read: Builder::let_statement,
     },
     Statement {
+        keyword: "REPEAT",
+        usage: "REPEAT name FROM first TO last [STEP step]   (the lines to repeat, then END)",
+        read: Builder::repeat,
+    },
+    Statement {
+        keyword: "END",
+        usage: "END   (closes the nearest open REPEAT)",
+        read: Builder::end,
+    },
+    Statement {
         keyword: "FRAMES",
         usage: "FRAMES n [FPS f]",
         read: Builder::frames,
@@ -140,35 +151,7 @@ pub fn parse_animated(text: &str, name: &str, options: &LoadOptions) -> Result<(
         ..Builder::default()
     };
     let mut names = Names::new(options.time);
-    let mut offset = 0;
-    let mut last_token_end = 0;
-    for (i, raw) in text.split('\n').enumerate() {
-        let start = offset;
-        offset += raw.len() + 1;
-        let tokens = lex_line(text, start, start + raw.len())
-            .map_err(|e| src.error(e.span, e.message, e.label, None))?;
-        let Some(last) = tokens.last() else {
-            continue;
-        };
-        last_token_end = last.span.end;
-        let mut cur = Cursor {
-            src,
-            tokens,
-            pos: 0,
-            line: i + 1,
-            next_line: offset.min(text.len()),
-            keyword: "",
-            usage: "",
-            part_usage: None,
-            names: &names,
-            uses_time: false,
-        };
-        builder.statement(&mut cur)?;
-        builder.uses_time |= cur.uses_time;
-        if let Some((name, value, uses_time)) = builder.defined.take() {
-            expr::define(&mut names, name, value, uses_time, i + 1);
-        }
-    }
+    let last_token_end = repeat::read_lines(src, &mut builder, &mut names)?;
     builder.finish(src, last_token_end)
 }
 
@@ -209,14 +192,16 @@ pub(super) struct Builder {
     /// `FRAMES n [FPS f]` and its line.
     frames: Option<((u32, f64), usize)>,
     /// A `LET` just read: name, value, whether it depends on the time.
-    defined: Option<(String, f64, bool)>,
+    pub(super) defined: Option<(String, f64, bool)>,
+    /// A `REPEAT` just read: its loop, which the reader of the lines runs.
+    pub(super) repeat: Option<Header>,
     /// Some value read so far depends on the time.
-    uses_time: bool,
+    pub(super) uses_time: bool,
 }
 
 impl Builder {
     /// One statement: finds its row of [`STATEMENTS`] and lets it read the line.
-    fn statement(&mut self, cur: &mut Cursor) -> Result<()> {
+    pub(super) fn statement(&mut self, cur: &mut Cursor) -> Result<()> {
         let first = cur.peek().expect("lines without tokens are skipped");
         let word = match first.kind {
             TokenKind::Word => cur.text(&first),
@@ -332,6 +317,18 @@ impl Builder {
         let (name, value, uses_time, _) = expr::let_statement(cur)?;
         self.defined = Some((name, value, uses_time));
         Ok(())
+    }
+
+    /// `REPEAT name FROM first TO last [STEP step]`: the loop is recorded once the line is
+    /// read, and run by `repeat::read_lines`.
+    fn repeat(&mut self, cur: &mut Cursor) -> Result<()> {
+        self.repeat = Some(repeat::header(cur)?);
+        Ok(())
+    }
+
+    /// `END`: nothing more on the line (the reader of the lines matches it to its `REPEAT`).
+    fn end(&mut self, cur: &mut Cursor) -> Result<()> {
+        cur.end()
     }
 
     /// `FRAMES n [FPS f]`: values the same at every frame.
@@ -663,6 +660,7 @@ impl Builder {
             background: self.background.map_or(DVec3::ZERO, |b| b.0),
             ambient: self.ambient.map_or(DVec3::ZERO, |a| a.0),
             lights: self.lights,
+            index: ObjectIndex::of(&self.objects),
             objects: self.objects,
         };
         Ok((scene, animation))

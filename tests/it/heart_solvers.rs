@@ -129,6 +129,7 @@ fn scene_reports_the_nearest_heart_with_its_normal() {
         background: DVec3::ZERO,
         ambient: DVec3::ZERO,
         lights: Vec::new(),
+        index: Default::default(),
         objects: vec![heart(0.0, 4), heart(3.0, 5)],
     };
     // Along −X at Y = 0, Z = 0: the equator of the heart at x = 3 first (X = 1/√2).

@@ -15,6 +15,7 @@ fn scene(shape: Box<dyn Shape>, keyword: &'static str) -> Scene {
         background: DVec3::ZERO,
         ambient: DVec3::ZERO,
         lights: Vec::new(),
+        index: Default::default(),
         objects: vec![Object::new(shape, Material::default(), keyword, 1)],
     }
 }

@@ -93,6 +93,7 @@ fn scene(view: &View, solver: Solver, generic: bool) -> Scene {
             radius: 0.0,
             samples: 1,
         }],
+        index: Default::default(),
         objects: vec![Object::new(
             Box::new(shape),
             Material {

@@ -37,6 +37,7 @@ mod scene_files;
 mod scene_fuzz;
 mod scene_lanes;
 mod scene_ranges;
+mod scene_repeat;
 mod shapes_props;
 mod specks;
 mod study_views;

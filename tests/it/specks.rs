@@ -103,6 +103,7 @@ impl View {
                 radius: 0.0,
                 samples: 1,
             }],
+            index: Default::default(),
             objects: vec![Object::new(
                 shape,
                 Material {

@@ -27,6 +27,7 @@ pub fn scene(w: u32, h: u32, eye: DVec3, at: DVec3, fov: f64) -> Scene {
         background: DVec3::ZERO,
         ambient: DVec3::ZERO,
         lights: Vec::new(),
+        index: Default::default(),
         objects: Vec::new(),
     }
 }

@@ -1,0 +1,550 @@
+//! A bounding volume hierarchy over anything with a box: built once in O(n log n) by binned
+//! surface-area heuristic, stored flat (depth first, a node's first child right after it), and
+//! walked by one ray or by [`LANES`] rays at once, nearest child first.
+//!
+//! It knows items only by an id and an [`Aabb`]: the scene uses it for its objects (with the
+//! object's index as id), and a mesh can use it for its triangles. The walk hands each item of
+//! a leaf the ray meets to a visitor, which asks the item itself and may shrink the ray's
+//! range; what "nearest" means (ties, any hit) is the visitor's to say.
+
+use crate::geometry::{Aabb, DVec3, Ray, LANES};
+
+/// Most items a leaf holds.
+const MAX_LEAF: usize = 4;
+/// Buckets of the binned surface-area heuristic along the chosen axis.
+const BINS: usize = 12;
+/// Depth beyond which nodes are split at the median, so the walk's stack (of
+/// [`MAX_DEPTH`] entries) never overflows whatever the boxes.
+const SAH_DEPTH: usize = 40;
+/// The deepest a node can be: below [`SAH_DEPTH`] each median split halves the items, and
+/// fewer than 2⁶⁴ items fit in memory.
+const MAX_DEPTH: usize = SAH_DEPTH + 64;
+/// Cost of walking into a node, relative to asking one item (the heuristic's only constant).
+const TRAVERSAL_COST: f64 = 0.5;
+
+/// One node of the flattened tree.
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    /// Holds every item below the node.
+    bounds: Aabb,
+    /// A leaf: its first item in [`Bvh::items`]; an inner node: the index of its second
+    /// child (its first is the next node).
+    offset: u32,
+    /// A leaf: how many items it holds (≥ 1); an inner node: 0.
+    count: u32,
+    /// An inner node: the axis its children were split on, the first child's items lower.
+    axis: u8,
+}
+
+/// A bounding volume hierarchy over items given as `(id, box)`: every finite box is held
+/// by each of its ancestors' boxes, and each item sits in exactly one leaf.
+#[derive(Debug, Clone, Default)]
+pub struct Bvh {
+    nodes: Vec<Node>,
+    /// The items' ids, leaf by leaf.
+    items: Vec<u32>,
+}
+
+/// An item while building: its id, box and the box's centre.
+#[derive(Clone, Copy)]
+struct Build {
+    id: u32,
+    bounds: Aabb,
+    centre: DVec3,
+}
+
+impl Bvh {
+    /// The hierarchy of `items` (each an id and a box with finite corners, or an empty box
+    /// such as [`Aabb::EMPTY`], which holds nothing: the walk need not visit it). Ids need not be distinct or in order. Time
+    /// O(n log n) for n items.
+    ///
+    /// # Panics
+    /// When a box has a NaN or infinite corner other than [`Aabb::EMPTY`]'s, or when there are
+    /// 2³² items or more.
+    pub fn new(items: &[(u32, Aabb)]) -> Self {
+        assert!(
+            u32::try_from(items.len()).is_ok(),
+            "too many items for a Bvh"
+        );
+        let mut build: Vec<Build> = items
+            .iter()
+            .map(|&(id, bounds)| {
+                let empty = bounds.min.cmpgt(bounds.max).any();
+                assert!(
+                    bounds.is_finite() || empty,
+                    "a Bvh holds finite boxes only: {bounds:?}"
+                );
+                // An empty box sorts with the others by a centre of zeros.
+                let centre = if empty {
+                    DVec3::ZERO
+                } else {
+                    (bounds.min + bounds.max) * 0.5
+                };
+                Build { id, bounds, centre }
+            })
+            .collect();
+        let mut bvh = Self {
+            nodes: Vec::with_capacity(2 * items.len().div_ceil(MAX_LEAF).max(1)),
+            items: Vec::with_capacity(items.len()),
+        };
+        if !build.is_empty() {
+            bvh.split(&mut build, 0);
+        }
+        bvh
+    }
+
+    /// Whether it holds no item.
+    pub fn is_empty(&self) -> bool {
+        self.items.is_empty()
+    }
+
+    /// The number of items it holds.
+    pub fn len(&self) -> usize {
+        self.items.len()
+    }
+
+    /// Adds the node of `items` (non-empty) at `depth` and its subtree; returns its index.
+    fn split(&mut self, items: &mut [Build], depth: usize) -> usize {
+        let bounds = items.iter().fold(Aabb::EMPTY, |b, i| b.union(i.bounds));
+        let index = self.nodes.len();
+        self.nodes.push(Node {
+            bounds,
+            offset: 0,
+            count: 0,
+            axis: 0,
+        });
+        let Some((axis, mid)) = self.choose_split(items, &bounds, depth) else {
+            self.nodes[index].offset = self.items.len() as u32;
+            self.nodes[index].count = items.len() as u32;
+            self.items.extend(items.iter().map(|i| i.id));
+            return index;
+        };
+        let (low, high) = items.split_at_mut(mid);
+        self.split(low, depth + 1);
+        let second = self.split(high, depth + 1);
+        self.nodes[index].offset = second as u32;
+        self.nodes[index].axis = axis as u8;
+        index
+    }
+
+    /// Splits `items` in place into two non-empty parts, the first lower along the returned
+    /// axis, and returns `(axis, length of the first part)`; `None` when they are better kept
+    /// as one leaf.
+    fn choose_split(
+        &self,
+        items: &mut [Build],
+        bounds: &Aabb,
+        depth: usize,
+    ) -> Option<(usize, usize)> {
+        let n = items.len();
+        if n <= 1 {
+            return None;
+        }
+        let centres = items.iter().fold(Aabb::EMPTY, |b, i| b.including(i.centre));
+        let extent = centres.max - centres.min;
+        let axis = if extent.x >= extent.y && extent.x >= extent.z {
+            0
+        } else if extent.y >= extent.z {
+            1
+        } else {
+            2
+        };
+        let by_centre = |a: &Build, b: &Build| a.centre[axis].total_cmp(&b.centre[axis]);
+        if extent[axis] <= 0.0 || depth >= SAH_DEPTH {
+            // All centres alike (or too deep for the heuristic): a leaf if small enough,
+            // else halves by count.
+            if n <= MAX_LEAF {
+                return None;
+            }
+            items.select_nth_unstable_by(n / 2, by_centre);
+            return Some((axis, n / 2));
+        }
+        // Binned SAH: each item to one of BINS buckets by its centre.
+        let (lo, scale) = (centres.min[axis], BINS as f64 / extent[axis]);
+        let bin_of = |c: f64| (((c - lo) * scale) as usize).min(BINS - 1);
+        let mut counts = [0usize; BINS];
+        let mut boxes = [Aabb::EMPTY; BINS];
+        for item in items.iter() {
+            let b = bin_of(item.centre[axis]);
+            counts[b] += 1;
+            boxes[b] = boxes[b].union(item.bounds);
+        }
+        // Cost of cutting after bin k: areas of both sides times their counts.
+        let mut below = [(0usize, 0.0f64); BINS - 1];
+        let (mut count, mut acc) = (0, Aabb::EMPTY);
+        for k in 0..BINS - 1 {
+            count += counts[k];
+            acc = acc.union(boxes[k]);
+            below[k] = (count, half_area(&acc));
+        }
+        let (mut best, mut best_cost) = (0, f64::INFINITY);
+        let (mut count, mut acc) = (0, Aabb::EMPTY);
+        for k in (0..BINS - 1).rev() {
+            count += counts[k + 1];
+            acc = acc.union(boxes[k + 1]);
+            let (n_below, a_below) = below[k];
+            if n_below == 0 || count == 0 {
+                continue;
+            }
+            let cost = n_below as f64 * a_below + count as f64 * half_area(&acc);
+            if cost < best_cost {
+                (best, best_cost) = (k, cost);
+            }
+        }
+        let area = half_area(bounds);
+        let split_cost = TRAVERSAL_COST + best_cost / area.max(f64::MIN_POSITIVE);
+        if n <= MAX_LEAF && (split_cost.is_nan() || split_cost >= n as f64) {
+            return None;
+        }
+        if best_cost.is_infinite() {
+            items.select_nth_unstable_by(n / 2, by_centre);
+            return Some((axis, n / 2));
+        }
+        let mut mid = 0;
+        for i in 0..n {
+            if bin_of(items[i].centre[axis]) <= best {
+                items.swap(i, mid);
+                mid += 1;
+            }
+        }
+        Some((axis, mid))
+    }
+
+    /// Walks the tree for `ray` on `(t_min, t_max)`: calls `visit(id, &mut t_max)` for each
+    /// item of each leaf whose box the ray meets within the current range (nearest child
+    /// first), where `visit` asks the item (the item's own box is not tested here) and may
+    /// lower `t_max`; lowering it below `t_min` (e.g. to `−∞`) ends the walk. Every item whose
+    /// box meets the ray on the range as it stands when its leaf is reached is visited.
+    #[inline]
+    pub fn walk(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        mut t_max: f64,
+        mut visit: impl FnMut(u32, &mut f64),
+    ) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let inv = DVec3::ONE / ray.dir;
+        let mut stack = [0u32; MAX_DEPTH];
+        let mut top = 0;
+        let mut node = 0usize;
+        loop {
+            let n = &self.nodes[node];
+            if t_max >= t_min && meets(&n.bounds, ray, inv, t_min, t_max) {
+                if n.count > 0 {
+                    let first = n.offset as usize;
+                    for &id in &self.items[first..first + n.count as usize] {
+                        visit(id, &mut t_max);
+                        if t_max.is_nan() || t_min.is_nan() || t_max < t_min {
+                            return;
+                        }
+                    }
+                } else {
+                    // Nearest child first: the first child is lower along the axis.
+                    let (near, far) = if ray.dir[n.axis as usize] >= 0.0 {
+                        (node + 1, n.offset as usize)
+                    } else {
+                        (n.offset as usize, node + 1)
+                    };
+                    stack[top] = far as u32;
+                    top += 1;
+                    node = near;
+                    continue;
+                }
+            }
+            if top == 0 {
+                return;
+            }
+            top -= 1;
+            node = stack[top] as usize;
+        }
+    }
+
+    /// [`Bvh::walk`] for [`LANES`] rays at once: calls `visit(id, &mut t_max)` for each item of
+    /// each leaf whose box some lane's ray meets within that lane's current range (lane `i`
+    /// on `(t_min[i], t_max[i])`; a lane with `t_max[i] < t_min[i]` is idle), nearest child
+    /// first along the first active lane's direction. `visit` asks the item for the lanes it
+    /// chooses and may lower any lane's `t_max`. Every item whose box meets some lane's ray
+    /// on its range as it stands when the item's leaf is reached is visited.
+    #[inline]
+    pub fn walk_lanes(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: [f64; LANES],
+        mut t_max: [f64; LANES],
+        mut visit: impl FnMut(u32, &mut [f64; LANES]),
+    ) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let inv: [DVec3; LANES] = std::array::from_fn(|lane| DVec3::ONE / rays[lane].dir);
+        let mut stack = [0u32; MAX_DEPTH];
+        let mut top = 0;
+        let mut node = 0usize;
+        loop {
+            let n = &self.nodes[node];
+            let mut lead = None;
+            for lane in 0..LANES {
+                if t_max[lane] >= t_min[lane]
+                    && meets(&n.bounds, &rays[lane], inv[lane], t_min[lane], t_max[lane])
+                {
+                    lead = Some(lane);
+                    break;
+                }
+            }
+            if let Some(lead) = lead {
+                if n.count > 0 {
+                    let first = n.offset as usize;
+                    for &id in &self.items[first..first + n.count as usize] {
+                        visit(id, &mut t_max);
+                    }
+                } else {
+                    let (near, far) = if rays[lead].dir[n.axis as usize] >= 0.0 {
+                        (node + 1, n.offset as usize)
+                    } else {
+                        (n.offset as usize, node + 1)
+                    };
+                    stack[top] = far as u32;
+                    top += 1;
+                    node = near;
+                    continue;
+                }
+            }
+            if top == 0 {
+                return;
+            }
+            top -= 1;
+            node = stack[top] as usize;
+        }
+    }
+}
+
+/// Half the surface area of a box (0 for an empty one).
+fn half_area(b: &Aabb) -> f64 {
+    let d = (b.max - b.min).max(DVec3::ZERO);
+    d.x * d.y + d.y * d.z + d.z * d.x
+}
+
+/// Whether `ray` meets `bounds` on `[t_min, t_max]`, with `inv = 1 / ray.dir`: true
+/// whenever [`Aabb::clip`] of the same box, or of any box inside it, is `Some` there (the
+/// same slab arithmetic, so never a miss where the items' own tests would meet).
+#[inline(always)]
+fn meets(bounds: &Aabb, ray: &Ray, inv: DVec3, t_min: f64, t_max: f64) -> bool {
+    let (mut t0, mut t1) = (t_min, t_max);
+    for axis in 0..3 {
+        let (o, d) = (ray.origin[axis], ray.dir[axis]);
+        let (lo, hi) = (bounds.min[axis], bounds.max[axis]);
+        if d == 0.0 {
+            if o < lo || o > hi {
+                return false;
+            }
+            continue;
+        }
+        let (mut a, mut b) = ((lo - o) * inv[axis], (hi - o) * inv[axis]);
+        if a > b {
+            std::mem::swap(&mut a, &mut b);
+        }
+        if a > t0 {
+            t0 = a;
+        }
+        if b < t1 {
+            t1 = b;
+        }
+        if t0 > t1 {
+            return false;
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::uniform_stream;
+
+    /// Draws uniform numbers in a range from a stream.
+    struct Uniform(Box<dyn FnMut() -> f64>);
+
+    impl Uniform {
+        fn new(seed: u64) -> Self {
+            Self(Box::new(uniform_stream(seed)))
+        }
+
+        fn range(&mut self, lo: f64, hi: f64) -> f64 {
+            lo + (hi - lo) * (self.0)()
+        }
+    }
+
+    /// Random small boxes in a cube of side 20, some of them empty.
+    fn boxes(rng: &mut Uniform, n: usize) -> Vec<(u32, Aabb)> {
+        (0..n)
+            .map(|i| {
+                let c = DVec3::new(
+                    rng.range(-10.0, 10.0),
+                    rng.range(-10.0, 10.0),
+                    rng.range(-10.0, 10.0),
+                );
+                let h = DVec3::new(
+                    rng.range(0.0, 1.0),
+                    rng.range(0.0, 1.0),
+                    rng.range(0.0, 1.0),
+                );
+                let b = if i % 17 == 5 {
+                    Aabb::EMPTY
+                } else {
+                    Aabb::new(c - h, c + h)
+                };
+                (i as u32, b)
+            })
+            .collect()
+    }
+
+    /// Whether a box holds nothing.
+    fn is_empty(b: &Aabb) -> bool {
+        b.min.cmpgt(b.max).any()
+    }
+
+    fn random_ray(rng: &mut Uniform) -> Ray {
+        let o = DVec3::new(
+            rng.range(-15.0, 15.0),
+            rng.range(-15.0, 15.0),
+            rng.range(-15.0, 15.0),
+        );
+        let mut d = DVec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
+        // Some rays parallel to a slab.
+        if rng.range(0.0, 1.0) < 0.2 {
+            d.y = 0.0;
+        }
+        Ray::new(o, d)
+    }
+
+    #[test]
+    fn every_item_is_in_one_leaf_and_every_box_inside_its_ancestors() {
+        let mut rng = Uniform::new(3);
+        for n in [0, 1, 2, 3, 5, 17, 100, 1000] {
+            let items = boxes(&mut rng, n);
+            let bvh = Bvh::new(&items);
+            let mut ids = bvh.items.clone();
+            ids.sort_unstable();
+            assert_eq!(ids, (0..n as u32).collect::<Vec<_>>());
+            // Each node's box holds its items' boxes.
+            for (k, node) in bvh.nodes.iter().enumerate() {
+                let (first, count) = leaf_range(&bvh, k);
+                for &id in &bvh.items[first..first + count] {
+                    let b = items[id as usize].1;
+                    if b.min.cmpgt(b.max).any() {
+                        continue;
+                    }
+                    assert!(node.bounds.contains(b.min) && node.bounds.contains(b.max));
+                }
+            }
+        }
+    }
+
+    /// The items below node `k`, as a range of `items` (leaves are laid out depth first).
+    fn leaf_range(bvh: &Bvh, k: usize) -> (usize, usize) {
+        let node = &bvh.nodes[k];
+        if node.count > 0 {
+            return (node.offset as usize, node.count as usize);
+        }
+        let (a, na) = leaf_range(bvh, k + 1);
+        let (b, nb) = leaf_range(bvh, node.offset as usize);
+        assert_eq!(a + na, b);
+        (a, na + nb)
+    }
+
+    #[test]
+    fn the_walk_visits_every_item_whose_box_the_ray_meets() {
+        let mut rng = Uniform::new(7);
+        let items = boxes(&mut rng, 500);
+        let bvh = Bvh::new(&items);
+        for _ in 0..2000 {
+            let ray = random_ray(&mut rng);
+            let (t_min, t_max) = (rng.range(-5.0, 1.0), rng.range(0.5, 40.0));
+            let mut seen = vec![false; items.len()];
+            bvh.walk(&ray, t_min, t_max, |id, _| seen[id as usize] = true);
+            for (id, b) in items.iter().filter(|(_, b)| !is_empty(b)) {
+                if b.clip(&ray, t_min, t_max).is_some() {
+                    assert!(seen[*id as usize], "item {id} missed");
+                }
+            }
+            // The same for four rays at once: each lane's items are among those visited.
+            let rays: [Ray; LANES] = std::array::from_fn(|_| random_ray(&mut rng));
+            let mut seen = vec![false; items.len()];
+            bvh.walk_lanes(&rays, [t_min; LANES], [t_max; LANES], |id, _| {
+                seen[id as usize] = true
+            });
+            for (id, b) in items.iter().filter(|(_, b)| !is_empty(b)) {
+                if rays.iter().any(|r| b.clip(r, t_min, t_max).is_some()) {
+                    assert!(seen[*id as usize], "item {id} missed by the lanes");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn nearest_by_walk_equals_nearest_by_list() {
+        // The nearest box entry found by shrinking t_max is the nearest over all boxes.
+        let mut rng = Uniform::new(11);
+        let items = boxes(&mut rng, 300);
+        let bvh = Bvh::new(&items);
+        let mut visited = 0;
+        for _ in 0..2000 {
+            let ray = random_ray(&mut rng);
+            let by_list = items
+                .iter()
+                .filter(|(_, b)| !is_empty(b))
+                .filter_map(|(id, b)| Some((b.clip(&ray, 0.0, 100.0)?.0, *id)))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            let mut by_walk: Option<(f64, u32)> = None;
+            bvh.walk(&ray, 0.0, 100.0, |id, t_max| {
+                visited += 1;
+                let b = items[id as usize].1;
+                if is_empty(&b) {
+                    return;
+                }
+                if let Some((t, _)) = b.clip(&ray, 0.0, *t_max) {
+                    if by_walk.is_none_or(|(best, _)| t < best) {
+                        by_walk = Some((t, id));
+                        *t_max = t;
+                    }
+                }
+            });
+            assert_eq!(by_walk.map(|b| b.0), by_list.map(|b| b.0));
+        }
+        // The walk asks far fewer than every item of every ray.
+        assert!(visited < 2000 * 300 / 10, "{visited} visits");
+    }
+
+    #[test]
+    fn lowering_t_max_below_t_min_ends_the_walk() {
+        let mut rng = Uniform::new(5);
+        let items = boxes(&mut rng, 200);
+        let bvh = Bvh::new(&items);
+        let ray = Ray::new(DVec3::new(-20.0, 0.0, 0.0), DVec3::X);
+        let mut calls = 0;
+        bvh.walk(&ray, 0.0, f64::INFINITY, |_, t_max| {
+            calls += 1;
+            *t_max = f64::NEG_INFINITY;
+        });
+        assert!(calls <= 1);
+    }
+
+    #[test]
+    fn identical_boxes_in_any_number_build_and_walk() {
+        let b = Aabb::new(DVec3::ZERO, DVec3::ONE);
+        let items: Vec<_> = (0..10_000).map(|i| (i, b)).collect();
+        let bvh = Bvh::new(&items);
+        assert_eq!(bvh.len(), 10_000);
+        let mut count = 0;
+        let ray = Ray::new(DVec3::new(0.5, 0.5, -1.0), DVec3::Z);
+        bvh.walk(&ray, 0.0, 10.0, |_, _| count += 1);
+        assert_eq!(count, 10_000);
+    }
+}
