@@ -139,6 +139,20 @@ pub enum ServerMessage {
         views: Vec<&'static str>,
         /// How to read each study view's colours (every view but `shaded`).
         legends: Vec<ViewLegend>,
+        /// Where the page starts: `"equation"` (on the heart) when the server was started
+        /// without a scene, `"scene"` (on `initial`) when it was given one.
+        start_mode: &'static str,
+    },
+    /// Where the surfaces of request `seq`'s scene lie, found when the scene was loaded
+    /// (each object's world-space box, as the renderer bounds it): the page frames the view
+    /// on it ("Fit"). Sent once per scene text, not for a change of camera alone.
+    Extent {
+        /// The request.
+        seq: u64,
+        /// Lower corner of the box holding every object, world units.
+        min: [f64; 3],
+        /// Upper corner, world units.
+        max: [f64; 3],
     },
     /// The scene of request `seq` did not parse; the last good image stays.
     SceneError {
