@@ -34,6 +34,9 @@ pub enum ClientMessage {
         /// Its parameters.
         params: Vec<f64>,
     },
+    /// The page is hidden: stop refining its view (the pass in flight is cancelled) until
+    /// it sends a view again.
+    Pause {},
     /// Render this scene once at this size and samples, and send it as a PNG.
     Save {
         /// Echoed in the reply.
@@ -302,6 +305,11 @@ mod tests {
         )
         .is_err());
         assert!(serde_json::from_str::<ClientMessage>(r#"{"type":"open_file"}"#).is_err());
+        assert_eq!(
+            serde_json::from_str::<ClientMessage>(r#"{"type":"pause"}"#).unwrap(),
+            ClientMessage::Pause {}
+        );
+        assert!(serde_json::from_str::<ClientMessage>(r#"{"type":"pause","x":1}"#).is_err());
     }
 
     #[test]

@@ -194,6 +194,10 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                     let _ = out.send(error_message(Some(seq), why)).await;
                 }
             },
+            ClientMessage::Pause {} => {
+                // No job: the render task cancels its pass and waits for the next view.
+                jobs.send_if_modified(|current| current.take().is_some());
+            }
             ClientMessage::Preset { name, params } => {
                 let reply = match crate::shapes::implicit::preset(&name, &params) {
                     Ok(p) => ServerMessage::Preset {

@@ -486,6 +486,25 @@ await check("Save names its file after the surface and its parameters", async ()
   assert.match(await page.evaluate(() => window.kardia.lastFileName), /^kardia-torus-1\.85-0\.3\.png$/);
 });
 
+await check("a hidden page pauses its refinement and resumes when shown", async () => {
+  await page.click('#gallery button[data-preset="sarti"]');
+  await page.waitForFunction(() => window.kardia.frames.some((f) => f.seq === window.kardia.sent() && f.spp >= 2),
+    null, { timeout: 60000 });
+  const setVisibility = (state) => page.evaluate((state) => {
+    Object.defineProperty(document, "visibilityState", { value: state, configurable: true });
+    document.dispatchEvent(new Event("visibilitychange"));
+  }, state);
+  await setVisibility("hidden");
+  await page.waitForTimeout(300); // a frame already on its way may still arrive
+  const frames = await page.evaluate(() => window.kardia.frames.length);
+  await page.waitForTimeout(1500);
+  assert.equal(await page.evaluate(() => window.kardia.frames.length), frames, "no frames while hidden");
+  const seq = await sentSeq();
+  await setVisibility("visible");
+  assert.equal(await sentSeq(), seq + 1, "the view is asked for again");
+  await fullFrameAfter(seq);
+});
+
 for (const [width, height] of [[390, 844], [768, 1024], [1280, 800]]) {
   await check(`at ${width}×${height}: the image fills the width on narrow screens, nothing scrolls sideways`, async () => {
     const screen = await context.newPage();

@@ -295,7 +295,7 @@ function onBinary(buffer) {
   }
   if (header.seq === seq) canvas.classList.remove("stale");
   const ms = performance.now() - stats.firstInput;
-  window.kardia.frames.push({ ...header, sinceInput: ms });
+  window.kardia.frames.push({ ...header, sinceInput: ms, receivedAt: performance.now() });
   if (window.kardia.frames.length > 1000) window.kardia.frames.shift();
   const full = header.width === header.view_width;
   const max = hello.limits.max_view_spp;
@@ -557,7 +557,9 @@ function fit() {
   if (!e) return;
   const c = state.camera;
   const centre = mul(add(e.min, e.max), 0.5);
-  const radius = Math.max(1e-6, len(sub(e.max, e.min)) / 2);
+  const radius = len(sub(e.max, e.min)) / 2;
+  // An empty or point-like surface (no real zeros, or a single point) is not framed.
+  if (!(radius > 1e-3) || !centre.every(Number.isFinite)) return;
   const [w, h] = viewSize();
   const half = Math.min((c.fov * Math.PI) / 360, Math.atan(Math.tan((c.fov * Math.PI) / 360) * (h / w)));
   const distance = (radius / Math.sin(half)) * 1.02;
@@ -1077,6 +1079,20 @@ function readUrl() {
   if (state.mode === "equation") state.homeCamera = structuredClone(DEFAULT_CAMERA);
   return messages;
 }
+
+// A hidden page stops its refinement (the server renders nothing for it) and asks for its
+// view again when shown.
+document.addEventListener("visibilitychange", () => {
+  if (document.visibilityState === "hidden") {
+    clearTimeout(pendingTimer);
+    send({ type: "pause" });
+    window.kardia.paused = true;
+  } else {
+    window.kardia.paused = false;
+    lastText = "";
+    update();
+  }
+});
 
 new ResizeObserver(() => update()).observe(canvas);
 connect();
