@@ -61,6 +61,11 @@ pub fn presets() -> Vec<GalleryPreset> {
         scale,
         bound,
     };
+    let classic = |id, title, about, equation, scale, bound| GalleryPreset {
+        preset: None,
+        equation: Some(equation),
+        ..entry(id, title, about, scale, bound)
+    };
     vec![
         entry(
             "heart",
@@ -134,7 +139,144 @@ pub fn presets() -> Vec<GalleryPreset> {
                 1.5,
             )
         },
+        classic(
+            "cayley",
+            "Cayley's cubic",
+            "Cayley's nodal cubic: four double points, the most a cubic surface can have, at the corners of a tetrahedron where its cones meet.",
+            "4*(x^2 + y^2 + z^2) + 16*x*y*z - 1",
+            0.9,
+            1.6,
+        ),
+        classic(
+            "roman",
+            "Steiner's Roman surface",
+            "Steiner's Roman surface: the real projective plane squeezed into space; three lines of self-intersection cross at the centre and end in six pinch points.",
+            "x^2*y^2 + y^2*z^2 + z^2*x^2 - x*y*z",
+            2.2,
+            1.0,
+        ),
+        classic(
+            "togliatti",
+            "Togliatti quintic",
+            "Togliatti's quintic with 31 nodes, the most a quintic can have (Beauville proved it): a cone of degree two and five planes, in five-fold symmetry.",
+            concat!(
+                "(1 - 0.831253875554907*z)*(x^2 + y^2 - 1 + 1.927050983124842*z^2)^2 - ",
+                "3.849606112048293*(x - z)*(0.309016994374947*x + 0.951056516295154*y - ",
+                "z)*(-0.809016994374947*x + 0.587785252292473*y - z)*(-0.809016994374948*x - ",
+                "0.587785252292473*y - z)*(0.309016994374947*x - 0.951056516295154*y - z)",
+            ),
+            0.36,
+            3.8,
+        ),
+        classic(
+            "barth_decic",
+            "Barth decic",
+            "Barth's decic: 345 nodes, with the symmetries of the icosahedron and golden-ratio coefficients.",
+            concat!(
+                "8*(x^2 - 6.854101966249686*y^2)*(y^2 - 6.854101966249686*z^2)*(z^2 - ",
+                "6.854101966249686*x^2)*(x^4 + y^4 + z^4 - 2*x^2*y^2 - 2*y^2*z^2 - 2*z^2*x^2) + ",
+                "11.090169943749475*(x^2 + y^2 + z^2 - 1)^2*(x^2 + y^2 + z^2 - ",
+                "0.381966011250105)^2",
+            ),
+            0.9,
+            1.8,
+        ),
+        classic(
+            "labs",
+            "Labs septic",
+            "Labs' septic with 99 nodes, the most known for degree seven; seven-fold symmetry, and a coefficient that is a root of a cubic.",
+            concat!(
+                "x*(x^6 - 21*x^4*y^2 + 35*x^2*y^4 - 7*y^6) + 7*z*((x^2 + y^2)^3 - 8*z^2*(x^2 + ",
+                "y^2)^2 + 16*z^4*(x^2 + y^2)) - 64*z^7 - (z + 51.94261459481465)*((z + 1)*(x^2 + ",
+                "y^2) - 0.078528201496985*z^3 - 4.158360592288017*z^2 - 4.147143488965512*z - ",
+                "1.188165938071479)^2",
+            ),
+            0.2,
+            7.0,
+        ),
+        classic(
+            "endrass",
+            "Endraß octic",
+            "Endraß's octic: 168 nodes, the most known for degree eight, with the eight-fold symmetry of its four pairs of planes.",
+            concat!(
+                "64*(x^2 - 1)*(y^2 - 1)*((x + y)^2 - 2)*((x - y)^2 - 2) - (-4*(1 + ",
+                "2*1.414213562373095)*(x^2 + y^2)^2 + 8*(2 + 3*1.414213562373095)*z^2*(x^2 + y^2) ",
+                "+ 2*(2 + 7*1.414213562373095)*(x^2 + y^2) - 16*z^4 + 8*(1 - ",
+                "2*1.414213562373095)*z^2 - (1 + 12*1.414213562373095))^2",
+            ),
+            0.34,
+            3.6,
+        ),
+        classic(
+            "sarti",
+            "Sarti dodecic",
+            "Sarti's dodecic: 600 nodes, the most known for degree twelve, built from invariants of a group of order 7200.",
+            concat!(
+                "243*(73.79024325749306*((x^2*y^2 + z^2)^2*(x^2*z^2 + y^2) - (x^2*y^2 + ",
+                "z^2)*(x^2*z^2 + y^2)^2 + (x^2*z^2 + y^2)^2*(x^2 + y^2*z^2) - (x^2*z^2 + ",
+                "y^2)*(x^2 + y^2*z^2)^2 + (x^2 + y^2*z^2)^2*(x^2*y^2 + z^2) - (x^2 + ",
+                "y^2*z^2)*(x^2*y^2 + z^2)^2) + 19*((x^2*y^2 + z^2)^2*(x^2*z^2 + y^2) + (x^2*y^2 + ",
+                "z^2)*(x^2*z^2 + y^2)^2 + (x^2*z^2 + y^2)^2*(x^2 + y^2*z^2) + (x^2*z^2 + ",
+                "y^2)*(x^2 + y^2*z^2)^2 + (x^2 + y^2*z^2)^2*(x^2*y^2 + z^2) + (x^2 + ",
+                "y^2*z^2)*(x^2*y^2 + z^2)^2) + 10*((x^2*y^2 + z^2)^3 + (x^2*z^2 + y^2)^3 + (x^2 + ",
+                "y^2*z^2)^3) - 14*(x^4 + y^4 + z^4 + 1)*((x^2*y^2 + z^2)*(x^2*z^2 + y^2) + ",
+                "(x^2*y^2 + z^2)*(x^2 + y^2*z^2) + (x^2*z^2 + y^2)*(x^2 + y^2*z^2)) + 2*(x^4 + ",
+                "y^4 + z^4 + 1)^2*((x^2*y^2 + z^2) + (x^2*z^2 + y^2) + (x^2 + y^2*z^2)) - 6*(x^4 ",
+                "+ y^4 + z^4 + 1)*((x^2*y^2 + z^2)^2 + (x^2*z^2 + y^2)^2 + (x^2 + y^2*z^2)^2) - ",
+                "352*(x*y*z)^2*((x^2*y^2 + z^2) + (x^2*z^2 + y^2) + (x^2 + y^2*z^2)) + ",
+                "336*(x*y*z)^2*(x^4 + y^4 + z^4 + 1) + 48*(x^2*y^2 + z^2)*(x^2*z^2 + y^2)*(x^2 + ",
+                "y^2*z^2)) - 22*(x^2 + y^2 + z^2 + 1)^6",
+            ),
+            0.4,
+            3.7,
+        ),
+        classic(
+            "dingdong",
+            "Ding-dong",
+            "x² + y² = z²(1 − z): a cone with a ball on its tip, touching at one node.",
+            "x^2 + y^2 + z^3 - z^2",
+            0.8,
+            1.6,
+        ),
     ]
+}
+
+/// Camera of equation mode's default view, as the page writes it: eye, look-at, up,
+/// horizontal field of view in degrees.
+pub const DEFAULT_CAMERA: ([f64; 3], [f64; 3], [f64; 3], f64) =
+    ([6.0, 1.2, 0.9], [0.0, 0.0, 0.05], [0.0, 0.0, 1.0], 32.0);
+
+/// The equation-mode scene of `entry` at its default parameters, seen from
+/// [`DEFAULT_CAMERA`] with the page's lights and default colours: what its gallery thumbnail
+/// shows (`kardia render` of this text draws the same image).
+pub fn scene_text(entry: &GalleryPreset) -> String {
+    let surface = match (entry.preset, entry.equation) {
+        (Some(name), _) => {
+            let params: Vec<String> = entry.sliders.iter().map(|s| s.value.to_string()).collect();
+            [name.to_string(), params.join(" ")]
+                .join(" ")
+                .trim()
+                .to_string()
+        }
+        (None, Some(equation)) => format!("\"{equation}\""),
+        (None, None) => "\"x^2 + y^2 + z^2 - 1\"".into(),
+    };
+    let (eye, look, up, fov) = DEFAULT_CAMERA;
+    let v = |a: [f64; 3]| format!("({}, {}, {})", a[0], a[1], a[2]);
+    let s = entry.scale;
+    format!(
+        "CAMERA {} {} {} {fov}\n\
+         BACKGROUND (0.03, 0.03, 0.05)\n\
+         AMBIENT (0.06, 0.06, 0.07)\n\
+         LIGHT (7, -4, 6) (0.9, 0.88, 0.85) 0.6 SAMPLES 4\n\
+         LIGHT (3, 6, 1) (0.25, 0.25, 0.3)\n\
+         IMPLICIT {surface} (0, 0, 0) ({s}, 0, 0) (0, {s}, 0) (0, 0, {s}) \
+         (0.7454, 0.0319, 0.0802) SPECULAR 0.4 60 INSIDE (0.8714, 0.6308, 0.117) BOUND {}\n",
+        v(eye),
+        v(look),
+        v(up),
+        entry.bound
+    )
 }
 
 /// The scene files of `scenes/`, as `(name, text)`, embedded at build time.
@@ -245,5 +387,43 @@ mod tests {
             }
         }
         assert!(gallery.iter().any(|g| g.equation.is_some()));
+    }
+
+    #[test]
+    fn every_gallery_scene_parses_and_its_surface_is_seen() {
+        use crate::pipeline::{Control, RenderRequest, Renderer};
+        let gallery = presets();
+        assert!(gallery.iter().filter(|g| g.equation.is_some()).count() >= 9);
+        let mut ids: Vec<_> = gallery.iter().map(|g| g.id).collect();
+        ids.sort();
+        ids.dedup();
+        assert_eq!(ids.len(), gallery.len(), "ids are unique");
+        let renderer = Renderer::new(1).unwrap();
+        for g in &gallery {
+            let text = scene_text(g);
+            let scene = parse(&text, g.id, &LoadOptions::default())
+                .unwrap_or_else(|e| panic!("{}: {e}", g.id));
+            // The surface is in the frame: a small render hits it on a good part of the
+            // image and leaves the corners to the background.
+            let request = RenderRequest {
+                width: Some(40),
+                height: Some(30),
+                spp: 1,
+                view: crate::pipeline::View::Depth,
+                ..RenderRequest::default()
+            };
+            let image = renderer
+                .render(&scene, &request, &Control::default())
+                .unwrap()
+                .image;
+            let background = image.pixels[0];
+            let covered = image.pixels.iter().filter(|p| **p != background).count();
+            let fraction = covered as f64 / image.pixels.len() as f64;
+            assert!(
+                (0.08..0.95).contains(&fraction),
+                "{}: the surface covers {fraction} of the thumbnail",
+                g.id
+            );
+        }
     }
 }

@@ -125,6 +125,9 @@ pub(crate) struct Shared {
     pub(crate) renders: AtomicUsize,
     /// Becomes `true` when the server stops: every session closes its page.
     pub(crate) stopping: tokio::sync::watch::Receiver<bool>,
+    /// The gallery's thumbnails rendered so far (PNG files, by entry id); the lock is held
+    /// while one renders, so thumbnails render one at a time.
+    pub(crate) thumbnails: tokio::sync::Mutex<std::collections::HashMap<String, Arc<Vec<u8>>>>,
 }
 
 /// A bound explorer server, not yet serving.
@@ -166,6 +169,7 @@ impl Server {
                 port,
                 clients: AtomicUsize::new(0),
                 renders: AtomicUsize::new(0),
+                thumbnails: Default::default(),
             }),
         })
     }
@@ -275,6 +279,7 @@ fn router(shared: Arc<Shared>) -> Router {
             get(page(STYLE_CSS, "text/css; charset=utf-8")),
         )
         .route("/favicon.ico", get(|| async { StatusCode::NO_CONTENT }))
+        .route("/thumbnail/{id}", get(thumbnail))
         .route("/ws", get(websocket))
         .layer(middleware::from_fn_with_state(
             shared.clone(),
@@ -296,6 +301,73 @@ async fn websocket(State(shared): State<Arc<Shared>>, upgrade: WebSocketUpgrade)
             session::run(socket, shared.clone(), admitted).await;
             shared.clients.fetch_sub(1, Ordering::SeqCst);
         })
+}
+
+/// Size of a gallery thumbnail, in pixels, and its samples per pixel.
+pub const THUMBNAIL: (u32, u32, u32) = (160, 120, 2);
+
+/// `GET /thumbnail/ID`: the gallery entry's default view rendered by kardia
+/// ([`gallery::scene_text`] at [`THUMBNAIL`]), as a PNG; rendered on first request, then kept.
+async fn thumbnail(
+    State(shared): State<Arc<Shared>>,
+    axum::extract::Path(id): axum::extract::Path<String>,
+) -> Response {
+    let Some(entry) = gallery::presets().into_iter().find(|g| g.id == id) else {
+        return (StatusCode::NOT_FOUND, "no such gallery entry\n").into_response();
+    };
+    let mut cache = shared.thumbnails.lock().await;
+    let png = match cache.get(&id) {
+        Some(png) => png.clone(),
+        None => {
+            let renderer = shared.renderer.clone();
+            let work = tokio::task::spawn_blocking(move || render_thumbnail(&renderer, &entry));
+            match work.await {
+                Ok(Ok(png)) => {
+                    let png = Arc::new(png);
+                    cache.insert(id, png.clone());
+                    png
+                }
+                Ok(Err(why)) => return (StatusCode::INTERNAL_SERVER_ERROR, why).into_response(),
+                Err(e) => {
+                    return (StatusCode::INTERNAL_SERVER_ERROR, e.to_string()).into_response()
+                }
+            }
+        }
+    };
+    drop(cache);
+    (
+        [
+            (header::CONTENT_TYPE, "image/png"),
+            (header::CACHE_CONTROL, "max-age=3600"),
+            (header::X_CONTENT_TYPE_OPTIONS, "nosniff"),
+        ],
+        png.as_ref().clone(),
+    )
+        .into_response()
+}
+
+/// Renders a gallery entry's thumbnail PNG (opaque, seed 0, as `kardia render`).
+pub fn render_thumbnail(
+    renderer: &crate::pipeline::Renderer,
+    entry: &gallery::GalleryPreset,
+) -> Result<Vec<u8>, String> {
+    let text = gallery::scene_text(entry);
+    let scene =
+        crate::scene::parse(&text, entry.id, &Default::default()).map_err(|e| e.to_string())?;
+    let (width, height, spp) = THUMBNAIL;
+    let request = crate::pipeline::RenderRequest {
+        width: Some(width),
+        height: Some(height),
+        spp,
+        ..crate::pipeline::RenderRequest::default()
+    };
+    let image = renderer
+        .render(&scene, &request, &crate::pipeline::Control::default())
+        .map_err(|e| e.to_string())?
+        .image;
+    let mut png = vec![];
+    crate::film::encode_png(&image, &mut png).map_err(|e| e.to_string())?;
+    Ok(png)
 }
 
 /// Refuses a request whose `Host` is not this server's own, or whose `Origin` (when sent)

@@ -34,6 +34,9 @@ pub enum ClientMessage {
         /// Its parameters.
         params: Vec<f64>,
     },
+    /// The page is hidden: stop refining its view (the pass in flight is cancelled) until
+    /// it sends a view again.
+    Pause {},
     /// Render this scene once at this size and samples, and send it as a PNG.
     Save {
         /// Echoed in the reply.
@@ -139,6 +142,20 @@ pub enum ServerMessage {
         views: Vec<&'static str>,
         /// How to read each study view's colours (every view but `shaded`).
         legends: Vec<ViewLegend>,
+        /// Where the page starts: `"equation"` (on the heart) when the server was started
+        /// without a scene, `"scene"` (on `initial`) when it was given one.
+        start_mode: &'static str,
+    },
+    /// Where the surfaces of request `seq`'s scene lie, found when the scene was loaded
+    /// (each object's world-space box, as the renderer bounds it): the page frames the view
+    /// on it ("Fit"). Sent once per scene text, not for a change of camera alone.
+    Extent {
+        /// The request.
+        seq: u64,
+        /// Lower corner of the box holding every object, world units.
+        min: [f64; 3],
+        /// Upper corner, world units.
+        max: [f64; 3],
     },
     /// The scene of request `seq` did not parse; the last good image stays.
     SceneError {
@@ -288,6 +305,11 @@ mod tests {
         )
         .is_err());
         assert!(serde_json::from_str::<ClientMessage>(r#"{"type":"open_file"}"#).is_err());
+        assert_eq!(
+            serde_json::from_str::<ClientMessage>(r#"{"type":"pause"}"#).unwrap(),
+            ClientMessage::Pause {}
+        );
+        assert!(serde_json::from_str::<ClientMessage>(r#"{"type":"pause","x":1}"#).is_err());
     }
 
     #[test]

@@ -75,6 +75,11 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
         ),
         views: View::ALL.iter().map(|(_, name)| *name).collect(),
         legends: super::protocol::view_legends(),
+        start_mode: if shared.options.scene_text == crate::scene::DEFAULT_SCENE {
+            "equation"
+        } else {
+            "scene"
+        },
     };
     let _ = out.send(Message::Text(hello.to_json().into())).await;
 
@@ -189,6 +194,10 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                     let _ = out.send(error_message(Some(seq), why)).await;
                 }
             },
+            ClientMessage::Pause {} => {
+                // No job: the render task cancels its pass and waits for the next view.
+                jobs.send_if_modified(|current| current.take().is_some());
+            }
             ClientMessage::Preset { name, params } => {
                 let reply = match crate::shapes::implicit::preset(&name, &params) {
                     Ok(p) => ServerMessage::Preset {
@@ -365,12 +374,29 @@ struct SceneCache {
     scene: SharedScene,
 }
 
-/// Parses `text`, or only its CAMERA line when the rest equals the cached scene's.
+/// The world-space box holding every object of `scene` with a finite box, as
+/// `(min, max)`; `None` when no object has one.
+fn extent(scene: &Scene) -> Option<([f64; 3], [f64; 3])> {
+    let finite = |v: glam::DVec3| v.is_finite();
+    let mut boxes = scene
+        .objects
+        .iter()
+        .map(|o| o.bounds)
+        .filter(|b| finite(b.min) && finite(b.max) && b.min.cmple(b.max).all());
+    let first = boxes.next()?;
+    let (min, max) = boxes.fold((first.min, first.max), |(lo, hi), b| {
+        (lo.min(b.min), hi.max(b.max))
+    });
+    Some((min.to_array(), max.to_array()))
+}
+
+/// Parses `text`, or only its CAMERA line when the rest equals the cached scene's; the
+/// flag is true when the scene was parsed anew.
 async fn load(
     cache: &mut Option<SceneCache>,
     name: &str,
     text: &str,
-) -> Result<(SharedScene, Camera), SceneProblem> {
+) -> Result<(SharedScene, Camera, bool), SceneProblem> {
     let key = without_camera_lines(text);
     let reuse = cache
         .as_ref()
@@ -381,7 +407,7 @@ async fn load(
         let camera_text = camera_lines_only(text);
         let parsed =
             scene::parse(&camera_text, name, &options).map_err(|e| SceneProblem::new(&e, text))?;
-        return Ok((scene, parsed.camera));
+        return Ok((scene, parsed.camera, false));
     }
     let (name, owned) = (name.to_string(), text.to_string());
     let parsed = tokio::task::spawn_blocking(move || {
@@ -396,7 +422,7 @@ async fn load(
         key,
         scene: scene.clone(),
     });
-    Ok((scene, camera))
+    Ok((scene, camera, true))
 }
 
 fn internal_problem(what: &str) -> SceneProblem {
@@ -485,7 +511,19 @@ async fn render_views(
             }
         };
         let (scene, camera) = match loaded {
-            Ok(loaded) => loaded,
+            Ok((scene, camera, fresh)) => {
+                if fresh {
+                    if let Some((min, max)) = extent(&scene) {
+                        let message = ServerMessage::Extent {
+                            seq: job.seq,
+                            min,
+                            max,
+                        };
+                        let _ = out.send(Message::Text(message.to_json().into())).await;
+                    }
+                }
+                (scene, camera)
+            }
             Err(problem) => {
                 let message = ServerMessage::SceneError {
                     seq: job.seq,

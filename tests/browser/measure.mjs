@@ -2,7 +2,9 @@
 // sextic in equation mode at a fixed 800×600 view, the time from an input event (a drag step;
 // the page sends the view from its event handler) to the first coarse frame drawn and to the
 // full 800×600 frame at 1 sample, over RUNS drag steps, and the frames drawn per second during
-// RUNS steady drags of 3 s; prints one JSON line per surface with the medians (and every run).
+// RUNS steady drags of 3 s, alone and while a second page saves 1600×1200 images at 16 spp
+// one after the other (with, for those, the time from releasing the mouse to the full frame);
+// prints one JSON line per surface with the medians (and every run).
 //
 // Usage:
 //   node tests/browser/measure.mjs --kardia target/release/kardia [RUNS] [SCREENSHOT_DIR]
@@ -100,9 +102,9 @@ try {
       full.push(f.sinceInput);
       fullPassMs.push(f.ms);
     }
-    // Steady drags: one move every 16 ms for 3 s each.
-    const fps = [], fullFps = [], sentPerSecond = [];
-    for (let i = 0; i < runs; i++) {
+    // Steady drags: one move every 16 ms for 3 s each; the result's frame rates, and the time
+    // from the release to the full frame of the last view.
+    const steadyDrag = async () => {
       await page.waitForTimeout(300);
       const seqBefore = await sent();
       await page.mouse.move(cx, cy);
@@ -116,11 +118,47 @@ try {
       }
       const seconds = (Date.now() - start) / 1000;
       const drawn = await framesAfter(seqBefore);
+      const released = await page.evaluate(() => performance.now());
       await page.mouse.up();
-      fps.push(drawn.length / seconds);
-      fullFps.push(drawn.filter(isFull).length / seconds);
-      sentPerSecond.push(((await sent()) - seqBefore) / seconds);
-    }
+      const last = await sent();
+      await page.waitForFunction(([s, w, h]) => window.kardia.frames.some((f) => f.seq >= s && f.width === w && f.height === h),
+        [last, W, H], { timeout: 120000 });
+      const fullAt = await page.evaluate(([s, w, h]) => {
+        const f = window.kardia.frames.find((f) => f.seq >= s && f.width === w && f.height === h);
+        return f.receivedAt;
+      }, [last, W, H]);
+      return {
+        fps: drawn.length / seconds,
+        fullFps: drawn.filter(isFull).length / seconds,
+        sentPerSecond: ((await sent()) - seqBefore) / seconds,
+        releaseToFull: fullAt - released,
+      };
+    };
+    const alone = [];
+    for (let i = 0; i < runs; i++) alone.push(await steadyDrag());
+    // The same beside a second page that saves 1600×1200 images at 16 spp, one after another.
+    const saver = await context.newPage();
+    saver.on("pageerror", (e) => pageErrors.push("saving page: " + e.message));
+    await saver.goto(`${url}#mode=equation&preset=${preset}&size=400x300&save=1600x1200x16`);
+    await saver.waitForFunction(() => window.kardia.frames.length > 0, null, { timeout: 120000 });
+    await saver.evaluate(() => {
+      window.keepSaving = true;
+      const again = () => {
+        if (!window.keepSaving) return;
+        window.kardia.lastPng = null;
+        document.getElementById("save").click();
+        const wait = () => (window.kardia.lastPng ? again() : setTimeout(wait, 20));
+        wait();
+      };
+      again();
+    });
+    await saver.waitForTimeout(500);
+    const beside = [];
+    for (let i = 0; i < runs; i++) beside.push(await steadyDrag());
+    const saves = await saver.evaluate(() => { window.keepSaving = false; return window.kardia.messages.filter((m) => /^saved /.test(m)).length; });
+    await saver.close();
+    const fps = alone.map((r) => r.fps), fullFps = alone.map((r) => r.fullFps);
+    const sentPerSecond = alone.map((r) => r.sentPerSecond);
     const round = (xs) => xs.map((x) => Math.round(x));
     const tenth = (x) => Math.round(x * 10) / 10;
     console.log(JSON.stringify({
@@ -135,6 +173,12 @@ try {
       drag_frames_per_second_median: tenth(median(fps)),
       drag_full_size_frames_per_second_median: tenth(median(fullFps)),
       drag_views_sent_per_second_median: tenth(median(sentPerSecond)),
+      release_to_full_ms_median: Math.round(median(alone.map((r) => r.releaseToFull))),
+      beside_saving_drag_frames_per_second_median: tenth(median(beside.map((r) => r.fps))),
+      beside_saving_drag_frames_per_second: beside.map((r) => tenth(r.fps)),
+      beside_saving_release_to_full_ms_median: Math.round(median(beside.map((r) => r.releaseToFull))),
+      beside_saving_release_to_full_ms: round(beside.map((r) => r.releaseToFull)),
+      saves_finished_meanwhile: saves,
     }));
   }
   if (pageErrors.length) throw new Error(`script errors on the page: ${pageErrors.join("; ")}`);

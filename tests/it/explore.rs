@@ -80,7 +80,21 @@ async fn connect(addr: SocketAddr) -> Ws {
     ws
 }
 
+/// The next message, skipping pings and the `extent` reports of new scene texts (tested by
+/// `a_new_scene_text_reports_its_extent_once`, through `next_raw_message`).
 async fn next_message(ws: &mut Ws) -> Option<Message> {
+    loop {
+        let m = next_raw_message(ws).await?;
+        if let Message::Text(t) = &m {
+            if t.starts_with(r#"{"type":"extent""#) {
+                continue;
+            }
+        }
+        return Some(m);
+    }
+}
+
+async fn next_raw_message(ws: &mut Ws) -> Option<Message> {
     loop {
         let m = tokio::time::timeout(Duration::from_secs(60), ws.next())
             .await
@@ -493,6 +507,125 @@ async fn fifty_view_changes_a_second_end_on_the_last_view_without_stale_frames()
         server.monitor.renders() == 0
     })
     .await;
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn gallery_thumbnails_are_kardia_renders_of_their_scenes() {
+    let server = start(Limits::default()).await;
+    let get = |path: &'static str, host: String| async move {
+        let mut stream = tokio::net::TcpStream::connect(server.addr).await.unwrap();
+        let request = format!("GET {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n");
+        stream.write_all(request.as_bytes()).await.unwrap();
+        let mut response = vec![];
+        stream.read_to_end(&mut response).await.unwrap();
+        let split = response.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+        let head = String::from_utf8_lossy(&response[..split]).to_string();
+        (head, response[split + 4..].to_vec())
+    };
+    let own = format!("127.0.0.1:{}", server.addr.port());
+    let (head, png) = get("/thumbnail/cayley", own.clone()).await;
+    assert!(head.starts_with("HTTP/1.1 200"), "{head}");
+    assert!(head.contains("content-type: image/png"), "{head}");
+    let entry = kardia::explore::gallery::presets()
+        .into_iter()
+        .find(|g| g.id == "cayley")
+        .unwrap();
+    let renderer = kardia::pipeline::Renderer::new(1).unwrap();
+    let expected = kardia::explore::render_thumbnail(&renderer, &entry).unwrap();
+    assert_eq!(
+        png, expected,
+        "the thumbnail is the render of the entry's scene"
+    );
+    let decoded = image::load_from_memory(&png).unwrap();
+    assert_eq!((decoded.width(), decoded.height()), (160, 120));
+    // Kept: the second answer is the same file.
+    assert_eq!(get("/thumbnail/cayley", own.clone()).await.1, png);
+    let (head, _) = get("/thumbnail/nonsense", own).await;
+    assert!(head.starts_with("HTTP/1.1 404"), "{head}");
+    let (head, _) = get(
+        "/thumbnail/cayley",
+        format!("evil.example:{}", server.addr.port()),
+    )
+    .await;
+    assert!(head.starts_with("HTTP/1.1 403"), "{head}");
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_new_scene_text_reports_its_extent_once() {
+    let server = start(Limits {
+        max_view_spp: 1,
+        ..Limits::default()
+    })
+    .await;
+    let mut ws = connect(server.addr).await;
+    ws.send(view(1, &sphere_scene(0.0, "(1, 0, 0)"), 32, 24))
+        .await
+        .unwrap();
+    let extent = match next_raw_message(&mut ws).await {
+        Some(Message::Text(t)) => serde_json::from_str::<Value>(&t).unwrap(),
+        other => panic!("expected the extent first, got {other:?}"),
+    };
+    assert_eq!(extent["type"], "extent", "{extent}");
+    assert_eq!(extent["seq"], 1);
+    for i in 0..3 {
+        let (lo, hi) = (
+            extent["min"][i].as_f64().unwrap(),
+            extent["max"][i].as_f64().unwrap(),
+        );
+        assert!(
+            (-1.01..=-0.99).contains(&lo) && (0.99..=1.01).contains(&hi),
+            "{extent}"
+        );
+    }
+    // A camera-only change: frames only, no extent.
+    let _ = frames_until_done(&mut ws).await;
+    ws.send(view(2, &sphere_scene(0.5, "(1, 0, 0)"), 32, 24))
+        .await
+        .unwrap();
+    loop {
+        match next_raw_message(&mut ws).await {
+            Some(Message::Binary(b)) => {
+                if split_binary(&b).0["done"] == true {
+                    break;
+                }
+            }
+            other => panic!("a camera-only change sent {other:?}"),
+        }
+    }
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_paused_page_renders_nothing_until_its_next_view() {
+    let server = start(Limits::default()).await;
+    let mut ws = connect(server.addr).await;
+    // The default heart at 1600×1200 refining to 64 spp: seconds of passes.
+    ws.send(view(1, kardia::scene::DEFAULT_SCENE, 1600, 1200))
+        .await
+        .unwrap();
+    let (first, _) = next_binary(&mut ws).await;
+    assert_eq!(first["pass"], 0);
+    ws.send(Message::text(r#"{"type":"pause"}"#)).await.unwrap();
+    wait_until("the pass is cancelled", Duration::from_secs(5), || {
+        server.monitor.renders() == 0
+    })
+    .await;
+    // A frame already on its way may arrive; then nothing.
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    while let Ok(Some(_)) =
+        tokio::time::timeout(Duration::from_millis(50), next_message(&mut ws)).await
+    {}
+    let quiet = tokio::time::timeout(Duration::from_millis(1500), next_message(&mut ws)).await;
+    assert!(quiet.is_err(), "a paused page got {quiet:?}");
+    assert_eq!(server.monitor.renders(), 0);
+    // Its next view renders again.
+    ws.send(view(2, &sphere_scene(0.0, "(1, 0, 0)"), 32, 24))
+        .await
+        .unwrap();
+    let (header, _) = next_binary(&mut ws).await;
+    assert_eq!(header["seq"], 2);
     server.stop().await;
 }
 
