@@ -182,7 +182,11 @@ fn write_exr_part(
             let p = at(v);
             (h(p.x), h(p.y), h(p.z))
         };
-        let mut exr = exr::image::Image::from_channels(size, SpecificChannels::rgb(px));
+        let mut exr = exr::image::Image::from_encoded_channels(
+            size,
+            film::exr_encoding(),
+            SpecificChannels::rgb(px),
+        );
         exr.attributes.other.insert(attribute.0, attribute.1);
         exr.write().to_buffered(out).map_err(encode_error)
     } else {
@@ -190,7 +194,11 @@ fn write_exr_part(
             let p = at(v);
             (p.x, p.y, p.z)
         };
-        let mut exr = exr::image::Image::from_channels(size, SpecificChannels::rgb(px));
+        let mut exr = exr::image::Image::from_encoded_channels(
+            size,
+            film::exr_encoding(),
+            SpecificChannels::rgb(px),
+        );
         exr.attributes.other.insert(attribute.0, attribute.1);
         exr.write().to_buffered(out).map_err(encode_error)
     }

@@ -133,9 +133,22 @@ pub fn encode_png(image: &Image, mut out: impl Write) -> Result<(), OutputError>
     out.flush().map_err(encode_error)
 }
 
+/// How kardia's OpenEXR files are laid out: the `exr` crate's default (RLE compression in
+/// 64×64 tiles) with the blocks in increasing order. The crate compresses blocks on many
+/// threads; with an unspecified order it writes each as it finishes, so the same image gave
+/// different bytes from run to run. In increasing order the file is one sequence of bytes for
+/// one image, whatever the threads.
+pub(crate) fn exr_encoding() -> exr::image::Encoding {
+    exr::image::Encoding {
+        line_order: exr::meta::attribute::LineOrder::Increasing,
+        ..exr::image::Encoding::FAST_LOSSLESS
+    }
+}
+
 /// Encodes the image as linear-RGB OpenEXR into `out`: 32-bit float channels, or 16-bit half
 /// floats when `half` (values beyond the half range stored as `±65504`, never infinity). An
 /// image with alpha gets an A channel too, its colours premultiplied (OpenEXR's convention).
+/// The same image always gives the same bytes (blocks in increasing order, [`exr_encoding`]).
 pub fn encode_exr(
     image: &Image,
     half: bool,
@@ -155,7 +168,7 @@ pub fn encode_exr(
                 let p = at(v);
                 (h(p.x), h(p.y), h(p.z), f16::from_f32(a(v)))
             };
-            Image::from_channels(size, SpecificChannels::rgba(px))
+            Image::from_encoded_channels(size, exr_encoding(), SpecificChannels::rgba(px))
                 .write()
                 .to_buffered(&mut out)
                 .map_err(encode_error)?;
@@ -164,7 +177,7 @@ pub fn encode_exr(
                 let p = at(v);
                 (p.x, p.y, p.z, a(v))
             };
-            Image::from_channels(size, SpecificChannels::rgba(px))
+            Image::from_encoded_channels(size, exr_encoding(), SpecificChannels::rgba(px))
                 .write()
                 .to_buffered(&mut out)
                 .map_err(encode_error)?;
@@ -176,7 +189,7 @@ pub fn encode_exr(
             let p = at(v);
             (h(p.x), h(p.y), h(p.z))
         };
-        Image::from_channels(size, SpecificChannels::rgb(px))
+        Image::from_encoded_channels(size, exr_encoding(), SpecificChannels::rgb(px))
             .write()
             .to_buffered(&mut out)
             .map_err(encode_error)?;
@@ -185,7 +198,7 @@ pub fn encode_exr(
             let p = at(v);
             (p.x, p.y, p.z)
         };
-        Image::from_channels(size, SpecificChannels::rgb(px))
+        Image::from_encoded_channels(size, exr_encoding(), SpecificChannels::rgb(px))
             .write()
             .to_buffered(&mut out)
             .map_err(encode_error)?;
@@ -500,6 +513,34 @@ mod tests {
         assert!(twice.is_err());
         let (_, empty) = encode_png_streaming(Vec::new(), 0, 3, false, |_| ());
         assert!(empty.is_err());
+    }
+
+    #[test]
+    fn exr_bytes_do_not_depend_on_the_order_blocks_finish_in() {
+        // 512×384: 48 blocks of 64×64, compressed on many threads.
+        let (w, h) = (512u32, 384u32);
+        let mut img = Image::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                let v = DVec3::new(
+                    (x as f64 * 0.37).sin(),
+                    ((x * y) % 97) as f64 / 13.0,
+                    y as f64 / 7.0,
+                );
+                img.set(x, y, v);
+            }
+        }
+        for half in [false, true] {
+            let encoded = || {
+                let mut out = std::io::Cursor::new(Vec::new());
+                encode_exr(&img, half, &mut out).unwrap();
+                out.into_inner()
+            };
+            let first = encoded();
+            for _ in 0..6 {
+                assert!(first == encoded(), "half {half}: the bytes changed");
+            }
+        }
     }
 
     #[test]

@@ -24,6 +24,7 @@ mod encode;
 mod srgb;
 
 pub use atomic::{check_output_path, AtomicFile};
+pub(crate) use encode::exr_encoding;
 pub use encode::{
     encode, encode_exr, encode_png, encode_png_streaming, write_image, write_image_as, ImageFormat,
     OutputError, RowSink,

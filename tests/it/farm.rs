@@ -166,3 +166,41 @@ fn the_slurm_scripts_are_valid_and_chain_the_join_after_the_array() {
     let submit = std::fs::read_to_string(recipe("slurm-submit.sh")).unwrap();
     assert!(submit.contains("--dependency=afterok:\"$tiles_job\""));
 }
+
+#[test]
+fn exr_files_are_the_same_bytes_whatever_the_threads() {
+    // 320×256 holds 20 blocks of 64×64: enough for the blocks to finish in any order.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("a.scene"), SCENE).unwrap();
+    for (half, name) in [(false, "float"), (true, "half")] {
+        let render = |threads: &str, out: &str| {
+            let mut a = vec![
+                "render",
+                "a.scene",
+                "--width",
+                "320",
+                "--spp",
+                "1",
+                "--quiet",
+                "--threads",
+                threads,
+                "-o",
+                out,
+            ];
+            if half {
+                a.push("--half");
+            }
+            ok(d, &a);
+            std::fs::read(d.join(out)).unwrap()
+        };
+        let first = render("2", &format!("{name}_a.exr"));
+        for (threads, out) in [("2", "b"), ("1", "c"), ("2", "d"), ("2", "e")] {
+            let again = render(threads, &format!("{name}_{out}.exr"));
+            assert!(
+                first == again,
+                "{name} EXR on {threads} thread(s) differs from the first render's bytes"
+            );
+        }
+    }
+}
