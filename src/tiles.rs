@@ -441,15 +441,17 @@ pub fn assemble(parts: &[PathBuf], output: &Path) -> Result<(), AssembleError> {
                 vb,
             })
         };
+        // The frame first: a frame's seed derives from it, so parts of two frames differ in
+        // their seeds too, and "frames" is the answer.
         let checks = [
+            differ("frames", a.frame.to_string(), b.frame.to_string()),
             differ(
                 "image sizes",
                 format!("{}×{}", a.full_width, a.full_height),
                 format!("{}×{}", b.full_width, b.full_height),
             ),
-            differ("seeds", a.seed.to_string(), b.seed.to_string()),
             differ("samples per pixel", a.spp.to_string(), b.spp.to_string()),
-            differ("frames", a.frame.to_string(), b.frame.to_string()),
+            differ("seeds", a.seed.to_string(), b.seed.to_string()),
             differ(
                 "scenes or settings (render keys)",
                 a.key[..12.min(a.key.len())].to_string() + "…",

@@ -2,11 +2,11 @@
 //! (`--frames`, `--frame`, `--resume`, `--turntable`, `--tile`, `--region`): arguments →
 //! [`crate::animation`] → files, one progress bar across all frames.
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
 
+use super::progress::Progress;
 use super::render::{RenderArgs, INTERRUPTED};
 use crate::animation::animated::{AnimatedEncoder, AnimatedFormat};
 use crate::animation::{self, FrameError, FrameJob, FrameRange, SceneSource};
@@ -188,7 +188,12 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
         Ok(r) => r,
         Err(e) => return report(e),
     };
-    let bar = progress_bar(args.quiet, region.pixel_count() * u64::from(range.len()));
+    let bar = Progress::new(
+        args.quiet,
+        region.pixel_count() * u64::from(range.len()),
+        args.progress_every,
+        "kardia: {msg} {wide_bar} {percent:>3}% {elapsed}, eta {eta}",
+    );
     let control = Control::new(interrupt.clone(), |p| bar.inc(p.finished));
     let started = std::time::Instant::now();
     let outcome = match animated {
@@ -208,6 +213,7 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
                     &args.output,
                     declared.fps,
                     region,
+                    &bar,
                 )
             }
         }
@@ -223,7 +229,7 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
             region.pixel_count(),
         ),
     };
-    bar.finish_and_clear();
+    bar.finish();
     match outcome {
         Ok(done) => {
             if !args.quiet {
@@ -271,20 +277,13 @@ struct Done {
     skipped: u32,
 }
 
-fn progress_bar(quiet: bool, total: u64) -> indicatif::ProgressBar {
-    if quiet || !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::with_draw_target(
-        Some(total),
-        indicatif::ProgressDrawTarget::stderr(),
-    );
-    if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "kardia: {msg} {wide_bar} {percent:>3}% {elapsed}, eta {eta}",
-    ) {
-        bar.set_style(style);
-    }
-    bar
+/// "frame 7 (3 of 10)": what the progress shows while `frame` of `range` renders.
+fn frame_message(frame: u32, range: FrameRange) -> String {
+    format!(
+        "frame {frame} ({} of {})",
+        frame - range.first + 1,
+        range.len()
+    )
 }
 
 /// Each frame to its own file (the pattern's `####` filled in).
@@ -297,7 +296,7 @@ fn frames_to_files(
     format: ImageFormat,
     pattern: &Path,
     resume: bool,
-    bar: &indicatif::ProgressBar,
+    bar: &Progress,
     pixels_per_frame: u64,
 ) -> Result<Done, FrameError> {
     let mut done = Done {
@@ -306,7 +305,7 @@ fn frames_to_files(
     };
     for frame in range.frames() {
         let path: PathBuf = animation::frame_path(pattern, frame);
-        bar.set_message(format!("frame {frame}"));
+        bar.set_message(frame_message(frame, range));
         if resume && animation::is_complete(&path) {
             done.skipped += 1;
             bar.inc(pixels_per_frame);
@@ -329,6 +328,7 @@ fn animate_into_one_file(
     output: &Path,
     fps: f64,
     region: film::Region,
+    bar: &Progress,
 ) -> Result<Done, FrameError> {
     let mut file = AtomicFile::create(output)?;
     let mut encoder = AnimatedEncoder::new(
@@ -341,6 +341,7 @@ fn animate_into_one_file(
         job.request.alpha,
     )?;
     for frame in range.frames() {
+        bar.set_message(frame_message(frame, range));
         let (scene, request) = job.frame(frame)?;
         let rendered = renderer.render(&scene, &request, control)?;
         encoder.add_frame(&rendered.image)?;

@@ -6,6 +6,7 @@ mod animate;
 mod assemble;
 mod explore;
 mod probe;
+mod progress;
 mod render;
 mod roots;
 

@@ -1,6 +1,7 @@
 //! `kardia render`: arguments → [`crate::pipeline`] → an image file, and a summary line.
 
 use super::animate::AnimationArgs;
+use super::progress::{Progress, DEFAULT_INTERVAL_SECONDS};
 use crate::film::{self, AtomicFile, ImageFormat};
 use crate::pipeline::{
     CancelToken, Control, Region, RenderError, RenderRequest, RenderSummary, Renderer, View,
@@ -9,7 +10,6 @@ use crate::roots::Solver;
 use crate::scene::{self, LoadOptions, Scene};
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
-use std::io::IsTerminal;
 use std::path::PathBuf;
 
 /// Output written when no `-o` is given.
@@ -66,6 +66,11 @@ pub struct RenderArgs {
     /// Print nothing but errors: no progress bar, no summary line.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Without a terminal (a farm job's log), print a plain progress line (frame, percentage,
+    /// time left) every this many seconds; 0 after every tile. A terminal shows a bar instead.
+    #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_INTERVAL_SECONDS,
+          value_parser = parse_interval)]
+    pub progress_every: f64,
     /// Frames, turntables and tiles (see `animate.rs`).
     #[command(flatten)]
     pub animation: AnimationArgs,
@@ -106,6 +111,14 @@ fn solver_parser() -> impl TypedValueParser<Value = Solver> {
 fn view_parser() -> impl TypedValueParser<Value = View> {
     PossibleValuesParser::new(View::ALL.iter().map(|(_, name)| *name))
         .map(|name| name.parse::<View>().unwrap_or_default())
+}
+
+/// Parses a number of seconds ≥ 0.
+fn parse_interval(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("expected a number of seconds ≥ 0, not '{s}'")),
+    }
 }
 
 /// Parses `X,Y,WIDTH,HEIGHT` (non-negative integers, width and height at least 1).
@@ -149,6 +162,7 @@ impl Default for RenderArgs {
             half: false,
             alpha: false,
             quiet: false,
+            progress_every: DEFAULT_INTERVAL_SECONDS,
             animation: AnimationArgs::default(),
         }
     }
@@ -160,7 +174,8 @@ fn report(err: impl miette::Diagnostic + Send + Sync + 'static) {
     eprintln!("{:?}", miette::Report::new(err));
 }
 
-/// Exit code of a render stopped by `interrupt` (as a shell reports SIGINT).
+/// Exit code of a render stopped by `interrupt` (as a shell reports SIGINT; the binary turns
+/// it into 128 + the number of the signal that cancelled, 143 for SIGTERM).
 pub const INTERRUPTED: i32 = 130;
 
 /// "4.5 M rays/s" and the like.
@@ -223,24 +238,16 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
     let region = request.region_in(&scene).map_err(fail)?;
     let renderer = Renderer::new(args.threads.map_or(0, |t| t as usize)).map_err(fail)?;
 
-    let bar = if !args.quiet && std::io::stderr().is_terminal() {
-        let bar = indicatif::ProgressBar::with_draw_target(
-            Some(region.pixel_count()),
-            indicatif::ProgressDrawTarget::stderr(),
-        );
-        if let Ok(style) = indicatif::ProgressStyle::with_template(
-            "kardia: rendering {wide_bar} {percent:>3}% {elapsed}, eta {eta}",
-        ) {
-            bar.set_style(style);
-        }
-        bar
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    let control = Control::new(interrupt.clone(), |p| bar.inc(p.finished));
+    let progress = Progress::new(
+        args.quiet,
+        region.pixel_count(),
+        args.progress_every,
+        "kardia: rendering {wide_bar} {percent:>3}% {elapsed}, eta {eta}",
+    );
+    let control = Control::new(interrupt.clone(), |p| progress.inc(p.finished));
     let mut file = AtomicFile::create(&args.output).map_err(fail)?;
     let rendered = render_into(&renderer, &scene, &request, &control, format, &mut file);
-    bar.finish_and_clear();
+    progress.finish();
     let rendered = rendered.map_err(|e| match e {
         Failure::Reported if interrupt.is_cancelled() => Failure::Interrupted,
         other => other,

@@ -323,7 +323,10 @@ fn assemble_refuses_parts_that_do_not_fit() {
             "overlap (both hold pixel (0, 10))",
         ),
         (&["p0.png", "seed9.png"], "their seeds differ (0 against 9)"),
-        (&["p0.png", "frame1.png"], "their seeds differ"),
+        (
+            &["p0.png", "frame1.png"],
+            "their frames differ (0 against 1)",
+        ),
         (
             &["p0.png", "wide.png"],
             "their image sizes differ (40×32 against 80×64)",

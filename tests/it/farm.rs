@@ -204,3 +204,104 @@ fn exr_files_are_the_same_bytes_whatever_the_threads() {
         }
     }
 }
+
+#[test]
+fn without_a_terminal_progress_is_a_plain_line_and_quiet_silences_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("a.scene"), SCENE).unwrap();
+    let base = [
+        "render",
+        "a.scene",
+        "--frames",
+        "0..1",
+        "--spp",
+        "1",
+        "--progress-every",
+        "0",
+        "-o",
+        "f_#.png",
+    ];
+    // stderr is a pipe here, as in a farm job's log.
+    let out = super::anim_cli::kardia(d, &base);
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("eta")).collect();
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.starts_with("kardia: frame 0 (1 of 2): ")),
+        "{err}"
+    );
+    let last = lines.last().expect("progress lines");
+    assert!(
+        last.starts_with("kardia: frame 1 (2 of 2): 100%, ") && last.contains(" elapsed, eta "),
+        "{err}"
+    );
+    assert!(
+        !err.contains('\r') && !err.contains('\u{1b}'),
+        "no bar: {err:?}"
+    );
+    // A still says "rendering".
+    let still = super::anim_cli::kardia(
+        d,
+        &[
+            "render",
+            "a.scene",
+            "--spp",
+            "1",
+            "--progress-every",
+            "0",
+            "-o",
+            "s.png",
+        ],
+    );
+    let err = String::from_utf8_lossy(&still.stderr);
+    assert!(err.contains("kardia: rendering: 100%, "), "{err}");
+    let mut quiet = base.to_vec();
+    quiet.push("--quiet");
+    let out = super::anim_cli::kardia(d, &quiet);
+    assert!(out.status.success() && out.stderr.is_empty(), "{out:?}");
+}
+
+/// Starts a long render in `dir`, sends `signal` once it has begun, and returns its exit code
+/// and the files left in `dir`.
+#[cfg(unix)]
+fn render_and_signal(dir: &Path, signal: &str, output: &[&str]) -> (Option<i32>, Vec<String>) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_kardia"))
+        .args([
+            "render", "a.scene", "--width", "2000", "--spp", "64", "--quiet",
+        ])
+        .args(output)
+        .current_dir(dir)
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(700));
+    let sent = Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let status = child.wait().unwrap();
+    (status.code(), crate::cli_render::listing(dir))
+}
+
+#[cfg(unix)]
+#[test]
+fn sigterm_exits_143_and_removes_the_temporary_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("a.scene"), SCENE).unwrap();
+    for output in [
+        &["-o", "still.png"][..],
+        &["-o", "still.exr"],
+        &["--frame", "1", "-o", "f_####.png"],
+        &["--tile", "1/2", "-o", "part.png"],
+    ] {
+        let (code, left) = render_and_signal(d, "-TERM", output);
+        assert_eq!(code, Some(143), "{output:?}");
+        assert_eq!(left, ["a.scene"], "{output:?}");
+    }
+    let (code, left) = render_and_signal(d, "-HUP", &["-o", "still.png"]);
+    assert_eq!((code, left.len()), (Some(129), 1));
+}
