@@ -25,12 +25,17 @@ pub struct AnimationArgs {
     /// Render frame N alone, exactly as it is in the sequence.
     #[arg(long, value_name = "N")]
     pub frame: Option<u32>,
-    /// Skip frames whose output file already exists and is complete.
+    /// Skip frames (and tiles and regions) whose output file already exists, is complete and
+    /// carries this render's key (same scene, settings and frame); any other is rendered anew.
     #[arg(long)]
     pub resume: bool,
     /// Orbit the camera once about its look-at point, around its up vector, in N frames.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub turntable: Option<u32>,
+    /// Render nothing: print the number of frames the scene makes (--turntable's N, else its
+    /// FRAMES, else 1) on stdout, for farm scripts.
+    #[arg(long)]
+    pub print_frame_count: bool,
     /// Render only row band I (from 0) of N, as a part file for `kardia assemble`.
     #[arg(long, value_name = "I/N", value_parser = parse_tile, conflicts_with = "region")]
     pub tile: Option<(u32, u32)>,
@@ -55,6 +60,7 @@ impl AnimationArgs {
     /// True when `kardia render` with these arguments is this file's business.
     pub fn applies(&self, args: &RenderArgs) -> bool {
         self.frames.is_some()
+            || self.print_frame_count
             || self.frame.is_some()
             || self.turntable.is_some()
             || self.tile.is_some()
@@ -91,6 +97,10 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
         Ok(s) => s,
         Err(e) => return report(e),
     };
+    if a.print_frame_count {
+        println!("{}", a.turntable.or(declared.frames).unwrap_or(1));
+        return 0;
+    }
     let animated = AnimatedFormat::from_path(&args.output);
     let pattern = animation::has_frame_pattern(&args.output);
     // Without a frame asked for, a scene is read as a still (frame 0 of 1), as a plain
@@ -306,7 +316,7 @@ fn frames_to_files(
     for frame in range.frames() {
         let path: PathBuf = animation::frame_path(pattern, frame);
         bar.set_message(frame_message(frame, range));
-        if resume && animation::is_complete(&path) {
+        if resume && job.is_done(frame, &path) {
             done.skipped += 1;
             bar.inc(pixels_per_frame);
             continue;

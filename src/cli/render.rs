@@ -2,12 +2,14 @@
 
 use super::animate::AnimationArgs;
 use super::progress::{Progress, DEFAULT_INTERVAL_SECONDS};
-use crate::film::{self, AtomicFile, ImageFormat};
+use crate::animation::{FrameJob, SceneSource};
+use crate::film::{self, AtomicFile, FileTag, ImageFormat};
 use crate::pipeline::{
     CancelToken, Control, Region, RenderError, RenderRequest, RenderSummary, Renderer, View,
 };
 use crate::roots::Solver;
 use crate::scene::{self, LoadOptions, Scene};
+use crate::tiles;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
 use std::path::PathBuf;
@@ -229,12 +231,19 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
         format = ImageFormat::ExrHalf;
     }
     let options = args.load_options();
-    let scene = match &args.scene {
-        Some(path) => scene::parse_file(path, &options),
-        None => scene::parse(scene::DEFAULT_SCENE, "scenes/heart.scene", &options),
+    let source = match &args.scene {
+        Some(path) => SceneSource::from_file(path),
+        None => Ok(SceneSource::default_scene()),
     }
     .map_err(fail)?;
+    let scene = scene::parse(&source.text, &source.name, &options).map_err(fail)?;
     let request = args.request();
+    // The still's render key, stored in the file: what `--resume` and `assemble` compare.
+    let key = FrameJob::still(source, options, request.clone()).key(&scene, &request, 0);
+    let tag = Some(FileTag {
+        name: tiles::KEY_TAG,
+        text: &key,
+    });
     let region = request.region_in(&scene).map_err(fail)?;
     let renderer = Renderer::new(args.threads.map_or(0, |t| t as usize)).map_err(fail)?;
 
@@ -246,7 +255,9 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
     );
     let control = Control::new(interrupt.clone(), |p| progress.inc(p.finished));
     let mut file = AtomicFile::create(&args.output).map_err(fail)?;
-    let rendered = render_into(&renderer, &scene, &request, &control, format, &mut file);
+    let rendered = render_into(
+        &renderer, &scene, &request, &control, format, tag, &mut file,
+    );
     progress.finish();
     let rendered = rendered.map_err(|e| match e {
         Failure::Reported if interrupt.is_cancelled() => Failure::Interrupted,
@@ -305,16 +316,23 @@ fn render_into(
     request: &RenderRequest,
     control: &Control,
     format: ImageFormat,
+    tag: Option<FileTag>,
     file: &mut AtomicFile,
 ) -> Result<RenderSummary, Failure> {
     if format == ImageFormat::Png {
         let region = request.region_in(scene).map_err(fail)?;
-        let (rendered, written) =
-            film::encode_png_streaming(file, region.width, region.height, request.alpha, |sink| {
+        let (rendered, written) = film::encode_png_streaming_tagged(
+            file,
+            region.width,
+            region.height,
+            request.alpha,
+            tag,
+            |sink| {
                 renderer.render_streamed(scene, request, control, &|row, rows, alpha| {
                     sink.rows(row, rows, alpha)
                 })
-            });
+            },
+        );
         // A cancelled render leaves the PNG unfinished: say so, not what the encoder saw.
         let rendered = rendered.map_err(render_failure)?;
         written.map_err(fail)?;
@@ -323,7 +341,7 @@ fn render_into(
         let rendered = renderer
             .render(scene, request, control)
             .map_err(render_failure)?;
-        film::encode(&rendered.image, format, file).map_err(fail)?;
+        film::encode_tagged(&rendered.image, format, tag, file).map_err(fail)?;
         Ok(rendered.summary())
     }
 }
