@@ -14,6 +14,10 @@ use crate::integrator::TILE_SIZE;
 /// Name of the PNG text chunk and of the OpenEXR attribute holding a part's [`PartInfo`].
 pub const METADATA_KEY: &str = "kardia-part";
 
+/// Name of the PNG text chunk and of the OpenEXR attribute holding a whole image's render key
+/// ([`render_key`]): what `--resume` compares, and what `assemble` writes into a joined file.
+pub const KEY_TAG: &str = "kardia-key";
+
 /// What a part file is part of. Parts join only when everything but `region` is equal.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct PartInfo {
@@ -166,34 +170,14 @@ fn write_exr_part(
     image: &Image,
     info: &PartInfo,
     half: bool,
-    out: impl Write + Seek,
+    out: impl Write + Seek + Send,
 ) -> Result<(), OutputError> {
-    use exr::prelude::*;
-    let w = image.width as usize;
-    let size = (w, image.height as usize);
-    let at = |v: Vec2<usize>| image.pixels[v.y() * w + v.x()];
-    let attribute = (
-        Text::from(METADATA_KEY),
-        AttributeValue::Text(Text::from(info.to_text().as_str())),
-    );
-    if half {
-        let h = |c: f32| f16::from_f32(c);
-        let px = |v: Vec2<usize>| {
-            let p = at(v);
-            (h(p.x), h(p.y), h(p.z))
-        };
-        let mut exr = exr::image::Image::from_channels(size, SpecificChannels::rgb(px));
-        exr.attributes.other.insert(attribute.0, attribute.1);
-        exr.write().to_buffered(out).map_err(encode_error)
-    } else {
-        let px = |v: Vec2<usize>| {
-            let p = at(v);
-            (p.x, p.y, p.z)
-        };
-        let mut exr = exr::image::Image::from_channels(size, SpecificChannels::rgb(px));
-        exr.attributes.other.insert(attribute.0, attribute.1);
-        exr.write().to_buffered(out).map_err(encode_error)
-    }
+    let text = info.to_text();
+    let tag = film::FileTag {
+        name: METADATA_KEY,
+        text: &text,
+    };
+    film::encode_exr_tagged(image, half, Some(tag), out)
 }
 
 /// Why parts could not be joined.
@@ -433,15 +417,17 @@ pub fn assemble(parts: &[PathBuf], output: &Path) -> Result<(), AssembleError> {
                 vb,
             })
         };
+        // The frame first: a frame's seed derives from it, so parts of two frames differ in
+        // their seeds too, and "frames" is the answer.
         let checks = [
+            differ("frames", a.frame.to_string(), b.frame.to_string()),
             differ(
                 "image sizes",
                 format!("{}×{}", a.full_width, a.full_height),
                 format!("{}×{}", b.full_width, b.full_height),
             ),
-            differ("seeds", a.seed.to_string(), b.seed.to_string()),
             differ("samples per pixel", a.spp.to_string(), b.spp.to_string()),
-            differ("frames", a.frame.to_string(), b.frame.to_string()),
+            differ("seeds", a.seed.to_string(), b.seed.to_string()),
             differ(
                 "scenes or settings (render keys)",
                 a.key[..12.min(a.key.len())].to_string() + "…",
@@ -459,6 +445,11 @@ pub fn assemble(parts: &[PathBuf], output: &Path) -> Result<(), AssembleError> {
     }
     let (w, h) = (first.info.full_width, first.info.full_height);
     check_coverage(&read, w, h)?;
+    // The joined file carries the render key, as the single render does.
+    let key_tag = Some(film::FileTag {
+        name: KEY_TAG,
+        text: &first.info.key,
+    });
     let mut file = AtomicFile::create(output)?;
     match format {
         ImageFormat::Png => {
@@ -474,7 +465,7 @@ pub fn assemble(parts: &[PathBuf], output: &Path) -> Result<(), AssembleError> {
                     rgb[start..start + row].copy_from_slice(src);
                 }
             }
-            encode_png_like_render(&rgb, w, h, &mut file)?;
+            encode_png_like_render(&rgb, w, h, key_tag, &mut file)?;
         }
         _ => {
             let mut image = Image::new(w, h);
@@ -485,7 +476,7 @@ pub fn assemble(parts: &[PathBuf], output: &Path) -> Result<(), AssembleError> {
                 image.paste(part.info.region.x, part.info.region.y, tile);
             }
             let half = halves[0];
-            film::encode_exr(&image, half, &mut file)?;
+            film::encode_exr_tagged(&image, half, key_tag, &mut file)?;
         }
     }
     file.commit()?;
@@ -534,20 +525,21 @@ fn check_coverage(parts: &[Part], w: u32, h: u32) -> Result<(), AssembleError> {
     Ok(())
 }
 
-/// Encodes 8-bit sRGB rows as `kardia render` encodes a whole PNG (the same streaming encoder,
-/// fed the same bands of [`TILE_SIZE`] rows), so the bytes are the same. Each byte goes
+/// Encodes 8-bit sRGB rows as `kardia render` encodes a whole PNG (the same streaming encoder
+/// with the same `tag`, fed the same bands of [`TILE_SIZE`] rows), so the bytes are the same. Each byte goes
 /// through its exact linear value, which converts back to the same byte.
 fn encode_png_like_render(
     rgb: &[u8],
     w: u32,
     h: u32,
+    tag: Option<film::FileTag>,
     out: impl Write + Send,
 ) -> Result<(), OutputError> {
     let linear: Vec<f32> = (0..=255u8)
         .map(|c| film::srgb8_to_linear(c) as f32)
         .collect();
     let row_bytes = 3 * w as usize;
-    let ((), written) = film::encode_png_streaming(out, w, h, false, |sink| {
+    let ((), written) = film::encode_png_streaming_tagged(out, w, h, false, tag, |sink| {
         for (band, rows) in rgb.chunks(row_bytes * TILE_SIZE as usize).enumerate() {
             let pixels: Vec<film::Vec3> = rows
                 .chunks_exact(3)

@@ -8,7 +8,7 @@ pub mod animated;
 use std::path::{Path, PathBuf};
 
 use crate::camera::Camera;
-use crate::film::{self, AtomicFile, ImageFormat, OutputError, Region};
+use crate::film::{self, AtomicFile, FileTag, ImageFormat, OutputError, Region};
 use crate::pipeline::{Control, RenderError, RenderRequest, RenderSummary, Renderer};
 use crate::scene::{self, Animation, FrameTime, LoadOptions, Scene, SceneError};
 use crate::tiles::{self, PartInfo};
@@ -255,9 +255,53 @@ impl FrameJob {
         tiles::render_key(&self.source.text, &settings)
     }
 
+    /// The job of a still: `request` at frame 0 of 1, no turntable (what a plain
+    /// `kardia render` does, and what parts of a still join into).
+    pub fn still(source: SceneSource, options: LoadOptions, request: RenderRequest) -> Self {
+        Self {
+            source,
+            options,
+            request,
+            turntable: None,
+            count: 1,
+        }
+    }
+
+    /// True when `path` already holds `frame` as this job makes it: the file decodes to the
+    /// end ([`is_complete`]) and carries this frame's render key (a whole image, under
+    /// [`tiles::KEY_TAG`]) or this frame's [`PartInfo`] (a region, under
+    /// [`tiles::METADATA_KEY`]). A file from other settings, another scene or another frame,
+    /// or one without a key, is not. What `--resume` checks before skipping a frame.
+    pub fn is_done(&self, frame: u32, path: &Path) -> bool {
+        let Ok((scene, request)) = self.frame(frame) else {
+            return false;
+        };
+        let (Ok(region), Ok((full_width, full_height))) =
+            (request.region_in(&scene), request.full_size(&scene))
+        else {
+            return false;
+        };
+        let key = self.key(&scene, &request, frame);
+        let (name, expected) = if region == Region::full(full_width, full_height) {
+            (tiles::KEY_TAG, key)
+        } else {
+            let info = PartInfo {
+                full_width,
+                full_height,
+                region,
+                seed: request.seed,
+                spp: request.spp.max(1),
+                frame,
+                key,
+            };
+            (tiles::METADATA_KEY, info.to_text())
+        };
+        film::read_tag(path, name).is_some_and(|t| t == expected) && is_complete(path)
+    }
+
     /// Renders `frame` (its `request.region`, if any) and writes it to `path` atomically in
-    /// `format`: a whole image as `kardia render` writes a still, a region as a part file with
-    /// its [`PartInfo`]. Nothing is written when the render fails or is cancelled.
+    /// `format`: a whole image as `kardia render` writes a still, with its render key under
+    /// [`tiles::KEY_TAG`]; a region as a part file with its [`PartInfo`]. Nothing is written when the render fails or is cancelled.
     pub fn render_to_file(
         &self,
         renderer: &Renderer,
@@ -289,13 +333,19 @@ impl FrameJob {
             tiles::write_part(&rendered.image, &info, format, path)?;
             return Ok(rendered.summary());
         }
+        let key = self.key(&scene, &request, frame);
+        let tag = Some(FileTag {
+            name: tiles::KEY_TAG,
+            text: &key,
+        });
         let mut file = AtomicFile::create(path)?;
         let rendered = if format == ImageFormat::Png {
-            let (rendered, written) = film::encode_png_streaming(
+            let (rendered, written) = film::encode_png_streaming_tagged(
                 &mut file,
                 region.width,
                 region.height,
                 request.alpha,
+                tag,
                 |sink| {
                     renderer.render_streamed(&scene, &request, control, &|row, rows, alpha| {
                         sink.rows(row, rows, alpha)
@@ -307,7 +357,7 @@ impl FrameJob {
             rendered
         } else {
             let rendered = renderer.render(&scene, &request, control)?;
-            film::encode(&rendered.image, format, &mut file)?;
+            film::encode_tagged(&rendered.image, format, tag, &mut file)?;
             rendered.summary()
         };
         if control.cancel.is_cancelled() {

@@ -2,11 +2,11 @@
 //! (`--frames`, `--frame`, `--resume`, `--turntable`, `--tile`, `--region`): arguments →
 //! [`crate::animation`] → files, one progress bar across all frames.
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
 
+use super::progress::Progress;
 use super::render::{RenderArgs, INTERRUPTED};
 use crate::animation::animated::{AnimatedEncoder, AnimatedFormat};
 use crate::animation::{self, FrameError, FrameJob, FrameRange, SceneSource};
@@ -25,12 +25,17 @@ pub struct AnimationArgs {
     /// Render frame N alone, exactly as it is in the sequence.
     #[arg(long, value_name = "N")]
     pub frame: Option<u32>,
-    /// Skip frames whose output file already exists and is complete.
+    /// Skip frames (and tiles and regions) whose output file already exists, is complete and
+    /// carries this render's key (same scene, settings and frame); any other is rendered anew.
     #[arg(long)]
     pub resume: bool,
     /// Orbit the camera once about its look-at point, around its up vector, in N frames.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub turntable: Option<u32>,
+    /// Render nothing: print the number of frames the scene makes (--turntable's N, else its
+    /// FRAMES, else 1) on stdout, for farm scripts.
+    #[arg(long)]
+    pub print_frame_count: bool,
     /// Render only row band I (from 0) of N, as a part file for `kardia assemble`.
     #[arg(long, value_name = "I/N", value_parser = parse_tile, conflicts_with = "region")]
     pub tile: Option<(u32, u32)>,
@@ -55,6 +60,7 @@ impl AnimationArgs {
     /// True when `kardia render` with these arguments is this file's business.
     pub fn applies(&self, args: &RenderArgs) -> bool {
         self.frames.is_some()
+            || self.print_frame_count
             || self.frame.is_some()
             || self.turntable.is_some()
             || self.tile.is_some()
@@ -91,6 +97,10 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
         Ok(s) => s,
         Err(e) => return report(e),
     };
+    if a.print_frame_count {
+        println!("{}", a.turntable.or(declared.frames).unwrap_or(1));
+        return 0;
+    }
     let animated = AnimatedFormat::from_path(&args.output);
     let pattern = animation::has_frame_pattern(&args.output);
     // Without a frame asked for, a scene is read as a still (frame 0 of 1), as a plain
@@ -188,7 +198,12 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
         Ok(r) => r,
         Err(e) => return report(e),
     };
-    let bar = progress_bar(args.quiet, region.pixel_count() * u64::from(range.len()));
+    let bar = Progress::new(
+        args.quiet,
+        region.pixel_count() * u64::from(range.len()),
+        args.progress_every,
+        "kardia: {msg} {wide_bar} {percent:>3}% {elapsed}, eta {eta}",
+    );
     let control = Control::new(interrupt.clone(), |p| bar.inc(p.finished));
     let started = std::time::Instant::now();
     let outcome = match animated {
@@ -208,6 +223,7 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
                     &args.output,
                     declared.fps,
                     region,
+                    &bar,
                 )
             }
         }
@@ -223,7 +239,7 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
             region.pixel_count(),
         ),
     };
-    bar.finish_and_clear();
+    bar.finish();
     match outcome {
         Ok(done) => {
             if !args.quiet {
@@ -271,20 +287,13 @@ struct Done {
     skipped: u32,
 }
 
-fn progress_bar(quiet: bool, total: u64) -> indicatif::ProgressBar {
-    if quiet || !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::with_draw_target(
-        Some(total),
-        indicatif::ProgressDrawTarget::stderr(),
-    );
-    if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "kardia: {msg} {wide_bar} {percent:>3}% {elapsed}, eta {eta}",
-    ) {
-        bar.set_style(style);
-    }
-    bar
+/// "frame 7 (3 of 10)": what the progress shows while `frame` of `range` renders.
+fn frame_message(frame: u32, range: FrameRange) -> String {
+    format!(
+        "frame {frame} ({} of {})",
+        frame - range.first + 1,
+        range.len()
+    )
 }
 
 /// Each frame to its own file (the pattern's `####` filled in).
@@ -297,7 +306,7 @@ fn frames_to_files(
     format: ImageFormat,
     pattern: &Path,
     resume: bool,
-    bar: &indicatif::ProgressBar,
+    bar: &Progress,
     pixels_per_frame: u64,
 ) -> Result<Done, FrameError> {
     let mut done = Done {
@@ -306,8 +315,8 @@ fn frames_to_files(
     };
     for frame in range.frames() {
         let path: PathBuf = animation::frame_path(pattern, frame);
-        bar.set_message(format!("frame {frame}"));
-        if resume && animation::is_complete(&path) {
+        bar.set_message(frame_message(frame, range));
+        if resume && job.is_done(frame, &path) {
             done.skipped += 1;
             bar.inc(pixels_per_frame);
             continue;
@@ -329,6 +338,7 @@ fn animate_into_one_file(
     output: &Path,
     fps: f64,
     region: film::Region,
+    bar: &Progress,
 ) -> Result<Done, FrameError> {
     let mut file = AtomicFile::create(output)?;
     let mut encoder = AnimatedEncoder::new(
@@ -341,6 +351,7 @@ fn animate_into_one_file(
         job.request.alpha,
     )?;
     for frame in range.frames() {
+        bar.set_message(frame_message(frame, range));
         let (scene, request) = job.frame(frame)?;
         let rendered = renderer.render(&scene, &request, control)?;
         encoder.add_frame(&rendered.image)?;

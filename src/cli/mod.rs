@@ -7,6 +7,7 @@ mod assemble;
 mod convert;
 mod explore;
 mod probe;
+mod progress;
 mod render;
 mod roots;
 

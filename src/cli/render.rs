@@ -1,15 +1,17 @@
 //! `kardia render`: arguments → [`crate::pipeline`] → an image file, and a summary line.
 
 use super::animate::AnimationArgs;
-use crate::film::{self, AtomicFile, ImageFormat};
+use super::progress::{Progress, DEFAULT_INTERVAL_SECONDS};
+use crate::animation::{FrameJob, SceneSource};
+use crate::film::{self, AtomicFile, FileTag, ImageFormat};
 use crate::pipeline::{
     CancelToken, Control, Region, RenderError, RenderRequest, RenderSummary, Renderer, View,
 };
 use crate::roots::Solver;
 use crate::scene::{self, LoadOptions, Scene};
+use crate::tiles;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
-use std::io::IsTerminal;
 use std::path::PathBuf;
 
 /// Output written when no `-o` is given.
@@ -66,6 +68,11 @@ pub struct RenderArgs {
     /// Print nothing but errors: no progress bar, no summary line.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Without a terminal (a farm job's log), print a plain progress line (frame, percentage,
+    /// time left) every this many seconds; 0 after every tile. A terminal shows a bar instead.
+    #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_INTERVAL_SECONDS,
+          value_parser = parse_interval)]
+    pub progress_every: f64,
     /// Frames, turntables and tiles (see `animate.rs`).
     #[command(flatten)]
     pub animation: AnimationArgs,
@@ -106,6 +113,14 @@ fn solver_parser() -> impl TypedValueParser<Value = Solver> {
 fn view_parser() -> impl TypedValueParser<Value = View> {
     PossibleValuesParser::new(View::ALL.iter().map(|(_, name)| *name))
         .map(|name| name.parse::<View>().unwrap_or_default())
+}
+
+/// Parses a number of seconds ≥ 0.
+fn parse_interval(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("expected a number of seconds ≥ 0, not '{s}'")),
+    }
 }
 
 /// Parses `X,Y,WIDTH,HEIGHT` (non-negative integers, width and height at least 1).
@@ -149,6 +164,7 @@ impl Default for RenderArgs {
             half: false,
             alpha: false,
             quiet: false,
+            progress_every: DEFAULT_INTERVAL_SECONDS,
             animation: AnimationArgs::default(),
         }
     }
@@ -160,7 +176,8 @@ fn report(err: impl miette::Diagnostic + Send + Sync + 'static) {
     eprintln!("{:?}", miette::Report::new(err));
 }
 
-/// Exit code of a render stopped by `interrupt` (as a shell reports SIGINT).
+/// Exit code of a render stopped by `interrupt` (as a shell reports SIGINT; the binary turns
+/// it into 128 + the number of the signal that cancelled, 143 for SIGTERM).
 pub const INTERRUPTED: i32 = 130;
 
 /// "4.5 M rays/s" and the like.
@@ -214,38 +231,46 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
         format = ImageFormat::ExrHalf;
     }
     let options = args.load_options();
-    let scene = match &args.scene {
+    let (scene, source) = match &args.scene {
         Some(path) => crate::formats::load(path, &options).map(|loaded| {
             if !args.quiet {
                 super::convert::print_warnings(path, &loaded.warnings);
             }
-            loaded.scene
+            // A foreign file's key is that of its translation: the text that was rendered.
+            let source = SceneSource {
+                text: loaded.text,
+                name: path.display().to_string(),
+            };
+            (loaded.scene, source)
         }),
-        None => scene::parse(scene::DEFAULT_SCENE, "scenes/heart.scene", &options),
+        None => {
+            let source = SceneSource::default_scene();
+            scene::parse(&source.text, &source.name, &options).map(|scene| (scene, source))
+        }
     }
     .map_err(fail)?;
     let request = args.request();
+    // The still's render key, stored in the file: what `--resume` and `assemble` compare.
+    let key = FrameJob::still(source, options, request.clone()).key(&scene, &request, 0);
+    let tag = Some(FileTag {
+        name: tiles::KEY_TAG,
+        text: &key,
+    });
     let region = request.region_in(&scene).map_err(fail)?;
     let renderer = Renderer::new(args.threads.map_or(0, |t| t as usize)).map_err(fail)?;
 
-    let bar = if !args.quiet && std::io::stderr().is_terminal() {
-        let bar = indicatif::ProgressBar::with_draw_target(
-            Some(region.pixel_count()),
-            indicatif::ProgressDrawTarget::stderr(),
-        );
-        if let Ok(style) = indicatif::ProgressStyle::with_template(
-            "kardia: rendering {wide_bar} {percent:>3}% {elapsed}, eta {eta}",
-        ) {
-            bar.set_style(style);
-        }
-        bar
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    let control = Control::new(interrupt.clone(), |p| bar.inc(p.finished));
+    let progress = Progress::new(
+        args.quiet,
+        region.pixel_count(),
+        args.progress_every,
+        "kardia: rendering {wide_bar} {percent:>3}% {elapsed}, eta {eta}",
+    );
+    let control = Control::new(interrupt.clone(), |p| progress.inc(p.finished));
     let mut file = AtomicFile::create(&args.output).map_err(fail)?;
-    let rendered = render_into(&renderer, &scene, &request, &control, format, &mut file);
-    bar.finish_and_clear();
+    let rendered = render_into(
+        &renderer, &scene, &request, &control, format, tag, &mut file,
+    );
+    progress.finish();
     let rendered = rendered.map_err(|e| match e {
         Failure::Reported if interrupt.is_cancelled() => Failure::Interrupted,
         other => other,
@@ -303,16 +328,23 @@ fn render_into(
     request: &RenderRequest,
     control: &Control,
     format: ImageFormat,
+    tag: Option<FileTag>,
     file: &mut AtomicFile,
 ) -> Result<RenderSummary, Failure> {
     if format == ImageFormat::Png {
         let region = request.region_in(scene).map_err(fail)?;
-        let (rendered, written) =
-            film::encode_png_streaming(file, region.width, region.height, request.alpha, |sink| {
+        let (rendered, written) = film::encode_png_streaming_tagged(
+            file,
+            region.width,
+            region.height,
+            request.alpha,
+            tag,
+            |sink| {
                 renderer.render_streamed(scene, request, control, &|row, rows, alpha| {
                     sink.rows(row, rows, alpha)
                 })
-            });
+            },
+        );
         // A cancelled render leaves the PNG unfinished: say so, not what the encoder saw.
         let rendered = rendered.map_err(render_failure)?;
         written.map_err(fail)?;
@@ -321,7 +353,7 @@ fn render_into(
         let rendered = renderer
             .render(scene, request, control)
             .map_err(render_failure)?;
-        film::encode(&rendered.image, format, file).map_err(fail)?;
+        film::encode_tagged(&rendered.image, format, tag, file).map_err(fail)?;
         Ok(rendered.summary())
     }
 }

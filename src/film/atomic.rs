@@ -6,7 +6,7 @@ use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 /// A file being written atomically: the bytes go to a temporary file of its own in the
-/// target's directory (`.NAME.PID-N.tmp`, never an existing file); [`AtomicFile::commit`]
+/// target's directory (`.NAME.kardia@HOST.PID-N.tmp`, never an existing file); [`AtomicFile::commit`]
 /// flushes it to disk and renames it over the target. Dropped without a commit (an error, a
 /// cancelled render, a panic), it removes its temporary file and leaves the target as it was.
 /// Any number of them may be open at once, from any threads, for distinct targets. A
@@ -22,8 +22,11 @@ pub struct AtomicFile {
 impl AtomicFile {
     /// Starts writing `target`: creates the temporary file beside it. Fails when the directory
     /// does not exist or cannot be written, or when `target` is a directory.
+    /// The first time a process writes into a directory, it removes the temporaries there that
+    /// kardia runs on this host left behind when killed ([`remove_stale_temporaries`]).
     pub fn create(target: &Path) -> Result<Self, OutputError> {
         check_directory(target)?;
+        sweep_once(parent_dir(target));
         let (temp, file) = create_temp_beside(target).map_err(|e| write_error(target, e))?;
         Ok(Self {
             target: target.to_path_buf(),
@@ -140,8 +143,102 @@ pub fn check_output_path(path: &Path) -> Result<ImageFormat, OutputError> {
     Ok(format)
 }
 
+/// What sits between the target's name and the host in kardia's temporary file names.
+const TEMP_MARK: &str = ".kardia@";
+
+/// This machine's host name (as in temporary file names: letters, digits, `-`, `_` and `.`
+/// only), or `unknown` where it cannot be read.
+fn host_name() -> &'static str {
+    static HOST: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    HOST.get_or_init(|| {
+        let name = std::fs::read_to_string("/proc/sys/kernel/hostname")
+            .or_else(|_| std::fs::read_to_string("/etc/hostname"))
+            .unwrap_or_default();
+        let name: String = name
+            .trim()
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || "-_.".contains(c) {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        if name.is_empty() {
+            "unknown".into()
+        } else {
+            name
+        }
+    })
+}
+
+/// The host and process id in a kardia temporary file name (`.NAME.kardia@HOST.PID-N.tmp`),
+/// or `None` for any other name.
+fn temp_owner(file_name: &str) -> Option<(&str, u32)> {
+    let inner = file_name.strip_prefix('.')?.strip_suffix(".tmp")?;
+    let (rest, pid_n) = inner.rsplit_once('.')?;
+    let (name, host) = rest.rsplit_once(TEMP_MARK)?;
+    let (pid, n) = pid_n.split_once('-')?;
+    if name.is_empty() || host.is_empty() || n.parse::<u64>().is_err() {
+        return None;
+    }
+    Some((host, pid.parse().ok()?))
+}
+
+/// True only when process `pid` of this machine is known to have ended (Linux: no
+/// `/proc/PID`). Elsewhere, or when `/proc` is not there, never true.
+fn process_has_ended(pid: u32) -> bool {
+    cfg!(target_os = "linux")
+        && Path::new("/proc/self").exists()
+        && !Path::new("/proc").join(pid.to_string()).exists()
+}
+
+/// Removes from `dir` the temporary files that kardia runs on this host left behind when they
+/// were killed (a name `.NAME.kardia@HOST.PID-N.tmp` with this host and a process that has
+/// ended); never any other file, nor those of other hosts sharing the directory, nor those of
+/// processes still running. Returns the files removed.
+pub fn remove_stale_temporaries(dir: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    let mut removed = Vec::new();
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some((host, pid)) = name.to_str().and_then(temp_owner) else {
+            continue;
+        };
+        let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+        if is_file
+            && host == host_name()
+            && pid != std::process::id()
+            && process_has_ended(pid)
+            && std::fs::remove_file(entry.path()).is_ok()
+        {
+            removed.push(entry.path());
+        }
+    }
+    removed
+}
+
+/// [`remove_stale_temporaries`] in `dir`, once per directory per process.
+fn sweep_once(dir: &Path) {
+    use std::sync::Mutex;
+    static SWEPT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+    let key = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
+    let Ok(mut swept) = SWEPT.lock() else {
+        return;
+    };
+    if swept.contains(&key) {
+        return;
+    }
+    swept.push(key);
+    drop(swept);
+    remove_stale_temporaries(dir);
+}
+
 /// Creates a fresh temporary file in the target's directory, named after the target
-/// (`.NAME.PID-N.tmp`), never overwriting anything.
+/// (`.NAME.kardia@HOST.PID-N.tmp`), never overwriting anything.
 fn create_temp_beside(path: &Path) -> std::io::Result<(PathBuf, File)> {
     use std::sync::atomic::{AtomicU64, Ordering};
     static COUNTER: AtomicU64 = AtomicU64::new(0);
@@ -152,7 +249,11 @@ fn create_temp_beside(path: &Path) -> std::io::Result<(PathBuf, File)> {
         .unwrap_or_else(|| "image".into());
     loop {
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let tmp = dir.join(format!(".{name}.{}-{n}.tmp", std::process::id()));
+        let tmp = dir.join(format!(
+            ".{name}{TEMP_MARK}{}.{}-{n}.tmp",
+            host_name(),
+            std::process::id()
+        ));
         match OpenOptions::new().write(true).create_new(true).open(&tmp) {
             Ok(f) => return Ok((tmp, f)),
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
@@ -226,6 +327,53 @@ mod tests {
         std::fs::write(target.join("inside"), b"").unwrap();
         assert!(file.commit().is_err());
         assert_eq!(listing(dir.path()), ["t.bin"]);
+    }
+
+    #[test]
+    fn temporaries_are_named_for_their_host_and_process() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = AtomicFile::create(&dir.path().join("a.b.png")).unwrap();
+        let name = file.temp_path().file_name().unwrap().to_str().unwrap();
+        assert_eq!(temp_owner(name), Some((host_name(), std::process::id())));
+        assert_eq!(temp_owner(".a.png.1234-0.tmp"), None);
+        assert_eq!(temp_owner(".x.tmp"), None);
+        assert_eq!(
+            temp_owner(".f.png.kardia@node-1.lab.77-3.tmp"),
+            Some(("node-1.lab", 77))
+        );
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn only_kardias_own_stale_temporaries_are_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        // No process has this id (above Linux's largest pid_max, 2^22).
+        let ended = 4_194_305 + 17;
+        let host = host_name();
+        let stale = format!(".f_0001.png{TEMP_MARK}{host}.{ended}-0.tmp");
+        let keep = [
+            format!(".f_0002.png{TEMP_MARK}other-host.{ended}-0.tmp"), // another node's
+            format!(".f_0003.png{TEMP_MARK}{host}.{}-0.tmp", std::process::id()), // alive
+            format!(".f_0004.png.{ended}-0.tmp"),                      // not kardia's marker
+            "notes.tmp".to_string(),
+            "f_0000.png".to_string(),
+        ];
+        for name in keep.iter().chain([&stale]) {
+            std::fs::write(d.join(name), b"x").unwrap();
+        }
+        let removed = remove_stale_temporaries(d);
+        assert_eq!(removed, [d.join(&stale)]);
+        let mut expected = keep.to_vec();
+        expected.sort();
+        assert_eq!(listing(d), expected);
+        // The first write into a directory sweeps it.
+        std::fs::write(d.join(&stale), b"x").unwrap();
+        AtomicFile::create(&d.join("new.png"))
+            .unwrap()
+            .commit()
+            .unwrap();
+        assert!(!d.join(&stale).exists());
     }
 
     #[test]

@@ -104,6 +104,73 @@ pub fn encode(
     }
 }
 
+/// A line of text stored in an image file under a name: a PNG `tEXt` chunk (Latin-1 name of
+/// 1 to 79 characters) or an OpenEXR text attribute. [`read_tag`] reads it back.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FileTag<'a> {
+    /// The chunk's keyword or the attribute's name.
+    pub name: &'a str,
+    /// The text.
+    pub text: &'a str,
+}
+
+/// [`encode`] with `tag` stored in the file (a PNG through [`encode_png_streaming_tagged`],
+/// handed all rows at once).
+pub fn encode_tagged(
+    image: &Image,
+    format: ImageFormat,
+    tag: Option<FileTag>,
+    out: impl Write + Seek + Send,
+) -> Result<(), OutputError> {
+    match format {
+        ImageFormat::Png => {
+            check_size(image)?;
+            let ((), written) = encode_png_streaming_tagged(
+                out,
+                image.width,
+                image.height,
+                image.alpha.is_some(),
+                tag,
+                |sink| sink.rows(0, &image.pixels, image.alpha.as_deref()),
+            );
+            written
+        }
+        ImageFormat::ExrFloat => encode_exr_tagged(image, false, tag, out),
+        ImageFormat::ExrHalf => encode_exr_tagged(image, true, tag, out),
+    }
+}
+
+/// The text stored under `name` in the PNG or OpenEXR file at `path` (by its extension), or
+/// `None` when the file cannot be read or holds no such text.
+pub fn read_tag(path: &Path, name: &str) -> Option<String> {
+    let file = std::io::BufReader::new(std::fs::File::open(path).ok()?);
+    match ImageFormat::from_path(path).ok()? {
+        ImageFormat::Png => {
+            let reader = png::Decoder::new(file).read_info().ok()?;
+            let info = reader.info();
+            info.uncompressed_latin1_text
+                .iter()
+                .find(|t| t.keyword == name)
+                .map(|t| t.text.clone())
+        }
+        ImageFormat::ExrFloat | ImageFormat::ExrHalf => {
+            use exr::prelude::{AttributeValue, Text};
+            let meta = exr::meta::MetaData::read_from_buffered(file, false).ok()?;
+            let header = meta.headers.first()?;
+            let key = Text::from(name);
+            let found = header
+                .shared_attributes
+                .other
+                .get(&key)
+                .or_else(|| header.own_attributes.other.get(&key));
+            match found {
+                Some(AttributeValue::Text(t)) => Some(t.to_string()),
+                _ => None,
+            }
+        }
+    }
+}
+
 /// An error unless the image holds `width·height ≥ 1` pixels.
 fn check_size(image: &Image) -> Result<(), OutputError> {
     let (w, h) = (image.width as usize, image.height as usize);
@@ -133,12 +200,31 @@ pub fn encode_png(image: &Image, mut out: impl Write) -> Result<(), OutputError>
     out.flush().map_err(encode_error)
 }
 
+/// How kardia's OpenEXR files are laid out: the `exr` crate's default (RLE compression in
+/// 64×64 tiles) with the blocks in increasing order. The crate compresses blocks on many
+/// threads; with an unspecified order it writes each as it finishes, so the same image gave
+/// different bytes from run to run. In increasing order the file is one sequence of bytes for
+/// one image, whatever the threads.
+pub(crate) fn exr_encoding() -> exr::image::Encoding {
+    exr::image::Encoding {
+        line_order: exr::meta::attribute::LineOrder::Increasing,
+        ..exr::image::Encoding::FAST_LOSSLESS
+    }
+}
+
 /// Encodes the image as linear-RGB OpenEXR into `out`: 32-bit float channels, or 16-bit half
 /// floats when `half` (values beyond the half range stored as `±65504`, never infinity). An
 /// image with alpha gets an A channel too, its colours premultiplied (OpenEXR's convention).
-pub fn encode_exr(
+/// The same image always gives the same bytes (blocks in increasing order, [`exr_encoding`]).
+pub fn encode_exr(image: &Image, half: bool, out: impl Write + Seek) -> Result<(), OutputError> {
+    encode_exr_tagged(image, half, None, out)
+}
+
+/// [`encode_exr`] with `tag` stored as a text attribute of the image.
+pub fn encode_exr_tagged(
     image: &Image,
     half: bool,
+    tag: Option<FileTag>,
     mut out: impl Write + Seek,
 ) -> Result<(), OutputError> {
     use exr::prelude::*;
@@ -146,49 +232,39 @@ pub fn encode_exr(
     let w = image.width as usize;
     let at = |v: Vec2<usize>| image.pixels[v.y() * w + v.x()];
     let size = (w, image.height as usize);
-    if let Some(alpha) = &image.alpha {
-        let a = |v: Vec2<usize>| alpha[v.y() * w + v.x()];
-        if half {
-            let max = f16::MAX.to_f32();
-            let h = |c: f32| f16::from_f32(c.clamp(-max, max));
-            let px = |v: Vec2<usize>| {
-                let p = at(v);
-                (h(p.x), h(p.y), h(p.z), f16::from_f32(a(v)))
-            };
-            Image::from_channels(size, SpecificChannels::rgba(px))
-                .write()
-                .to_buffered(&mut out)
-                .map_err(encode_error)?;
-        } else {
-            let px = |v: Vec2<usize>| {
-                let p = at(v);
-                (p.x, p.y, p.z, a(v))
-            };
-            Image::from_channels(size, SpecificChannels::rgba(px))
-                .write()
-                .to_buffered(&mut out)
-                .map_err(encode_error)?;
-        }
-    } else if half {
-        let max = f16::MAX.to_f32();
-        let h = |c: f32| f16::from_f32(c.clamp(-max, max));
-        let px = |v: Vec2<usize>| {
+    let max = f16::MAX.to_f32();
+    let h = |c: f32| f16::from_f32(c.clamp(-max, max));
+    // Every channel layout is its own type: one expansion each.
+    macro_rules! write_exr {
+        ($channels:expr) => {{
+            let mut exr = Image::from_encoded_channels(size, exr_encoding(), $channels);
+            if let Some(tag) = tag {
+                exr.attributes.other.insert(
+                    Text::from(tag.name),
+                    AttributeValue::Text(Text::from(tag.text)),
+                );
+            }
+            exr.write().to_buffered(&mut out).map_err(encode_error)?;
+        }};
+    }
+    match (&image.alpha, half) {
+        (Some(alpha), true) => write_exr!(SpecificChannels::rgba(|v: Vec2<usize>| {
+            let p = at(v);
+            let a = alpha[v.y() * w + v.x()];
+            (h(p.x), h(p.y), h(p.z), f16::from_f32(a))
+        })),
+        (Some(alpha), false) => write_exr!(SpecificChannels::rgba(|v: Vec2<usize>| {
+            let p = at(v);
+            (p.x, p.y, p.z, alpha[v.y() * w + v.x()])
+        })),
+        (None, true) => write_exr!(SpecificChannels::rgb(|v: Vec2<usize>| {
             let p = at(v);
             (h(p.x), h(p.y), h(p.z))
-        };
-        Image::from_channels(size, SpecificChannels::rgb(px))
-            .write()
-            .to_buffered(&mut out)
-            .map_err(encode_error)?;
-    } else {
-        let px = |v: Vec2<usize>| {
+        })),
+        (None, false) => write_exr!(SpecificChannels::rgb(|v: Vec2<usize>| {
             let p = at(v);
             (p.x, p.y, p.z)
-        };
-        Image::from_channels(size, SpecificChannels::rgb(px))
-            .write()
-            .to_buffered(&mut out)
-            .map_err(encode_error)?;
+        })),
     }
     out.flush().map_err(encode_error)
 }
@@ -208,9 +284,22 @@ pub fn encode_png_streaming<R>(
     alpha: bool,
     produce: impl FnOnce(&RowSink) -> R,
 ) -> (R, Result<(), OutputError>) {
+    encode_png_streaming_tagged(out, width, height, alpha, None, produce)
+}
+
+/// [`encode_png_streaming`] with `tag` stored in a `tEXt` chunk before the pixels.
+pub fn encode_png_streaming_tagged<R>(
+    out: impl Write + Send,
+    width: u32,
+    height: u32,
+    alpha: bool,
+    tag: Option<FileTag>,
+    produce: impl FnOnce(&RowSink) -> R,
+) -> (R, Result<(), OutputError>) {
     let (sender, receiver) = std::sync::mpsc::channel();
     std::thread::scope(|scope| {
-        let encoder = scope.spawn(move || encode_png_rows(out, width, height, alpha, receiver));
+        let encoder =
+            scope.spawn(move || encode_png_rows(out, width, height, alpha, tag, receiver));
         let sink = RowSink {
             width: width as usize,
             alpha,
@@ -262,12 +351,18 @@ fn encode_png_rows(
     width: u32,
     height: u32,
     alpha: bool,
+    tag: Option<FileTag>,
     runs: std::sync::mpsc::Receiver<(u32, Vec<u8>)>,
 ) -> Result<(), String> {
     if width == 0 || height == 0 {
         return Err(format!("the image is {width}×{height}"));
     }
     let mut encoder = png::Encoder::new(&mut out, width, height);
+    if let Some(tag) = tag {
+        encoder
+            .add_text_chunk(tag.name.into(), tag.text.into())
+            .map_err(|e| e.to_string())?;
+    }
     let channels = if alpha { 4 } else { 3 };
     encoder.set_color(if alpha {
         png::ColorType::Rgba
@@ -500,6 +595,34 @@ mod tests {
         assert!(twice.is_err());
         let (_, empty) = encode_png_streaming(Vec::new(), 0, 3, false, |_| ());
         assert!(empty.is_err());
+    }
+
+    #[test]
+    fn exr_bytes_do_not_depend_on_the_order_blocks_finish_in() {
+        // 512×384: 48 blocks of 64×64, compressed on many threads.
+        let (w, h) = (512u32, 384u32);
+        let mut img = Image::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                let v = DVec3::new(
+                    (x as f64 * 0.37).sin(),
+                    ((x * y) % 97) as f64 / 13.0,
+                    y as f64 / 7.0,
+                );
+                img.set(x, y, v);
+            }
+        }
+        for half in [false, true] {
+            let encoded = || {
+                let mut out = std::io::Cursor::new(Vec::new());
+                encode_exr(&img, half, &mut out).unwrap();
+                out.into_inner()
+            };
+            let first = encoded();
+            for _ in 0..6 {
+                assert!(first == encoded(), "half {half}: the bytes changed");
+            }
+        }
     }
 
     #[test]

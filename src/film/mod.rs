@@ -23,10 +23,11 @@ mod atomic;
 mod encode;
 mod srgb;
 
-pub use atomic::{check_output_path, AtomicFile};
+pub use atomic::{check_output_path, remove_stale_temporaries, AtomicFile};
 pub use encode::{
-    encode, encode_exr, encode_png, encode_png_streaming, write_image, write_image_as, ImageFormat,
-    OutputError, RowSink,
+    encode, encode_exr, encode_exr_tagged, encode_png, encode_png_streaming,
+    encode_png_streaming_tagged, encode_tagged, read_tag, write_image, write_image_as, FileTag,
+    ImageFormat, OutputError, RowSink,
 };
 pub use srgb::{linear_to_srgb8, srgb8_to_linear};
 pub(crate) use srgb::{srgb8_into, srgba8_into};

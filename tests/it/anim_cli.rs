@@ -90,9 +90,13 @@ fn one_frame_equals_that_frame_of_the_sequence() {
             "frame {f}"
         );
     }
-    // Frame 0 of a scene is its still with the same seed.
+    // Frame 0 of a scene is its still with the same seed: the same pixels. The files differ in
+    // their render key only (a still is frame 0 of 1, not of 4), so `--resume` tells them apart.
     ok(d, &args(&["-o", "still.png"]));
-    assert_eq!(read(d, "still.png"), read(d, &names[0]));
+    let pixels = |name: &str| image::open(d.join(name)).unwrap().to_rgb8().into_raw();
+    assert_eq!(pixels("still.png"), pixels(&names[0]));
+    let key = |name: &str| kardia::film::read_tag(&d.join(name), kardia::tiles::KEY_TAG);
+    assert!(key("still.png").is_some() && key("still.png") != key(&names[0]));
 }
 
 #[test]
@@ -323,7 +327,10 @@ fn assemble_refuses_parts_that_do_not_fit() {
             "overlap (both hold pixel (0, 10))",
         ),
         (&["p0.png", "seed9.png"], "their seeds differ (0 against 9)"),
-        (&["p0.png", "frame1.png"], "their seeds differ"),
+        (
+            &["p0.png", "frame1.png"],
+            "their frames differ (0 against 1)",
+        ),
         (
             &["p0.png", "wide.png"],
             "their image sizes differ (40×32 against 80×64)",

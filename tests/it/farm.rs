@@ -164,5 +164,303 @@ fn the_slurm_scripts_are_valid_and_chain_the_join_after_the_array() {
     let tiles = std::fs::read_to_string(recipe("slurm-tiles.sbatch")).unwrap();
     assert!(tiles.contains("--tile \"$SLURM_ARRAY_TASK_ID/$TILES\""));
     let submit = std::fs::read_to_string(recipe("slurm-submit.sh")).unwrap();
-    assert!(submit.contains("--dependency=afterok:\"$tiles_job\""));
+    assert!(submit.contains("--dependency=afterany:\"$tiles_job\""));
+    assert!(submit.contains("--print-frame-count") && !submit.contains("sed "));
+    for name in ["parallel-frames.sh", "parallel-tiles.sh"] {
+        let text = std::fs::read_to_string(recipe(name)).unwrap();
+        assert!(text.contains("--halt soon,fail=1") && !text.contains("--halt now"));
+    }
+}
+
+#[test]
+fn exr_files_are_the_same_bytes_whatever_the_threads() {
+    // 320×256 holds 20 blocks of 64×64: enough for the blocks to finish in any order.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("a.scene"), SCENE).unwrap();
+    for (half, name) in [(false, "float"), (true, "half")] {
+        let render = |threads: &str, out: &str| {
+            let mut a = vec![
+                "render",
+                "a.scene",
+                "--width",
+                "320",
+                "--spp",
+                "1",
+                "--quiet",
+                "--threads",
+                threads,
+                "-o",
+                out,
+            ];
+            if half {
+                a.push("--half");
+            }
+            ok(d, &a);
+            std::fs::read(d.join(out)).unwrap()
+        };
+        let first = render("2", &format!("{name}_a.exr"));
+        for (threads, out) in [("2", "b"), ("1", "c"), ("2", "d"), ("2", "e")] {
+            let again = render(threads, &format!("{name}_{out}.exr"));
+            assert!(
+                first == again,
+                "{name} EXR on {threads} thread(s) differs from the first render's bytes"
+            );
+        }
+    }
+}
+
+#[test]
+fn without_a_terminal_progress_is_a_plain_line_and_quiet_silences_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("a.scene"), SCENE).unwrap();
+    let base = [
+        "render",
+        "a.scene",
+        "--frames",
+        "0..1",
+        "--spp",
+        "1",
+        "--progress-every",
+        "0",
+        "-o",
+        "f_#.png",
+    ];
+    // stderr is a pipe here, as in a farm job's log.
+    let out = super::anim_cli::kardia(d, &base);
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("eta")).collect();
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.starts_with("kardia: frame 0 (1 of 2): ")),
+        "{err}"
+    );
+    let last = lines.last().expect("progress lines");
+    assert!(
+        last.starts_with("kardia: frame 1 (2 of 2): 100%, ") && last.contains(" elapsed, eta "),
+        "{err}"
+    );
+    assert!(
+        !err.contains('\r') && !err.contains('\u{1b}'),
+        "no bar: {err:?}"
+    );
+    // A still says "rendering".
+    let still = super::anim_cli::kardia(
+        d,
+        &[
+            "render",
+            "a.scene",
+            "--spp",
+            "1",
+            "--progress-every",
+            "0",
+            "-o",
+            "s.png",
+        ],
+    );
+    let err = String::from_utf8_lossy(&still.stderr);
+    assert!(err.contains("kardia: rendering: 100%, "), "{err}");
+    let mut quiet = base.to_vec();
+    quiet.push("--quiet");
+    let out = super::anim_cli::kardia(d, &quiet);
+    assert!(out.status.success() && out.stderr.is_empty(), "{out:?}");
+}
+
+/// Starts a long render in `dir`, sends `signal` once it has begun, and returns its exit code
+/// and the files left in `dir`.
+#[cfg(unix)]
+fn render_and_signal(dir: &Path, signal: &str, output: &[&str]) -> (Option<i32>, Vec<String>) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_kardia"))
+        .args([
+            "render", "a.scene", "--width", "2000", "--spp", "64", "--quiet",
+        ])
+        .args(output)
+        .current_dir(dir)
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(700));
+    let sent = Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let status = child.wait().unwrap();
+    (status.code(), crate::cli_render::listing(dir))
+}
+
+#[cfg(unix)]
+#[test]
+fn sigterm_exits_143_and_removes_the_temporary_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("a.scene"), SCENE).unwrap();
+    for output in [
+        &["-o", "still.png"][..],
+        &["-o", "still.exr"],
+        &["--frame", "1", "-o", "f_####.png"],
+        &["--tile", "1/2", "-o", "part.png"],
+    ] {
+        let (code, left) = render_and_signal(d, "-TERM", output);
+        assert_eq!(code, Some(143), "{output:?}");
+        assert_eq!(left, ["a.scene"], "{output:?}");
+    }
+    let (code, left) = render_and_signal(d, "-HUP", &["-o", "still.png"]);
+    assert_eq!((code, left.len()), (Some(129), 1));
+}
+
+#[test]
+fn resume_keeps_only_files_of_this_render_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("a.scene"), SCENE).unwrap();
+    let run = |extra: &[&str]| {
+        let mut a = vec!["render", "a.scene", "--threads", "1", "--resume"];
+        a.extend_from_slice(extra);
+        let out = super::anim_cli::kardia(d, &a);
+        assert!(out.status.success(), "{out:?}");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let read = |name: &str| std::fs::read(d.join(name)).unwrap();
+    let err = run(&["--spp", "1", "--frames", "0..1", "-o", "f_#.png"]);
+    assert!(!err.contains("skipped"), "{err}");
+    let frame1 = read("f_1.png");
+    // Frame 0's picture put in frame 1's place: a complete PNG, but not frame 1.
+    std::fs::copy(d.join("f_0.png"), d.join("f_1.png")).unwrap();
+    let err = run(&["--spp", "1", "--frames", "0..1", "-o", "f_#.png"]);
+    assert!(err.contains("(1 already complete, skipped)"), "{err}");
+    assert_eq!(read("f_1.png"), frame1, "frame 1 rendered anew");
+    // Other settings: nothing is kept.
+    let err = run(&["--spp", "2", "--frames", "0..1", "-o", "f_#.png"]);
+    assert!(
+        err.contains("kardia: 2 frames") && !err.contains("skipped"),
+        "{err}"
+    );
+    let err = run(&["--spp", "2", "--frames", "0..1", "-o", "f_#.png"]);
+    assert!(err.contains("(2 already complete, skipped)"), "{err}");
+    // A file kardia did not write (no key) is rendered anew, EXR too.
+    ok(
+        d,
+        &[
+            "render", "a.scene", "--spp", "2", "--frame", "1", "--quiet", "-o", "e_#.exr",
+        ],
+    );
+    let exr = read("e_1.exr");
+    let mut image = kardia::film::Image::new(40, 32);
+    image.pixels[0] = kardia::film::Vec3::new(1.0, 0.0, 0.0);
+    kardia::film::write_image(&image, &d.join("e_1.exr")).unwrap();
+    let err = run(&["--spp", "2", "--frame", "1", "-o", "e_#.exr"]);
+    assert!(!err.contains("skipped"), "{err}");
+    assert_eq!(read("e_1.exr"), exr);
+    // Tiles resume too, by their part metadata.
+    let err = run(&["--spp", "1", "--tile", "0/2", "-o", "p0.png"]);
+    assert!(!err.contains("skipped"), "{err}");
+    let err = run(&["--spp", "1", "--tile", "0/2", "-o", "p0.png"]);
+    assert!(err.contains("(1 already complete, skipped)"), "{err}");
+    let err = run(&["--spp", "1", "--tile", "1/2", "-o", "p0.png"]);
+    assert!(!err.contains("skipped"), "band 1 is not band 0: {err}");
+}
+
+#[test]
+fn the_slurm_join_names_the_missing_bands_and_how_to_rerun_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("a.scene"), SCENE).unwrap();
+    for i in [0, 2] {
+        ok(
+            d,
+            &[
+                "render",
+                "a.scene",
+                "--spp",
+                "1",
+                "--quiet",
+                "--tile",
+                &format!("{i}/4"),
+                "-o",
+                &format!("part_{i}.png"),
+            ],
+        );
+    }
+    let join = |out: &Path| {
+        Command::new("bash")
+            .arg(recipe("slurm-assemble.sbatch"))
+            .env("KARDIA", env!("CARGO_BIN_EXE_kardia"))
+            .env("SCENE", d.join("a.scene"))
+            .env("OUT", out)
+            .env("TILES", "4")
+            .env("IMAGE", "joined.png")
+            .output()
+            .unwrap()
+    };
+    let out = join(d);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(err.contains("bands 1,3 of 4 are missing"), "{err}");
+    assert!(
+        err.contains("--array=1,3") && err.contains("--dependency=afterany:"),
+        "{err}"
+    );
+    assert!(!d.join("joined.png").exists());
+    for i in [1, 3] {
+        ok(
+            d,
+            &[
+                "render",
+                "a.scene",
+                "--spp",
+                "1",
+                "--quiet",
+                "--tile",
+                &format!("{i}/4"),
+                "-o",
+                &format!("part_{i}.png"),
+            ],
+        );
+    }
+    let out = join(d);
+    assert!(out.status.success(), "{out:?}");
+    ok(
+        d,
+        &[
+            "render",
+            "a.scene",
+            "--spp",
+            "1",
+            "--quiet",
+            "-o",
+            "single.png",
+        ],
+    );
+    assert_eq!(
+        std::fs::read(d.join("joined.png")).unwrap(),
+        std::fs::read(d.join("single.png")).unwrap()
+    );
+}
+
+#[test]
+fn kardia_prints_the_frame_count_turntable_included() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("a.scene"), SCENE).unwrap();
+    std::fs::write(d.join("still.scene"), SCENE.replace("FRAMES 4 FPS 8\n", "")).unwrap();
+    for (args, count) in [
+        (&["a.scene"][..], "4"),
+        (&["a.scene", "--turntable", "36"], "36"),
+        (&["still.scene"], "1"),
+    ] {
+        let mut a = vec!["render"];
+        a.extend_from_slice(args);
+        a.push("--print-frame-count");
+        let out = super::anim_cli::kardia(d, &a);
+        assert!(out.status.success(), "{out:?}");
+        assert_eq!(
+            String::from_utf8_lossy(&out.stdout).trim(),
+            count,
+            "{args:?}"
+        );
+    }
+    assert_eq!(crate::cli_render::listing(d), ["a.scene", "still.scene"]);
 }
