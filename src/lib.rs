@@ -13,6 +13,7 @@ pub mod geometry;
 pub mod integrator;
 pub mod lights;
 pub mod materials;
+pub mod mesh;
 pub mod pipeline;
 pub mod roots;
 pub mod scene;
