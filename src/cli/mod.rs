@@ -5,6 +5,7 @@
 mod animate;
 mod assemble;
 mod explore;
+mod mesh;
 mod probe;
 mod render;
 mod roots;
@@ -34,6 +35,8 @@ enum Command {
     Explore(explore::ExploreArgs),
     /// Join part files (rendered with --tile or --region) into the whole image.
     Assemble(assemble::AssembleArgs),
+    /// Mesh a scene's HEART and IMPLICIT objects (or an equation) as a printable solid.
+    Mesh(mesh::MeshArgs),
 }
 
 /// Runs the command line and returns the process exit code. `interrupt` is the binary's
@@ -48,5 +51,6 @@ pub fn main(interrupt: &CancelToken) -> i32 {
         Some(Command::Probe(a)) => probe::run(a),
         Some(Command::Explore(a)) => explore::run(a, interrupt),
         Some(Command::Assemble(a)) => assemble::run(a),
+        Some(Command::Mesh(a)) => mesh::run(a),
     }
 }

@@ -1,7 +1,8 @@
 //! How far the mesh is from the exact surface, measured with the project's root finder.
 //!
-//! - Vertices: each surface vertex's distance to the surface along `∇φ` (the nearest root
-//!   of `φ` on that line).
+//! - Vertices: each surface vertex's distance to the surface: the nearest root of `φ` on the
+//!   line along `∇φ` or along any of the grid's seven edge directions (the least of these
+//!   bounds the distance from above).
 //! - Mesh to surface: from the centroid of every triangle whose corners are all on the
 //!   surface, the nearest root of `φ` along the triangle's normal (or along `∇φ` if nearer).
 //! - Surface to mesh: points of the exact surface (every root of `φ` on lines parallel to
@@ -20,6 +21,18 @@ use crate::shapes::implicit::MAX_DEGREE;
 use rayon::prelude::*;
 use std::collections::HashMap;
 
+/// The directions of the grid's edges ([`super::extract`]: the cube's axes, face diagonals
+/// and main diagonal).
+const EDGE_DIRECTIONS: [DVec3; 7] = [
+    DVec3::X,
+    DVec3::Y,
+    DVec3::Z,
+    DVec3::new(1.0, 1.0, 0.0),
+    DVec3::new(1.0, 0.0, 1.0),
+    DVec3::new(0.0, 1.0, 1.0),
+    DVec3::ONE,
+];
+
 /// Distances measured between a mesh and the exact surface (see the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Deviation {
@@ -27,7 +40,7 @@ pub struct Deviation {
     pub vertex: f64,
     /// Surface vertices measured.
     pub vertices: usize,
-    /// Surface vertices with no surface point within the tolerance along `∇φ`.
+    /// Surface vertices with no surface point within the tolerance on any of those lines.
     pub vertices_beyond: usize,
     /// The largest distance from a sampled point of the mesh to the surface.
     pub mesh_to_surface: f64,
@@ -79,24 +92,44 @@ pub fn measure(
         .par_iter()
         .map(|&v| {
             let p = mesh.vertices[v];
-            field.distance_along(p, field.gradient(p, h), tolerance)
+            // Along ∇φ, and along the grid's edge directions (a vertex was found on one of
+            // them; at a node, where ∇φ vanishes, that is the line that sees the root). Each
+            // line's distance bounds the true distance from above.
+            std::iter::once(field.gradient(p, h))
+                .chain(EDGE_DIRECTIONS)
+                .filter_map(|d| field.distance_along(p, d, tolerance))
+                .reduce(f64::min)
         })
         .collect();
-    let vertex = vertex_distances.iter().flatten().copied().fold(0.0, f64::max);
+    let vertex = vertex_distances
+        .iter()
+        .flatten()
+        .copied()
+        .fold(0.0, f64::max);
     let vertices_beyond = vertex_distances.iter().filter(|d| d.is_none()).count();
 
     let mesh_side: Vec<Option<f64>> = (0..mesh.triangles.len())
         .into_par_iter()
-        .filter(|&t| mesh.triangles[t].iter().all(|&v| kinds[v as usize] == VertexKind::Surface))
+        .filter(|&t| {
+            mesh.triangles[t]
+                .iter()
+                .all(|&v| kinds[v as usize] == VertexKind::Surface)
+        })
         .map(|t| {
             let [a, b, c] = mesh.corners(t);
             let centroid = (a + b + c) / 3.0;
             let along_normal = field.distance_along(centroid, mesh.normal(t), reach);
             let along_gradient = field.distance_along(centroid, field.gradient(centroid, h), reach);
-            along_normal.into_iter().chain(along_gradient).reduce(f64::min)
+            along_normal
+                .into_iter()
+                .chain(along_gradient)
+                .reduce(f64::min)
         })
         .collect();
-    let mesh_to_surface = mesh_side.iter().map(|d| d.unwrap_or(reach)).fold(0.0, f64::max);
+    let mesh_to_surface = mesh_side
+        .iter()
+        .map(|d| d.unwrap_or(reach))
+        .fold(0.0, f64::max);
 
     let samples = surface_samples(field, step);
     let nearest = NearestTriangle::new(mesh, step);
@@ -104,8 +137,15 @@ pub fn measure(
         .par_iter()
         .map(|&p| nearest.distance(p, reach))
         .collect();
-    let surface_to_mesh = surface_side.iter().map(|d| d.unwrap_or(reach)).fold(0.0, f64::max);
-    let beyond_reach = mesh_side.iter().chain(&surface_side).filter(|d| d.is_none()).count();
+    let surface_to_mesh = surface_side
+        .iter()
+        .map(|d| d.unwrap_or(reach))
+        .fold(0.0, f64::max);
+    let beyond_reach = mesh_side
+        .iter()
+        .chain(&surface_side)
+        .filter(|d| d.is_none())
+        .count();
     Deviation {
         vertex,
         vertices: surface_vertices.len(),
@@ -179,7 +219,11 @@ impl<'a> NearestTriangle<'a> {
                 }
             }
         }
-        Self { mesh, cell, buckets }
+        Self {
+            mesh,
+            cell,
+            buckets,
+        }
     }
 
     fn key(p: DVec3, cell: f64) -> [i64; 3] {

@@ -37,8 +37,10 @@ pub fn verify(mesh: &TriangleMesh) -> Result<Verified, String> {
         return Err(format!("triangles {a} and {b} intersect"));
     }
     let volume = mesh.volume();
-    if !(volume > 0.0) {
-        return Err(format!("the volume is {volume}, not positive (inward normals)"));
+    if volume.is_nan() || volume <= 0.0 {
+        return Err(format!(
+            "the volume is {volume}, not positive (inward normals)"
+        ));
     }
     let edges = mesh.triangles.len() * 3 / 2;
     Ok(Verified {
@@ -110,7 +112,11 @@ pub fn one_fan_per_vertex(mesh: &TriangleMesh) -> Result<(), String> {
         if steps != edges.len() {
             return Err(format!(
                 "vertex {v} joins {} fans of triangles (a pinch: not a 2-manifold)",
-                if steps < edges.len() { "several" } else { "broken" }
+                if steps < edges.len() {
+                    "several"
+                } else {
+                    "broken"
+                }
             ));
         }
     }
@@ -154,7 +160,7 @@ fn orient(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {
 /// touching at an end, an edge or a corner does not count).
 fn segment_crosses(p: DVec3, q: DVec3, [a, b, c]: [DVec3; 3]) -> bool {
     let (sp, sq) = (orient(a, b, c, p), orient(a, b, c, q));
-    if !(sp * sq < 0.0) {
+    if sp * sq >= 0.0 || (sp * sq).is_nan() {
         return false;
     }
     let (u, v, w) = (orient(p, q, a, b), orient(p, q, b, c), orient(p, q, c, a));
@@ -240,7 +246,8 @@ fn triangles_cross(mesh: &TriangleMesh, i: usize, j: usize) -> bool {
     let shared: Vec<u32> = ti.iter().filter(|v| tj.contains(v)).copied().collect();
     match shared.len() {
         0 => (0..3).any(|k| {
-            segment_crosses(pi[k], pi[(k + 1) % 3], pj) || segment_crosses(pj[k], pj[(k + 1) % 3], pi)
+            segment_crosses(pi[k], pi[(k + 1) % 3], pj)
+                || segment_crosses(pj[k], pj[(k + 1) % 3], pi)
         }),
         1 => {
             // Only the edges opposite the shared corner can cross the other triangle.

@@ -70,19 +70,26 @@ fn marching_table() -> Vec<Vec<TableTriangle>> {
             let inside: Vec<u8> = (0..4).filter(|i| case >> i & 1 == 1).collect();
             let outside: Vec<u8> = (0..4).filter(|i| case >> i & 1 == 0).collect();
             let mut tris: Vec<TableTriangle> = match (inside.len(), outside.len()) {
-                (1, 3) => vec![outside.iter().map(|&o| [inside[0], o]).collect::<Vec<_>>()
-                    .try_into().unwrap()],
-                (3, 1) => vec![inside.iter().map(|&i| [i, outside[0]]).collect::<Vec<_>>()
-                    .try_into().unwrap()],
+                (1, 3) => vec![outside
+                    .iter()
+                    .map(|&o| [inside[0], o])
+                    .collect::<Vec<_>>()
+                    .try_into()
+                    .unwrap()],
+                (3, 1) => vec![inside
+                    .iter()
+                    .map(|&i| [i, outside[0]])
+                    .collect::<Vec<_>>()
+                    .try_into()
+                    .unwrap()],
                 (2, 2) => {
                     let (a, b, c, d) = (inside[0], inside[1], outside[0], outside[1]);
                     vec![[[a, c], [a, d], [b, d]], [[a, c], [b, d], [b, c]]]
                 }
                 _ => Vec::new(),
             };
-            let centroid = |s: &[u8]| {
-                s.iter().map(|&k| reference[k as usize]).sum::<DVec3>() / s.len() as f64
-            };
+            let centroid =
+                |s: &[u8]| s.iter().map(|&k| reference[k as usize]).sum::<DVec3>() / s.len() as f64;
             for t in &mut tris {
                 let m = t.map(|[i, j]| 0.5 * (reference[i as usize] + reference[j as usize]));
                 let n = (m[1] - m[0]).cross(m[2] - m[0]);

@@ -169,7 +169,7 @@ impl Field {
     /// The first root of `φ(a + s·e)` in `(0, hi]`, by the project's root finder where the
     /// degree allows, else by bisection of the sign when the end is outside.
     fn first_root(&self, a: DVec3, e: DVec3, hi: f64) -> Option<f64> {
-        if !(hi > 0.0) {
+        if hi.is_nan() || hi <= 0.0 {
             return None;
         }
         let c = self.along(a, e);
@@ -202,7 +202,7 @@ impl Field {
     /// has degree above 16 along lines.
     pub fn distance_along(&self, p: DVec3, dir: DVec3, reach: f64) -> Option<f64> {
         let len = dir.length();
-        if !(len > 0.0) || self.degree() > MAX_DEGREE {
+        if len.is_nan() || len <= 0.0 || self.degree() > MAX_DEGREE {
             return None;
         }
         let c = self.along(p, dir * (reach / len));
@@ -285,7 +285,9 @@ mod tests {
     #[test]
     fn distances_along_a_line_find_the_nearest_root() {
         let f = sphere(SolidKind::Inside, 2.0);
-        let d = f.distance_along(DVec3::new(0.9, 0.0, 0.0), DVec3::X, 0.5).unwrap();
+        let d = f
+            .distance_along(DVec3::new(0.9, 0.0, 0.0), DVec3::X, 0.5)
+            .unwrap();
         assert!((d - 0.1).abs() < 1e-14);
         assert!(f.distance_along(DVec3::ZERO, DVec3::X, 0.5).is_none());
     }

@@ -135,7 +135,9 @@ pub enum MeshError {
     #[error("{0}")]
     Invalid(String),
     /// No grid vertex fell inside the solid.
-    #[error("the solid is empty at this tolerance (no grid point inside it): try a smaller --tolerance")]
+    #[error(
+        "the solid is empty at this tolerance (no grid point inside it): try a smaller --tolerance"
+    )]
     Empty,
     /// A guarantee failed on the finished mesh (a bug: please report it).
     #[error("the mesh failed its own check: {0}")]
@@ -164,7 +166,7 @@ pub fn stretch(m: &DMat3) -> f64 {
     for _ in 0..100 {
         let w = mtm * v;
         let len = w.length();
-        if !(len > 0.0) {
+        if len.is_nan() || len <= 0.0 {
             return 0.0;
         }
         v = w / len;
@@ -219,8 +221,8 @@ pub fn mesh_solid(
     if object_mesh.triangles.is_empty() {
         return Err(MeshError::Empty);
     }
-    let deviation = accuracy::measure(&field, &object_mesh, &kinds, tolerance / grow, grid.step())
-        .scaled(grow);
+    let deviation =
+        accuracy::measure(&field, &object_mesh, &kinds, tolerance / grow, grid.step()).scaled(grow);
     let flip = frame.m.determinant() < 0.0;
     let mesh = object_mesh.mapped(|p| frame.point_to_world(p), flip);
     Ok(MeshedSolid {
@@ -229,6 +231,99 @@ pub fn mesh_solid(
         grid,
         tolerance,
         deviation,
+    })
+}
+
+/// A solid to mesh with its name (for messages and files) and colour (sRGB bytes).
+#[derive(Debug, Clone)]
+pub struct NamedSolid {
+    /// E.g. `HEART (line 3)`.
+    pub name: String,
+    /// The solid.
+    pub solid: PolynomialSolid,
+    /// Its diffuse colour as sRGB bytes.
+    pub colour: [u8; 3],
+}
+
+/// The polynomial solids of a scene (its HEART and IMPLICIT objects), in scene order.
+pub fn scene_solids(scene: &crate::scene::Scene) -> Vec<NamedSolid> {
+    scene
+        .objects
+        .iter()
+        .filter_map(|o| {
+            let solid = o.shape.polynomial_solid()?;
+            Some(NamedSolid {
+                name: format!("{} (line {})", o.keyword, o.line),
+                solid,
+                colour: o
+                    .material
+                    .diffuse
+                    .to_array()
+                    .map(crate::film::linear_to_srgb8),
+            })
+        })
+        .collect()
+}
+
+/// The finished, checked mesh of one or more solids: what a file holds.
+#[derive(Debug, Clone)]
+pub struct Printable {
+    /// The mesh as written (after `--size` scaling, coordinates rounded to `f32`).
+    pub mesh: TriangleMesh,
+    /// The guarantees checked on exactly that mesh, with its counts and volume.
+    pub verified: check::Verified,
+    /// Each solid's mesh and measurements (world units, before scaling).
+    pub parts: Vec<MeshedSolid>,
+    /// The factor the world coordinates were multiplied by (`--size`), else 1.
+    pub scale: f64,
+}
+
+/// Meshes every solid, joins them, scales the whole so its largest extent is `size`
+/// (moved so its box starts at the origin) when given, rounds to `f32` as the files store it,
+/// and checks every guarantee on the result ([`check::verify`]: solids that overlap each
+/// other are refused there, as their meshes would cross). `progress(i, done, total)`:
+/// solid `i`'s grid layers.
+pub fn mesh_solids(
+    solids: &[NamedSolid],
+    request: &MeshRequest,
+    size: Option<f64>,
+    progress: &(dyn Fn(usize, usize, usize) + Sync),
+) -> Result<Printable, MeshError> {
+    if solids.is_empty() {
+        return Err(MeshError::Invalid(
+            "nothing to mesh: the scene has no HEART or IMPLICIT object".into(),
+        ));
+    }
+    let mut parts = Vec::new();
+    let mut joined = TriangleMesh::default();
+    for (i, s) in solids.iter().enumerate() {
+        let part = mesh_solid(&s.solid, request, &|done, total| progress(i, done, total)).map_err(
+            |e| match e {
+                MeshError::Empty => MeshError::Invalid(format!("{}: {e}", s.name)),
+                e => e,
+            },
+        )?;
+        joined.append(&part.mesh);
+        parts.push(part);
+    }
+    let mut scale = 1.0;
+    if let Some(size) = size {
+        if !(size > 0.0 && size.is_finite()) {
+            return Err(MeshError::Invalid(format!(
+                "--size must be a finite number of millimetres greater than 0, not {size}"
+            )));
+        }
+        let (lo, hi) = joined.extent();
+        scale = size / (hi - lo).max_element();
+        joined = joined.mapped(|p| (p - lo) * scale, false);
+    }
+    let mesh = joined.rounded_to_f32();
+    let verified = check::verify(&mesh).map_err(MeshError::Broken)?;
+    Ok(Printable {
+        mesh,
+        verified,
+        parts,
+        scale,
     })
 }
 
@@ -297,7 +392,11 @@ mod tests {
                 assert!(v.volume > 0.0);
                 if kind != (SolidKind::Shell { thickness: 0.1 }) {
                     assert_eq!(m.deviation.vertices_beyond, 0, "{name} {kind:?}");
-                    assert!(m.deviation.vertex <= 0.05, "{name} {kind:?} {:?}", m.deviation);
+                    assert!(
+                        m.deviation.vertex <= 0.05,
+                        "{name} {kind:?} {:?}",
+                        m.deviation
+                    );
                 }
             }
         }
@@ -307,8 +406,13 @@ mod tests {
     fn a_placement_carries_the_mesh_and_keeps_it_outward() {
         let mut s = solid("x^2 + y^2 + z^2 = 1", 1.5);
         // A mirror (negative determinant) that also stretches x by 2.
-        s.frame = Frame::new(DVec3::new(5.0, 0.0, 0.0), DVec3::X * -2.0, DVec3::Y, DVec3::Z)
-            .unwrap();
+        s.frame = Frame::new(
+            DVec3::new(5.0, 0.0, 0.0),
+            DVec3::X * -2.0,
+            DVec3::Y,
+            DVec3::Z,
+        )
+        .unwrap();
         let m = mesh(&s, SolidKind::Inside, 0.04);
         let v = check::verify(&m.mesh).unwrap();
         let exact = 2.0 * 4.0 / 3.0 * std::f64::consts::PI;

@@ -62,14 +62,19 @@ fn io(e: std::io::Error) -> OutputError {
 
 /// Binary STL: an 80-byte header, the triangle count, then per triangle its unit normal and
 /// three corners as little-endian `f32`, and a zero attribute.
-pub fn write_stl(mesh: &TriangleMesh, meta: &MeshMetadata, mut out: impl Write) -> Result<(), OutputError> {
+pub fn write_stl(
+    mesh: &TriangleMesh,
+    meta: &MeshMetadata,
+    mut out: impl Write,
+) -> Result<(), OutputError> {
     let mut header = [b' '; 80];
     let text = format!("kardia mesh: {}", meta.name);
     let n = text.len().min(80);
     header[..n].copy_from_slice(&text.as_bytes()[..n]);
     // A header starting with "solid" would read as ASCII STL to some readers.
     out.write_all(&header).map_err(io)?;
-    out.write_all(&(mesh.triangles.len() as u32).to_le_bytes()).map_err(io)?;
+    out.write_all(&(mesh.triangles.len() as u32).to_le_bytes())
+        .map_err(io)?;
     for t in 0..mesh.triangles.len() {
         let normal = mesh.normal(t).normalize_or_zero();
         let mut record = Vec::with_capacity(50);
@@ -85,7 +90,11 @@ pub fn write_stl(mesh: &TriangleMesh, meta: &MeshMetadata, mut out: impl Write) 
 }
 
 /// OBJ: `v x y z` lines (the `f32` values) and `f a b c` lines (1-based).
-pub fn write_obj(mesh: &TriangleMesh, meta: &MeshMetadata, mut out: impl Write) -> Result<(), OutputError> {
+pub fn write_obj(
+    mesh: &TriangleMesh,
+    meta: &MeshMetadata,
+    mut out: impl Write,
+) -> Result<(), OutputError> {
     writeln!(out, "# kardia mesh: {}", meta.name).map_err(io)?;
     writeln!(out, "o {}", meta.name.replace(char::is_whitespace, "_")).map_err(io)?;
     for p in &mesh.vertices {
@@ -99,7 +108,11 @@ pub fn write_obj(mesh: &TriangleMesh, meta: &MeshMetadata, mut out: impl Write) 
 }
 
 /// PLY, binary little-endian: `float` x y z per vertex, a `uchar`-counted `int` list per face.
-pub fn write_ply(mesh: &TriangleMesh, meta: &MeshMetadata, mut out: impl Write) -> Result<(), OutputError> {
+pub fn write_ply(
+    mesh: &TriangleMesh,
+    meta: &MeshMetadata,
+    mut out: impl Write,
+) -> Result<(), OutputError> {
     write!(
         out,
         "ply\nformat binary_little_endian 1.0\ncomment kardia mesh: {}\nelement vertex {}\n\
@@ -277,8 +290,14 @@ mod tests {
 
     #[test]
     fn formats_follow_the_extension() {
-        assert_eq!(MeshFormat::from_path(Path::new("a.STL")), Ok(MeshFormat::Stl));
-        assert_eq!(MeshFormat::from_path(Path::new("a.3mf")), Ok(MeshFormat::ThreeMf));
+        assert_eq!(
+            MeshFormat::from_path(Path::new("a.STL")),
+            Ok(MeshFormat::Stl)
+        );
+        assert_eq!(
+            MeshFormat::from_path(Path::new("a.3mf")),
+            Ok(MeshFormat::ThreeMf)
+        );
         assert!(MeshFormat::from_path(Path::new("a.png")).is_err());
     }
 }
