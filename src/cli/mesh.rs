@@ -125,7 +125,7 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
         indicatif::ProgressBar::with_draw_target(Some(1), indicatif::ProgressDrawTarget::stderr())
     };
     let count = solids.len();
-    let printable = crate::mesh::mesh_solids(&solids, &request, args.size, &|i, done, total| {
+    let printable = mesh_solids(&solids, &request, args.size, &|i, done, total| {
         bar.set_length((total * count) as u64);
         bar.set_position((i * total + done) as u64);
     })

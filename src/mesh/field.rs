@@ -206,8 +206,20 @@ impl Field {
             return None;
         }
         let c = self.along(p, dir * (reach / len));
+        if c[0] == 0.0 {
+            return Some(0.0);
+        }
+        // Every root (Sturm), and where rounding hides a multiple root from the sequence
+        // (at a node), the first root on each side by the solver that placed the vertex.
+        let mirrored: Vec<f64> = c
+            .iter()
+            .enumerate()
+            .map(|(k, &x)| if k % 2 == 1 { -x } else { x })
+            .collect();
         sturm_roots(&c, -1.0 - 1e-12, 1.0)
             .into_iter()
+            .chain(self.solver.first_root(&c, 0.0, 1.0))
+            .chain(self.solver.first_root(&mirrored, 0.0, 1.0))
             .map(|s| s.abs() * reach)
             .reduce(f64::min)
     }
