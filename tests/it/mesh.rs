@@ -82,7 +82,7 @@ fn the_nodal_surfaces_mesh_inside_outside_and_as_shells() {
             SolidKind::Outside,
             SolidKind::Shell { thickness: 0.08 },
         ] {
-            assert_guarantees(name, &[s.clone()], kind, tolerance);
+            assert_guarantees(name, std::slice::from_ref(&s), kind, tolerance);
         }
     }
 }
@@ -309,7 +309,7 @@ fn admesh_trimesh_and_manifold3d_accept_the_files() {
                 String::from_utf8_lossy(&o.stdout),
                 String::from_utf8_lossy(&o.stderr)
             );
-            if ext == "stl" {
+            if *ext == "stl" {
                 admesh_complaints(&out).unwrap_or_else(|e| panic!("{name}: {e}"));
             }
             files.push(out);
