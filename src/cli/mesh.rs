@@ -170,11 +170,12 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
         if d.measured {
             println!(
                 "    deviation (scene units, by the root finder): surface vertices ≤ {:.2e} \
-                 ({} measured, {} beyond the tolerance); Hausdorff estimate {:.2e} \
+                 ({} measured, {} beyond the tolerance, {} at a node: f zero to rounding); Hausdorff estimate {:.2e} \
                  (mesh→surface {:.2e}, surface→mesh {:.2e} from {} surface samples{})",
                 d.vertex,
                 d.vertices,
                 d.vertices_beyond,
+                d.vertices_at_rounding,
                 d.hausdorff(),
                 d.mesh_to_surface,
                 d.surface_to_mesh,

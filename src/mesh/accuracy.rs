@@ -42,6 +42,9 @@ pub struct Deviation {
     pub vertices: usize,
     /// Surface vertices with no surface point within the tolerance on any of those lines.
     pub vertices_beyond: usize,
+    /// Surface vertices where no root was found on those lines but `f` is zero up to its
+    /// rounding (at a node, a double root that rounding hides from the root finder).
+    pub vertices_at_rounding: usize,
     /// The largest distance from a sampled point of the mesh to the surface.
     pub mesh_to_surface: f64,
     /// The largest distance from a sampled point of the surface to the mesh.
@@ -106,7 +109,17 @@ pub fn measure(
         .flatten()
         .copied()
         .fold(0.0, f64::max);
-    let vertices_beyond = vertex_distances.iter().filter(|d| d.is_none()).count();
+    let unresolved: Vec<usize> = surface_vertices
+        .iter()
+        .zip(&vertex_distances)
+        .filter(|(_, d)| d.is_none())
+        .map(|(&v, _)| v)
+        .collect();
+    let vertices_at_rounding = unresolved
+        .iter()
+        .filter(|&&v| field.at_rounding(mesh.vertices[v]))
+        .count();
+    let vertices_beyond = unresolved.len() - vertices_at_rounding;
 
     let mesh_side: Vec<Option<f64>> = (0..mesh.triangles.len())
         .into_par_iter()
@@ -150,6 +163,7 @@ pub fn measure(
         vertex,
         vertices: surface_vertices.len(),
         vertices_beyond,
+        vertices_at_rounding,
         mesh_to_surface,
         surface_to_mesh,
         surface_samples: samples.len(),

@@ -93,6 +93,15 @@ impl Field {
         self.f.eval(p.to_array())
     }
 
+    /// Whether `f` at `p` is zero up to the rounding of evaluating it (`|f| ≤ 1e-8 · Σ|terms|`):
+    /// a point on the surface as far as `f64` can tell, where the root finder may see a
+    /// double root at a node as none (inside and outside only; false for a shell).
+    pub fn at_rounding(&self, p: DVec3) -> bool {
+        let q = p.to_array();
+        !matches!(self.kind, SolidKind::Shell { .. })
+            && self.f.eval(q).abs() <= 1e-8 * self.f.magnitude_bound(q)
+    }
+
     /// `φ` at an object-space point (negative inside the solid, ignoring the ball).
     pub fn value(&self, p: DVec3) -> f64 {
         let q = p.to_array();
