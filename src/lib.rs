@@ -15,6 +15,7 @@ pub mod geometry;
 pub mod integrator;
 pub mod lights;
 pub mod materials;
+pub mod mesh;
 pub mod pipeline;
 pub mod roots;
 pub mod scene;

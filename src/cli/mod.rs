@@ -6,6 +6,7 @@ mod animate;
 mod assemble;
 mod convert;
 mod explore;
+mod mesh;
 mod probe;
 mod progress;
 mod render;
@@ -38,6 +39,8 @@ enum Command {
     Assemble(assemble::AssembleArgs),
     /// Write kardia's scene text for a SURFER .jsurf or surf .pic file.
     Convert(convert::ConvertArgs),
+    /// Mesh a scene's HEART and IMPLICIT objects (or an equation) as a printable solid.
+    Mesh(mesh::MeshArgs),
 }
 
 /// Runs the command line and returns the process exit code. `interrupt` is the binary's
@@ -53,5 +56,6 @@ pub fn main(interrupt: &CancelToken) -> i32 {
         Some(Command::Explore(a)) => explore::run(a, interrupt),
         Some(Command::Assemble(a)) => assemble::run(a),
         Some(Command::Convert(a)) => convert::run(a),
+        Some(Command::Mesh(a)) => mesh::run(a),
     }
 }

@@ -12,6 +12,7 @@ pub mod placed;
 mod plane;
 mod polygon;
 pub mod report;
+pub mod solid;
 mod sphere;
 
 pub use boxes::Parallelepiped;
@@ -21,6 +22,7 @@ pub use implicit::Implicit;
 pub use plane::Plane;
 pub use polygon::Polygon;
 pub use report::{SettledBy, SolverReport};
+pub use solid::PolynomialSolid;
 pub use sphere::Sphere;
 
 /// Why a shape's parameters do not describe a valid shape; the message completes the sentence
@@ -120,6 +122,11 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
     /// `None` for other shapes, and for rays that never reach the root finder.
     fn solver_report(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<SolverReport> {
         let _ = (ray, t_min, t_max);
+        None
+    }
+    /// For a surface given by a polynomial (HEART, IMPLICIT): its exact polynomial, clip ball
+    /// and placement, the solid that `kardia mesh` turns into triangles; `None` for others.
+    fn polynomial_solid(&self) -> Option<PolynomialSolid> {
         None
     }
 }

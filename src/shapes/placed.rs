@@ -234,6 +234,11 @@ pub trait ObjectShape: Send + Sync + std::fmt::Debug {
         let _ = (at, world, local, t_min, t_max);
         None
     }
+    /// See [`Shape::polynomial_solid`]: the object-space polynomial (negative inside) and the
+    /// object-space clip radius; the placement is added by [`Placed`].
+    fn polynomial_solid(&self) -> Option<(std::sync::Arc<super::implicit::poly::Poly>, f64)> {
+        None
+    }
 }
 
 /// [`ObjectShape::normal_lanes`] asked of `shape` lane by lane: its default, and the answer of
@@ -377,6 +382,15 @@ impl<S: ObjectShape> Shape for Placed<S> {
         let local = self.at.ray_to_object(ray);
         self.shape
             .solver_report(&self.at, ray, &local, t_min, t_max)
+    }
+
+    fn polynomial_solid(&self) -> Option<super::PolynomialSolid> {
+        let (polynomial, clip_radius) = self.shape.polynomial_solid()?;
+        Some(super::PolynomialSolid {
+            polynomial,
+            clip_radius,
+            frame: *self.at.frame(),
+        })
     }
 }
 

@@ -21,6 +21,7 @@ mod implicit_measure;
 mod implicit_render;
 mod implicit_scene;
 mod implicit_specks;
+mod mesh;
 mod pipeline;
 mod probe_cli;
 mod render_golden;

@@ -481,6 +481,13 @@ impl ObjectShape for HeartShape {
         at.bounds_to_world(&BOUNDS)
     }
 
+    fn polynomial_solid(&self) -> Option<(std::sync::Arc<super::implicit::poly::Poly>, f64)> {
+        Some((
+            super::solid::heart_polynomial(),
+            super::solid::heart_clip_radius(),
+        ))
+    }
+
     fn enclosing_ellipsoids(&self) -> Vec<SolidEllipsoid> {
         // The lower and the upper half's ellipsoids, `2X² + Y² + (Z − c)² ≤ R²`: every chord
         // the solver searches meets one of them.

@@ -428,6 +428,8 @@ pub struct ImplicitShape {
     solver: Solver,
     bound: f64,
     kind: Kind,
+    /// The equation's exact expansion (for [`ObjectShape::polynomial_solid`]).
+    polynomial: std::sync::Arc<Poly>,
 }
 
 /// The per-ray univariate polynomial of an [`Implicit`] (for `kardia probe` and tests):
@@ -522,7 +524,7 @@ impl Implicit {
         };
         if let Some(form) = heart_form::recognise(&poly) {
             if form.is_identity() {
-                return Ok(Self::heart(frame, bound));
+                return Ok(Self::heart(frame, bound, poly));
             }
             let mapped = MappedHeart::new(form, &frame)?;
             return Ok(Placed::place(
@@ -531,6 +533,7 @@ impl Implicit {
                     solver: Solver::default(),
                     bound,
                     kind: Kind::MappedHeart(Box::new(mapped)),
+                    polynomial: std::sync::Arc::new(poly),
                 },
             ));
         }
@@ -556,6 +559,7 @@ impl Implicit {
     /// (already checked).
     fn generic(poly: Poly, f: Compiled, frame: Frame, bound: f64) -> Result<Self, EquationError> {
         let grad = [0, 1, 2].map(|v| Compiled::new(&poly.derivative(v)));
+        let torus = torus_form::recognise(&poly);
         let zero_set = extent::zero_set(&f, bound);
         let to_box = |(lo, hi): ([f64; 3], [f64; 3])| {
             Aabb::new(DVec3::from_array(lo), DVec3::from_array(hi))
@@ -574,8 +578,9 @@ impl Implicit {
             ImplicitShape {
                 solver: Solver::default(),
                 bound,
+                polynomial: std::sync::Arc::new(poly),
                 kind: Kind::Generic(Box::new(Surface {
-                    torus: torus_form::recognise(&poly),
+                    torus,
                     f,
                     gradient: Gradient::new(&grad),
                     grad,
@@ -598,12 +603,13 @@ impl Implicit {
         Self::new(&p.equation, frame, Some(bound.unwrap_or(p.bound))).map_err(|e| e.message)
     }
 
-    fn heart(frame: Frame, bound: f64) -> Self {
+    fn heart(frame: Frame, bound: f64, poly: Poly) -> Self {
         Placed::place(
             Placement::new(frame),
             ImplicitShape {
                 solver: Solver::default(),
                 bound,
+                polynomial: std::sync::Arc::new(poly),
                 kind: Kind::Heart(HeartShape::default()),
             },
         )
@@ -1652,6 +1658,10 @@ fn local_root(
 }
 
 impl ObjectShape for ImplicitShape {
+    fn polynomial_solid(&self) -> Option<(std::sync::Arc<Poly>, f64)> {
+        Some((self.polynomial.clone(), self.bound))
+    }
+
     fn intersect(
         &self,
         at: &Placement,

@@ -1,0 +1,331 @@
+//! How far the mesh is from the exact surface, measured with the project's root finder.
+//!
+//! - Vertices: each surface vertex's distance to the surface: the nearest root of `φ` on the
+//!   line along `∇φ` or along any of the grid's seven edge directions (the least of these
+//!   bounds the distance from above).
+//! - Mesh to surface: from the centroid of every triangle whose corners are all on the
+//!   surface, the nearest root of `φ` along the triangle's normal (or along `∇φ` if nearer).
+//! - Surface to mesh: points of the exact surface (every root of `φ` on lines parallel to
+//!   the axes, half a grid step off the grid's own lines, inside the clip ball), each one's
+//!   distance to the nearest triangle.
+//!
+//! The larger of the two directed distances estimates the two-sided Hausdorff distance
+//! between the surface part of the mesh and the surface (from samples: an estimate, not a
+//! bound). Distances beyond the search reach are counted and reported as the reach.
+
+use super::field::{Field, VertexKind};
+use super::TriangleMesh;
+use crate::geometry::DVec3;
+use crate::roots::sturm_roots;
+use crate::shapes::implicit::MAX_DEGREE;
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// The directions of the grid's edges ([`super::extract`]: the cube's axes, face diagonals
+/// and main diagonal).
+const EDGE_DIRECTIONS: [DVec3; 7] = [
+    DVec3::X,
+    DVec3::Y,
+    DVec3::Z,
+    DVec3::new(1.0, 1.0, 0.0),
+    DVec3::new(1.0, 0.0, 1.0),
+    DVec3::new(0.0, 1.0, 1.0),
+    DVec3::ONE,
+];
+
+/// Distances measured between a mesh and the exact surface (see the module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Deviation {
+    /// The largest distance of a surface vertex from the surface.
+    pub vertex: f64,
+    /// Surface vertices measured.
+    pub vertices: usize,
+    /// Surface vertices with no surface point within the tolerance on any of those lines.
+    pub vertices_beyond: usize,
+    /// Surface vertices where no root was found on those lines but `f` is zero up to its
+    /// rounding (at a node, a double root that rounding hides from the root finder).
+    pub vertices_at_rounding: usize,
+    /// The largest distance from a sampled point of the mesh to the surface.
+    pub mesh_to_surface: f64,
+    /// The largest distance from a sampled point of the surface to the mesh.
+    pub surface_to_mesh: f64,
+    /// Surface samples taken.
+    pub surface_samples: usize,
+    /// Samples (either way) with nothing found within the search reach (counted at the reach).
+    pub beyond_reach: usize,
+    /// Whether the surface could be measured (its line polynomials have degree ≤ 16).
+    pub measured: bool,
+}
+
+impl Deviation {
+    /// The estimated two-sided Hausdorff distance: the larger directed distance.
+    pub fn hausdorff(&self) -> f64 {
+        self.mesh_to_surface.max(self.surface_to_mesh)
+    }
+
+    /// Every distance multiplied by `k` (object units to world units by the frame's stretch:
+    /// an upper bound).
+    pub fn scaled(mut self, k: f64) -> Self {
+        self.vertex *= k;
+        self.mesh_to_surface *= k;
+        self.surface_to_mesh *= k;
+        self
+    }
+}
+
+/// Measures the object-space mesh of `field` (see the module doc). `tolerance`: the reach
+/// for vertices; `step`: the grid step (the surface samples' spacing; the reach of the other
+/// measurements is twice it).
+pub fn measure(
+    field: &Field,
+    mesh: &TriangleMesh,
+    kinds: &[VertexKind],
+    tolerance: f64,
+    step: f64,
+) -> Deviation {
+    if field.degree() > MAX_DEGREE {
+        return Deviation::default();
+    }
+    let reach = 2.0 * step;
+    let h = 1e-7 * field.radius();
+    let surface_vertices: Vec<usize> = (0..mesh.vertices.len())
+        .filter(|&v| kinds[v] == VertexKind::Surface)
+        .collect();
+    let vertex_distances: Vec<Option<f64>> = surface_vertices
+        .par_iter()
+        .map(|&v| {
+            let p = mesh.vertices[v];
+            // Along ∇φ, and along the grid's edge directions (a vertex was found on one of
+            // them; at a node, where ∇φ vanishes, that is the line that sees the root). Each
+            // line's distance bounds the true distance from above.
+            std::iter::once(field.gradient(p, h))
+                .chain(EDGE_DIRECTIONS)
+                .filter_map(|d| field.distance_along(p, d, tolerance))
+                .reduce(f64::min)
+        })
+        .collect();
+    let vertex = vertex_distances
+        .iter()
+        .flatten()
+        .copied()
+        .fold(0.0, f64::max);
+    let unresolved: Vec<usize> = surface_vertices
+        .iter()
+        .zip(&vertex_distances)
+        .filter(|(_, d)| d.is_none())
+        .map(|(&v, _)| v)
+        .collect();
+    let vertices_at_rounding = unresolved
+        .iter()
+        .filter(|&&v| field.at_rounding(mesh.vertices[v]))
+        .count();
+    let vertices_beyond = unresolved.len() - vertices_at_rounding;
+
+    let mesh_side: Vec<Option<f64>> = (0..mesh.triangles.len())
+        .into_par_iter()
+        .filter(|&t| {
+            mesh.triangles[t]
+                .iter()
+                .all(|&v| kinds[v as usize] == VertexKind::Surface)
+        })
+        .map(|t| {
+            let [a, b, c] = mesh.corners(t);
+            let centroid = (a + b + c) / 3.0;
+            let along_normal = field.distance_along(centroid, mesh.normal(t), reach);
+            let along_gradient = field.distance_along(centroid, field.gradient(centroid, h), reach);
+            along_normal
+                .into_iter()
+                .chain(along_gradient)
+                .reduce(f64::min)
+        })
+        .collect();
+    let mesh_to_surface = mesh_side
+        .iter()
+        .map(|d| d.unwrap_or(reach))
+        .fold(0.0, f64::max);
+
+    let samples = surface_samples(field, step);
+    let nearest = NearestTriangle::new(mesh, step);
+    let surface_side: Vec<Option<f64>> = samples
+        .par_iter()
+        .map(|&p| nearest.distance(p, reach))
+        .collect();
+    let surface_to_mesh = surface_side
+        .iter()
+        .map(|d| d.unwrap_or(reach))
+        .fold(0.0, f64::max);
+    let beyond_reach = mesh_side
+        .iter()
+        .chain(&surface_side)
+        .filter(|d| d.is_none())
+        .count();
+    Deviation {
+        vertex,
+        vertices: surface_vertices.len(),
+        vertices_beyond,
+        vertices_at_rounding,
+        mesh_to_surface,
+        surface_to_mesh,
+        surface_samples: samples.len(),
+        beyond_reach,
+        measured: true,
+    }
+}
+
+/// Points of `φ = 0` inside the clip ball: every root on the lines parallel to each axis
+/// through the points `(i + ½)·step` of the other two axes (by the root finder).
+pub fn surface_samples(field: &Field, step: f64) -> Vec<DVec3> {
+    let r = field.radius();
+    let count = (r / step).ceil() as i64;
+    let offsets: Vec<f64> = (-count..count).map(|i| (i as f64 + 0.5) * step).collect();
+    let mut lines = Vec::new();
+    for axis in 0..3 {
+        for &u in &offsets {
+            for &v in &offsets {
+                let rest = r * r - u * u - v * v;
+                if rest > 0.0 {
+                    lines.push((axis, u, v, rest.sqrt()));
+                }
+            }
+        }
+    }
+    lines
+        .par_iter()
+        .flat_map_iter(|&(axis, u, v, half)| {
+            let place = |t: f64| {
+                let mut p = [u, v, u];
+                p[axis] = t;
+                p[(axis + 1) % 3] = u;
+                p[(axis + 2) % 3] = v;
+                DVec3::from_array(p)
+            };
+            let start = place(-half);
+            let e = place(half) - start;
+            let c = field.along(start, e);
+            sturm_roots(&c, 0.0, 1.0)
+                .into_iter()
+                .map(move |s| start + s * e)
+                .filter(move |p| p.length_squared() < r * r)
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// Triangles bucketed by a grid of cubes, for nearest-triangle distances.
+struct NearestTriangle<'a> {
+    mesh: &'a TriangleMesh,
+    cell: f64,
+    buckets: HashMap<[i64; 3], Vec<u32>>,
+}
+
+impl<'a> NearestTriangle<'a> {
+    fn new(mesh: &'a TriangleMesh, cell: f64) -> Self {
+        let mut buckets: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+        for t in 0..mesh.triangles.len() {
+            let [a, b, c] = mesh.corners(t);
+            let lo = Self::key(a.min(b).min(c), cell);
+            let hi = Self::key(a.max(b).max(c), cell);
+            for x in lo[0]..=hi[0] {
+                for y in lo[1]..=hi[1] {
+                    for z in lo[2]..=hi[2] {
+                        buckets.entry([x, y, z]).or_default().push(t as u32);
+                    }
+                }
+            }
+        }
+        Self {
+            mesh,
+            cell,
+            buckets,
+        }
+    }
+
+    fn key(p: DVec3, cell: f64) -> [i64; 3] {
+        (p / cell).floor().as_i64vec3().to_array()
+    }
+
+    /// The distance from `p` to the nearest triangle, if one is within `reach`.
+    fn distance(&self, p: DVec3, reach: f64) -> Option<f64> {
+        let lo = Self::key(p - DVec3::splat(reach), self.cell);
+        let hi = Self::key(p + DVec3::splat(reach), self.cell);
+        let mut best = f64::INFINITY;
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    for &t in self.buckets.get(&[x, y, z]).into_iter().flatten() {
+                        let q = closest_on_triangle(p, self.mesh.corners(t as usize));
+                        best = best.min((p - q).length());
+                    }
+                }
+            }
+        }
+        (best <= reach).then_some(best)
+    }
+}
+
+/// The point of the triangle `a b c` nearest to `p` (by the regions of the triangle's
+/// corners, edges and face).
+pub fn closest_on_triangle(p: DVec3, [a, b, c]: [DVec3; 3]) -> DVec3 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_closest_point_is_found_in_every_region() {
+        let t = [DVec3::ZERO, DVec3::X, DVec3::Y];
+        let cases = [
+            (DVec3::new(0.2, 0.2, 1.0), DVec3::new(0.2, 0.2, 0.0)),
+            (DVec3::new(-1.0, -1.0, 0.0), DVec3::ZERO),
+            (DVec3::new(2.0, -0.5, 0.3), DVec3::X),
+            (DVec3::new(0.5, -1.0, 0.0), DVec3::new(0.5, 0.0, 0.0)),
+            (DVec3::new(-1.0, 0.5, 0.0), DVec3::new(0.0, 0.5, 0.0)),
+            (DVec3::new(1.0, 1.0, 0.0), DVec3::new(0.5, 0.5, 0.0)),
+            (DVec3::new(-0.5, 3.0, 0.0), DVec3::Y),
+        ];
+        for (p, want) in cases {
+            assert!((closest_on_triangle(p, t) - want).length() < 1e-15, "{p}");
+        }
+    }
+
+    #[test]
+    fn surface_samples_are_on_the_surface() {
+        let poly = crate::shapes::implicit::expand("x^2 + y^2 + z^2 = 1").unwrap();
+        let field = Field::new(&poly, 1.5, super::super::SolidKind::Inside);
+        let samples = surface_samples(&field, 0.1);
+        assert!(samples.len() > 500);
+        for p in samples {
+            assert!((p.length() - 1.0).abs() < 1e-12);
+        }
+    }
+}

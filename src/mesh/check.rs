@@ -1,0 +1,334 @@
+//! The guarantees of a mesh, checked on the mesh itself: closed (every edge in exactly two
+//! triangles, once in each direction, so consistently oriented), one fan of triangles about
+//! every vertex (a 2-manifold), positive volume (outward normals), no triangle of zero area
+//! and no two triangles that cross or overlap. `kardia mesh` checks every file it writes;
+//! the tests check every mesh they make.
+
+use super::TriangleMesh;
+use crate::geometry::DVec3;
+use std::collections::HashMap;
+
+/// What [`verify`] measured on a mesh that keeps every guarantee.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Verified {
+    /// Number of triangles.
+    pub triangles: usize,
+    /// Number of vertices.
+    pub vertices: usize,
+    /// Number of connected pieces (triangles joined by shared edges).
+    pub components: usize,
+    /// The enclosed volume (cubic units of the vertices; positive: outward normals).
+    pub volume: f64,
+    /// Euler characteristic `V − E + F` (2 per sphere-like piece, 2 − 2g for genus g).
+    pub euler_characteristic: i64,
+}
+
+/// Checks every guarantee of the module doc; the first one broken is the error.
+pub fn verify(mesh: &TriangleMesh) -> Result<Verified, String> {
+    if mesh.triangles.is_empty() {
+        return Err("the mesh has no triangles (the solid is empty at this tolerance)".into());
+    }
+    edges_pair_up(mesh)?;
+    one_fan_per_vertex(mesh)?;
+    if let Some(t) = (0..mesh.triangles.len()).find(|&t| mesh.area(t) <= 0.0) {
+        return Err(format!("triangle {t} has zero area"));
+    }
+    if let Some((a, b)) = crossing_triangles(mesh).first() {
+        return Err(format!("triangles {a} and {b} intersect"));
+    }
+    let volume = mesh.volume();
+    if volume.is_nan() || volume <= 0.0 {
+        return Err(format!(
+            "the volume is {volume}, not positive (inward normals)"
+        ));
+    }
+    let edges = mesh.triangles.len() * 3 / 2;
+    Ok(Verified {
+        triangles: mesh.triangles.len(),
+        vertices: mesh.vertices.len(),
+        components: components(mesh),
+        volume,
+        euler_characteristic: mesh.vertices.len() as i64 - edges as i64
+            + mesh.triangles.len() as i64,
+    })
+}
+
+/// Every directed edge `a → b` of a triangle appears in exactly one triangle, and `b → a`
+/// in exactly one other: closed and consistently oriented.
+pub fn edges_pair_up(mesh: &TriangleMesh) -> Result<(), String> {
+    let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
+            return Err(format!("triangle {t} repeats a vertex"));
+        }
+        for k in 0..3 {
+            if directed.insert((tri[k], tri[(k + 1) % 3]), t).is_some() {
+                return Err(format!(
+                    "edge {}–{} is used twice in the same direction (non-manifold or \
+                     inconsistently oriented)",
+                    tri[k],
+                    tri[(k + 1) % 3]
+                ));
+            }
+        }
+    }
+    for &(a, b) in directed.keys() {
+        if !directed.contains_key(&(b, a)) {
+            return Err(format!("edge {a}–{b} is in only one triangle (a hole)"));
+        }
+    }
+    Ok(())
+}
+
+/// The triangles about each vertex form one cycle (a disc), not several touching at it.
+pub fn one_fan_per_vertex(mesh: &TriangleMesh) -> Result<(), String> {
+    // Around vertex a, triangle (a, b, c) links b to c; with paired edges each b has one c.
+    let mut link: Vec<Vec<(u32, u32)>> = vec![Vec::new(); mesh.vertices.len()];
+    for tri in &mesh.triangles {
+        for k in 0..3 {
+            link[tri[k] as usize].push((tri[(k + 1) % 3], tri[(k + 2) % 3]));
+        }
+    }
+    for (v, edges) in link.iter().enumerate() {
+        if edges.is_empty() {
+            return Err(format!("vertex {v} is in no triangle"));
+        }
+        let next: HashMap<u32, u32> = edges.iter().copied().collect();
+        let start = edges[0].0;
+        let mut at = start;
+        let mut steps = 0;
+        loop {
+            at = *next
+                .get(&at)
+                .ok_or_else(|| format!("the triangles about vertex {v} do not close"))?;
+            steps += 1;
+            if at == start {
+                break;
+            }
+            if steps > edges.len() {
+                return Err(format!("the triangles about vertex {v} do not close"));
+            }
+        }
+        if steps != edges.len() {
+            return Err(format!(
+                "vertex {v} joins {} fans of triangles (a pinch: not a 2-manifold)",
+                if steps < edges.len() {
+                    "several"
+                } else {
+                    "broken"
+                }
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The number of pieces: triangles joined through shared edges.
+pub fn components(mesh: &TriangleMesh) -> usize {
+    let mut parent: Vec<u32> = (0..mesh.triangles.len() as u32).collect();
+    fn find(parent: &mut [u32], mut i: u32) -> u32 {
+        while parent[i as usize] != i {
+            parent[i as usize] = parent[parent[i as usize] as usize];
+            i = parent[i as usize];
+        }
+        i
+    }
+    let mut by_edge: HashMap<(u32, u32), u32> = HashMap::new();
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            let e = (a.min(b), a.max(b));
+            if let Some(&other) = by_edge.get(&e) {
+                let (x, y) = (find(&mut parent, t as u32), find(&mut parent, other));
+                parent[x as usize] = y;
+            } else {
+                by_edge.insert(e, t as u32);
+            }
+        }
+    }
+    (0..parent.len() as u32)
+        .filter(|&i| find(&mut parent, i) == i)
+        .count()
+}
+
+/// Six times the signed volume of the tetrahedron `a b c d`.
+fn orient(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {
+    (b - a).cross(c - a).dot(d - a)
+}
+
+/// Whether the segment `p q` crosses the triangle `a b c` at a point inside both (strict:
+/// touching at an end, an edge or a corner does not count).
+fn segment_crosses(p: DVec3, q: DVec3, [a, b, c]: [DVec3; 3]) -> bool {
+    let (sp, sq) = (orient(a, b, c, p), orient(a, b, c, q));
+    if sp * sq >= 0.0 || (sp * sq).is_nan() {
+        return false;
+    }
+    let (u, v, w) = (orient(p, q, a, b), orient(p, q, b, c), orient(p, q, c, a));
+    (u > 0.0 && v > 0.0 && w > 0.0) || (u < 0.0 && v < 0.0 && w < 0.0)
+}
+
+/// Pairs of triangles `(i, j)`, `i < j`, that intersect other than in the vertices and
+/// edges they share: a broad phase by a uniform grid of cells about the triangles' size,
+/// then exact tests of each candidate pair (segment against triangle in both directions;
+/// pairs that share an edge: the two folded onto each other in one plane).
+pub fn crossing_triangles(mesh: &TriangleMesh) -> Vec<(usize, usize)> {
+    let tris = &mesh.triangles;
+    if tris.is_empty() {
+        return Vec::new();
+    }
+    let corners = |t: usize| tris[t].map(|v| mesh.vertices[v as usize]);
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    let mut size = 0.0;
+    for t in 0..tris.len() {
+        for p in corners(t) {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        let c = corners(t);
+        size += (c[1] - c[0]).length().max((c[2] - c[0]).length());
+    }
+    let cell = (2.0 * size / tris.len() as f64).max(1e-300);
+    let dims = ((hi - lo) / cell).floor().as_uvec3() + 1;
+    let cell_of = |p: DVec3| {
+        let c = ((p - lo) / cell).floor().as_uvec3().min(dims - 1);
+        (c.x, c.y, c.z)
+    };
+    let mut cells: HashMap<(u32, u32, u32), Vec<u32>> = HashMap::new();
+    let ranges: Vec<_> = (0..tris.len())
+        .map(|t| {
+            let c = corners(t);
+            (
+                cell_of(c[0].min(c[1]).min(c[2])),
+                cell_of(c[0].max(c[1]).max(c[2])),
+            )
+        })
+        .collect();
+    for (t, &(a, b)) in ranges.iter().enumerate() {
+        for x in a.0..=b.0 {
+            for y in a.1..=b.1 {
+                for z in a.2..=b.2 {
+                    cells.entry((x, y, z)).or_default().push(t as u32);
+                }
+            }
+        }
+    }
+    let mut seen = vec![u32::MAX; tris.len()];
+    let mut found = Vec::new();
+    for (i, &(a, b)) in ranges.iter().enumerate() {
+        for x in a.0..=b.0 {
+            for y in a.1..=b.1 {
+                for z in a.2..=b.2 {
+                    for &j in &cells[&(x, y, z)] {
+                        let j = j as usize;
+                        if j <= i || seen[j] == i as u32 {
+                            continue;
+                        }
+                        seen[j] = i as u32;
+                        if triangles_cross(mesh, i, j) {
+                            found.push((i, j));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    found
+}
+
+/// Whether triangles `i` and `j` meet anywhere but in what they share (see
+/// [`crossing_triangles`]).
+fn triangles_cross(mesh: &TriangleMesh, i: usize, j: usize) -> bool {
+    let (ti, tj) = (mesh.triangles[i], mesh.triangles[j]);
+    let (pi, pj) = (
+        ti.map(|v| mesh.vertices[v as usize]),
+        tj.map(|v| mesh.vertices[v as usize]),
+    );
+    let shared: Vec<u32> = ti.iter().filter(|v| tj.contains(v)).copied().collect();
+    match shared.len() {
+        0 => (0..3).any(|k| {
+            segment_crosses(pi[k], pi[(k + 1) % 3], pj)
+                || segment_crosses(pj[k], pj[(k + 1) % 3], pi)
+        }),
+        1 => {
+            // Only the edges opposite the shared corner can cross the other triangle.
+            let opposite = |t: [u32; 3], p: [DVec3; 3]| {
+                let k = t.iter().position(|&v| v == shared[0]).unwrap();
+                (p[(k + 1) % 3], p[(k + 2) % 3])
+            };
+            let (a, b) = opposite(ti, pi);
+            let (c, d) = opposite(tj, pj);
+            segment_crosses(a, b, pj) || segment_crosses(c, d, pi)
+        }
+        2 => {
+            // Sharing an edge u v: they overlap only when folded flat onto the same side.
+            let u = mesh.vertices[shared[0] as usize];
+            let v = mesh.vertices[shared[1] as usize];
+            let other = |t: [u32; 3]| {
+                mesh.vertices[*t.iter().find(|w| !shared.contains(w)).unwrap() as usize]
+            };
+            let (a, b) = (other(ti), other(tj));
+            let na = (v - u).cross(a - u);
+            let nb = (v - u).cross(b - u);
+            orient(u, v, a, b) == 0.0 && na.dot(nb) > 0.0
+        }
+        _ => true,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A tetrahedron with outward faces.
+    fn tetrahedron() -> TriangleMesh {
+        TriangleMesh {
+            vertices: vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z],
+            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        }
+    }
+
+    #[test]
+    fn a_tetrahedron_keeps_every_guarantee() {
+        let v = verify(&tetrahedron()).unwrap();
+        assert_eq!((v.components, v.euler_characteristic), (1, 2));
+        assert!((v.volume - 1.0 / 6.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn each_broken_guarantee_is_caught() {
+        let mut hole = tetrahedron();
+        hole.triangles.pop();
+        assert!(verify(&hole).unwrap_err().contains("only one"));
+        let mut flipped = tetrahedron();
+        flipped.triangles[3].swap(1, 2);
+        assert!(verify(&flipped).unwrap_err().contains("same direction"));
+        let mut inward = tetrahedron();
+        for t in &mut inward.triangles {
+            t.swap(1, 2);
+        }
+        assert!(verify(&inward).unwrap_err().contains("volume"));
+        let mut flat = tetrahedron();
+        flat.vertices[3] = DVec3::new(0.5, 0.5, 0.0);
+        assert!(verify(&flat).is_err());
+        // Two tetrahedra sharing one corner: closed, but a pinch at that corner.
+        let mut pinch = tetrahedron();
+        let more = tetrahedron();
+        pinch.vertices.extend([-DVec3::X, -DVec3::Y, -DVec3::Z]);
+        let map = |v: u32| if v == 0 { 0 } else { v + 3 };
+        for t in &more.triangles {
+            // Mirrored through the origin: reverse the winding to stay outward.
+            pinch.triangles.push([map(t[0]), map(t[2]), map(t[1])]);
+        }
+        assert!(verify(&pinch).unwrap_err().contains("fans"));
+        // Two tetrahedra passing through each other.
+        let mut crossing = tetrahedron();
+        let shift = DVec3::splat(0.1);
+        crossing
+            .vertices
+            .extend(tetrahedron().vertices.iter().map(|&p| p + shift));
+        for t in &tetrahedron().triangles {
+            crossing.triangles.push(t.map(|v| v + 4));
+        }
+        assert!(verify(&crossing).unwrap_err().contains("intersect"));
+    }
+}

@@ -1,0 +1,315 @@
+//! The indicator of the solid being meshed and where its boundary crosses a segment.
+//!
+//! A [`Field`] is a polynomial `φ` in object space with the solid `{φ < 0} ∩ ball`: `φ = f`
+//! for the inside of a surface, `φ = −f` for its outside, and `φ = f² − (T/2)²·|∇f|²` for a
+//! shell of thickness `T` (the points where `|f|/|∇f| < T/2`, the first-order estimate of
+//! the distance to the surface). A point with `φ = 0` exactly counts as outside (a fixed
+//! sign: no label is ever zero), and so does any point on or outside the clip sphere.
+
+use crate::geometry::DVec3;
+use crate::roots::{sturm_roots, Solver};
+use crate::shapes::implicit::poly::{Compiled, Poly};
+use crate::shapes::implicit::MAX_DEGREE;
+
+/// Which side of the surface the mesh encloses.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SolidKind {
+    /// The region `f ≤ 0` (inside) within the clip ball.
+    Inside,
+    /// The region `f ≥ 0` (outside) within the clip ball.
+    Outside,
+    /// A wall about the surface: the points where `|f|/|∇f| ≤ thickness/2` (object-space
+    /// units, > 0), within the clip ball.
+    Shell {
+        /// The wall's full thickness in object-space units.
+        thickness: f64,
+    },
+}
+
+/// Where a crossing vertex lies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VertexKind {
+    /// On the solid's polynomial boundary `φ = 0` (the surface, or the shell's wall).
+    Surface,
+    /// On the clip sphere.
+    Cap,
+}
+
+/// Fraction of an edge's length that keeps a crossing vertex away from each end of the edge,
+/// so that no triangle collapses to zero area (a vertex moved by it is still measured by
+/// [`crate::mesh::accuracy`]).
+pub const END_GAP: f64 = 1e-3;
+
+/// The solid's indicator: see the module documentation.
+#[derive(Debug, Clone)]
+pub struct Field {
+    f: Compiled,
+    gradient: [Compiled; 3],
+    kind: SolidKind,
+    /// `(T/2)²` for a shell.
+    half_thickness_sq: f64,
+    radius: f64,
+    solver: Solver,
+}
+
+impl Field {
+    /// The field of `polynomial` (`f`, negative inside) for `kind`, clipped to the ball of
+    /// `clip_radius` about the origin.
+    pub fn new(polynomial: &Poly, clip_radius: f64, kind: SolidKind) -> Self {
+        let half = match kind {
+            SolidKind::Shell { thickness } => thickness / 2.0,
+            _ => 0.0,
+        };
+        Self {
+            f: Compiled::new(polynomial),
+            gradient: [0, 1, 2].map(|v| Compiled::new(&polynomial.derivative(v))),
+            kind,
+            half_thickness_sq: half * half,
+            radius: clip_radius,
+            solver: Solver::default(),
+        }
+    }
+
+    /// The clip radius (object space).
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// What is meshed.
+    pub fn kind(&self) -> SolidKind {
+        self.kind
+    }
+
+    /// The degree of `φ` along a line (`f`'s degree, twice it for a shell).
+    pub fn degree(&self) -> usize {
+        match self.kind {
+            SolidKind::Shell { .. } => 2 * self.f.degree,
+            _ => self.f.degree,
+        }
+    }
+
+    /// `f` at an object-space point.
+    pub fn surface_value(&self, p: DVec3) -> f64 {
+        self.f.eval(p.to_array())
+    }
+
+    /// Whether `f` at `p` is zero up to the rounding of evaluating it (`|f| ≤ 1e-8 · Σ|terms|`):
+    /// a point on the surface as far as `f64` can tell, where the root finder may see a
+    /// double root at a node as none (inside and outside only; false for a shell).
+    pub fn at_rounding(&self, p: DVec3) -> bool {
+        let q = p.to_array();
+        !matches!(self.kind, SolidKind::Shell { .. })
+            && self.f.eval(q).abs() <= 1e-8 * self.f.magnitude_bound(q)
+    }
+
+    /// `φ` at an object-space point (negative inside the solid, ignoring the ball).
+    pub fn value(&self, p: DVec3) -> f64 {
+        let q = p.to_array();
+        let f = self.f.eval(q);
+        match self.kind {
+            SolidKind::Inside => f,
+            SolidKind::Outside => -f,
+            SolidKind::Shell { .. } => {
+                let g: f64 = self.gradient.iter().map(|d| d.eval(q).powi(2)).sum();
+                f * f - self.half_thickness_sq * g
+            }
+        }
+    }
+
+    /// Whether an object-space point is in the solid: strictly inside the clip ball and
+    /// `φ < 0` (a zero counts as outside).
+    pub fn inside(&self, p: DVec3) -> bool {
+        p.length_squared() < self.radius * self.radius && self.value(p) < 0.0
+    }
+
+    /// The coefficients (ascending) of `φ(a + s·e)` in `s`, `degree() + 1` of them.
+    pub fn along(&self, a: DVec3, e: DVec3) -> Vec<f64> {
+        let (o, d) = (a.to_array(), e.to_array());
+        let n = self.f.degree + 1;
+        let f = self.f.compose(o, d);
+        match self.kind {
+            SolidKind::Inside => f[..n].to_vec(),
+            SolidKind::Outside => f[..n].iter().map(|c| -c).collect(),
+            SolidKind::Shell { .. } => {
+                let mut out = multiply(&f[..n], &f[..n]);
+                for g in &self.gradient {
+                    let gs = g.compose(o, d);
+                    let sq = multiply(&gs[..n], &gs[..n]);
+                    for (k, c) in sq.iter().enumerate() {
+                        out[k] -= self.half_thickness_sq * c;
+                    }
+                }
+                out
+            }
+        }
+    }
+
+    /// The first point where the solid's boundary meets the segment from `a` (in the solid)
+    /// to `b` (not in it), as the fraction `s` of the way (`END_GAP ≤ s ≤ 1 − END_GAP`) and
+    /// whether it lies on `φ = 0` or on the clip sphere: the first root of `φ` along the
+    /// segment by the project's root finder, or the segment's exit from the ball if that
+    /// comes first.
+    pub fn crossing(&self, a: DVec3, b: DVec3) -> (f64, VertexKind) {
+        let e = b - a;
+        let r2 = self.radius * self.radius;
+        let ball_exit = (b.length_squared() >= r2).then(|| {
+            let (qa, qb, qc) = (e.length_squared(), 2.0 * a.dot(e), a.length_squared() - r2);
+            let root = (qb * qb - 4.0 * qa * qc).max(0.0).sqrt();
+            // The positive root, in the form that avoids cancellation.
+            if qb >= 0.0 {
+                2.0 * qc / (-qb - root)
+            } else {
+                (-qb + root) / (2.0 * qa)
+            }
+        });
+        let hi = ball_exit.unwrap_or(1.0).min(1.0);
+        let surface = self.first_root(a, e, hi);
+        let (s, kind) = match (surface, ball_exit) {
+            (Some(s), Some(x)) if s < x => (s, VertexKind::Surface),
+            (Some(s), None) => (s, VertexKind::Surface),
+            (_, Some(x)) => (x, VertexKind::Cap),
+            // The labels say φ changes sign on the segment but the root finder found no
+            // root (rounding at a root of high multiplicity): bisect the sign itself.
+            (None, None) => (self.bisect(a, e), VertexKind::Surface),
+        };
+        (s.clamp(END_GAP, 1.0 - END_GAP), kind)
+    }
+
+    /// The first root of `φ(a + s·e)` in `(0, hi]`, by the project's root finder where the
+    /// degree allows, else by bisection of the sign when the end is outside.
+    fn first_root(&self, a: DVec3, e: DVec3, hi: f64) -> Option<f64> {
+        if hi.is_nan() || hi <= 0.0 {
+            return None;
+        }
+        let c = self.along(a, e);
+        if c.len() <= MAX_DEGREE + 1 {
+            if let Some(s) = self.solver.first_root(&c, 0.0, hi) {
+                return Some(s);
+            }
+        }
+        (self.value(a + hi * e) >= 0.0).then(|| self.bisect(a, e * hi) * hi)
+    }
+
+    /// A point of the segment `a + s·e`, `s ∈ (0, 1]`, where `φ` turns from negative to not
+    /// negative, by bisection of the sign (`φ(a) < 0`).
+    fn bisect(&self, a: DVec3, e: DVec3) -> f64 {
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        for _ in 0..64 {
+            let mid = 0.5 * (lo + hi);
+            if self.value(a + mid * e) < 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        hi
+    }
+
+    /// The distance from `p` to the nearest point of `φ = 0` on the line through `p` along
+    /// `dir` (any length), within `reach` (object units), by the project's root finder
+    /// (every real root in the window); `None` when there is none within reach, or when `φ`
+    /// has degree above 16 along lines.
+    pub fn distance_along(&self, p: DVec3, dir: DVec3, reach: f64) -> Option<f64> {
+        let len = dir.length();
+        if len.is_nan() || len <= 0.0 || self.degree() > MAX_DEGREE {
+            return None;
+        }
+        let c = self.along(p, dir * (reach / len));
+        if c[0] == 0.0 {
+            return Some(0.0);
+        }
+        // Every root (Sturm), and where rounding hides a multiple root from the sequence
+        // (at a node), the first root on each side by the solver that placed the vertex.
+        let mirrored: Vec<f64> = c
+            .iter()
+            .enumerate()
+            .map(|(k, &x)| if k % 2 == 1 { -x } else { x })
+            .collect();
+        sturm_roots(&c, -1.0 - 1e-12, 1.0)
+            .into_iter()
+            .chain(self.solver.first_root(&c, 0.0, 1.0))
+            .chain(self.solver.first_root(&mirrored, 0.0, 1.0))
+            .map(|s| s.abs() * reach)
+            .reduce(f64::min)
+    }
+
+    /// The gradient of `φ` at `p` (object space), by central differences of step `h`.
+    pub fn gradient(&self, p: DVec3, h: f64) -> DVec3 {
+        let d = |e: DVec3| (self.value(p + e * h) - self.value(p - e * h)) / (2.0 * h);
+        DVec3::new(d(DVec3::X), d(DVec3::Y), d(DVec3::Z))
+    }
+}
+
+/// The product of two polynomials (ascending coefficients).
+fn multiply(a: &[f64], b: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; a.len() + b.len() - 1];
+    for (i, x) in a.iter().enumerate() {
+        for (j, y) in b.iter().enumerate() {
+            out[i + j] += x * y;
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes::implicit::expand;
+
+    fn sphere(kind: SolidKind, clip: f64) -> Field {
+        Field::new(&expand("x^2 + y^2 + z^2 = 1").unwrap(), clip, kind)
+    }
+
+    #[test]
+    fn a_crossing_on_the_surface_is_the_exact_root() {
+        let f = sphere(SolidKind::Inside, 2.0);
+        let (s, kind) = f.crossing(DVec3::ZERO, DVec3::new(2.0, 0.0, 0.0) / 1.5);
+        assert_eq!(kind, VertexKind::Surface);
+        assert!((s * 2.0 / 1.5 - 1.0).abs() < 1e-14, "{s}");
+    }
+
+    #[test]
+    fn the_ball_exit_comes_first_when_the_surface_is_beyond_it() {
+        let f = sphere(SolidKind::Inside, 0.5);
+        let (s, kind) = f.crossing(DVec3::new(0.1, 0.0, 0.0), DVec3::new(0.9, 0.0, 0.0));
+        assert_eq!(kind, VertexKind::Cap);
+        assert!((0.1 + s * 0.8 - 0.5).abs() < 1e-14);
+    }
+
+    #[test]
+    fn outside_and_shell_flip_and_thicken_the_sign() {
+        let p = DVec3::new(0.5, 0.0, 0.0);
+        assert!(sphere(SolidKind::Inside, 2.0).inside(p));
+        assert!(!sphere(SolidKind::Outside, 2.0).inside(p));
+        let shell = sphere(SolidKind::Shell { thickness: 0.2 }, 2.0);
+        assert!(!shell.inside(p));
+        assert!(shell.inside(DVec3::new(1.04, 0.0, 0.0)));
+        assert!(shell.inside(DVec3::new(0.96, 0.0, 0.0)));
+        assert!(!shell.inside(DVec3::new(1.2, 0.0, 0.0)));
+        // Along a line, the shell's polynomial is the one evaluated pointwise.
+        let (a, e) = (DVec3::new(0.3, -0.2, 0.1), DVec3::new(0.4, 0.5, -0.3));
+        let c = shell.along(a, e);
+        for s in [0.0, 0.3, 1.0] {
+            let v: f64 = c.iter().rev().fold(0.0, |acc, k| acc * s + k);
+            assert!((v - shell.value(a + s * e)).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn a_zero_is_outside_and_crossings_keep_off_the_ends() {
+        let f = sphere(SolidKind::Inside, 2.0);
+        assert!(!f.inside(DVec3::X));
+        let (s, _) = f.crossing(DVec3::new(0.5, 0.0, 0.0), DVec3::X);
+        assert_eq!(s, 1.0 - END_GAP);
+    }
+
+    #[test]
+    fn distances_along_a_line_find_the_nearest_root() {
+        let f = sphere(SolidKind::Inside, 2.0);
+        let d = f
+            .distance_along(DVec3::new(0.9, 0.0, 0.0), DVec3::X, 0.5)
+            .unwrap();
+        assert!((d - 0.1).abs() < 1e-14);
+        assert!(f.distance_along(DVec3::ZERO, DVec3::X, 0.5).is_none());
+    }
+}

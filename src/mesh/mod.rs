@@ -1,0 +1,436 @@
+//! Triangle meshes of the solids that polynomial surfaces bound (`kardia mesh`): closed,
+//! 2-manifold, outward-oriented, free of self-intersections and of zero-area triangles by
+//! construction, with every surface vertex on the exact surface.
+//!
+//! The steps, one module each: [`field`] (the solid's indicator — inside, outside or a shell
+//! — and the exact boundary point on a segment, by the project's root finder and the clip
+//! sphere), [`extract`] (labels on a uniform grid cut into tetrahedra, marching tetrahedra),
+//! [`accuracy`] (distances between the mesh and the exact surface, measured with the root
+//! finder), [`check`] (every guarantee checked on the finished mesh) and [`write`] (binary
+//! STL, OBJ, binary PLY and 3MF, written atomically).
+
+pub mod accuracy;
+pub mod check;
+pub mod extract;
+pub mod field;
+pub mod write;
+
+use crate::geometry::{DMat3, DVec3, Frame};
+use crate::shapes::PolynomialSolid;
+pub use field::{Field, SolidKind, VertexKind};
+
+/// A triangle mesh: vertex positions and triangles of three vertex indices, wound
+/// counter-clockwise seen from outside (the right-hand normal faces out).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TriangleMesh {
+    /// Vertex positions.
+    pub vertices: Vec<DVec3>,
+    /// Triangles as indices into `vertices`.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl TriangleMesh {
+    /// The corners of triangle `t`.
+    pub fn corners(&self, t: usize) -> [DVec3; 3] {
+        self.triangles[t].map(|v| self.vertices[v as usize])
+    }
+
+    /// The right-hand normal of triangle `t`, of length twice its area.
+    pub fn normal(&self, t: usize) -> DVec3 {
+        let [a, b, c] = self.corners(t);
+        (b - a).cross(c - a)
+    }
+
+    /// The area of triangle `t`.
+    pub fn area(&self, t: usize) -> f64 {
+        0.5 * self.normal(t).length()
+    }
+
+    /// The signed enclosed volume (positive when the triangles face outward).
+    pub fn volume(&self) -> f64 {
+        (0..self.triangles.len())
+            .map(|t| {
+                let [a, b, c] = self.corners(t);
+                a.dot(b.cross(c))
+            })
+            .sum::<f64>()
+            / 6.0
+    }
+
+    /// The smallest box `(min, max)` holding every vertex.
+    pub fn extent(&self) -> (DVec3, DVec3) {
+        self.vertices.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        )
+    }
+
+    /// Appends `other`'s vertices and triangles (its indices shifted).
+    pub fn append(&mut self, other: &TriangleMesh) {
+        let base = self.vertices.len() as u32;
+        self.vertices.extend_from_slice(&other.vertices);
+        self.triangles
+            .extend(other.triangles.iter().map(|t| t.map(|v| v + base)));
+    }
+
+    /// Each vertex mapped by `map`; `flip` reverses every triangle's winding (for a map that
+    /// turns space inside out).
+    pub fn mapped(&self, map: impl Fn(DVec3) -> DVec3, flip: bool) -> TriangleMesh {
+        TriangleMesh {
+            vertices: self.vertices.iter().map(|&p| map(p)).collect(),
+            triangles: self
+                .triangles
+                .iter()
+                .map(|&[a, b, c]| if flip { [a, c, b] } else { [a, b, c] })
+                .collect(),
+        }
+    }
+
+    /// The same mesh with every coordinate rounded to `f32` (what STL, PLY and the other
+    /// writers store), so that checks see exactly the numbers in the file.
+    pub fn rounded_to_f32(&self) -> TriangleMesh {
+        self.mapped(|p| p.as_vec3().as_dvec3(), false)
+    }
+}
+
+/// What to mesh and how finely.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeshRequest {
+    /// Which solid: inside, outside, or a shell (its thickness in world units).
+    pub kind: SolidKind,
+    /// The grid's target accuracy in world units (> 0); `None`: 1% of the clip radius in
+    /// the world.
+    pub tolerance: Option<f64>,
+    /// The most grid cells along one side; a tolerance that needs more is refused.
+    pub max_cells: usize,
+}
+
+impl Default for MeshRequest {
+    fn default() -> Self {
+        Self {
+            kind: SolidKind::Inside,
+            tolerance: None,
+            max_cells: 512,
+        }
+    }
+}
+
+/// Why a solid could not be meshed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MeshError {
+    /// The tolerance asks for a finer grid than allowed.
+    #[error(
+        "a tolerance of {tolerance} needs {cells} grid cells a side, more than the limit of \
+         {limit}: choose a larger --tolerance"
+    )]
+    TooFine {
+        /// The tolerance asked for (world units).
+        tolerance: f64,
+        /// Cells a side it needs.
+        cells: usize,
+        /// The limit.
+        limit: usize,
+    },
+    /// A parameter is out of range.
+    #[error("{0}")]
+    Invalid(String),
+    /// No grid vertex fell inside the solid.
+    #[error(
+        "the solid is empty at this tolerance (no grid point inside it): try a smaller --tolerance"
+    )]
+    Empty,
+    /// A guarantee failed on the finished mesh (a bug: please report it).
+    #[error("the mesh failed its own check: {0}")]
+    Broken(String),
+}
+
+/// A solid's mesh in world coordinates, with what was measured on it.
+#[derive(Debug, Clone)]
+pub struct MeshedSolid {
+    /// The mesh (world units; outward winding).
+    pub mesh: TriangleMesh,
+    /// Where each vertex lies (on the surface or on the clip sphere).
+    pub kinds: Vec<VertexKind>,
+    /// The grid step in object units and the cells a side.
+    pub grid: extract::Grid,
+    /// The tolerance used (world units).
+    pub tolerance: f64,
+    /// Distances measured between the mesh and the exact surface (world units).
+    pub deviation: accuracy::Deviation,
+}
+
+/// The largest factor by which `m` stretches a vector (its spectral norm).
+pub fn stretch(m: &DMat3) -> f64 {
+    let mtm = m.transpose() * *m;
+    let mut v = DVec3::new(1.0, 0.7, 0.3).normalize();
+    for _ in 0..100 {
+        let w = mtm * v;
+        let len = w.length();
+        if len.is_nan() || len <= 0.0 {
+            return 0.0;
+        }
+        v = w / len;
+    }
+    (mtm * v).length().sqrt()
+}
+
+/// Meshes `solid` as `request` asks: the grid (step 2 × the tolerance, carried to object
+/// space), the labels and marching tetrahedra in object space, the vertices carried to the
+/// world by the solid's frame, and the deviation from the exact surface measured.
+/// `progress(done, total)` reports the grid's layers (from any thread).
+pub fn mesh_solid(
+    solid: &PolynomialSolid,
+    request: &MeshRequest,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<MeshedSolid, MeshError> {
+    let frame: Frame = solid.frame;
+    let grow = stretch(&frame.m);
+    let radius = solid.clip_radius;
+    let tolerance = request.tolerance.unwrap_or(0.01 * radius * grow);
+    if !(tolerance > 0.0 && tolerance.is_finite()) {
+        return Err(MeshError::Invalid(format!(
+            "the tolerance must be a finite number greater than 0, not {tolerance}"
+        )));
+    }
+    let kind = match request.kind {
+        SolidKind::Shell { thickness } => {
+            if !(thickness > 0.0 && thickness.is_finite()) {
+                return Err(MeshError::Invalid(format!(
+                    "the shell's thickness must be a finite number greater than 0, not \
+                     {thickness}"
+                )));
+            }
+            // World thickness to object units by the frame's mean scale.
+            SolidKind::Shell {
+                thickness: thickness / frame.m.determinant().abs().cbrt(),
+            }
+        }
+        k => k,
+    };
+    let step = 2.0 * tolerance / grow;
+    let grid = extract::Grid::covering(radius, step);
+    if grid.cells > request.max_cells {
+        return Err(MeshError::TooFine {
+            tolerance,
+            cells: grid.cells,
+            limit: request.max_cells,
+        });
+    }
+    let field = Field::new(&solid.polynomial, radius, kind);
+    let (object_mesh, kinds) = extract::march(&field, grid, progress);
+    if object_mesh.triangles.is_empty() {
+        return Err(MeshError::Empty);
+    }
+    let deviation =
+        accuracy::measure(&field, &object_mesh, &kinds, tolerance / grow, grid.step()).scaled(grow);
+    let flip = frame.m.determinant() < 0.0;
+    let mesh = object_mesh.mapped(|p| frame.point_to_world(p), flip);
+    Ok(MeshedSolid {
+        mesh,
+        kinds,
+        grid,
+        tolerance,
+        deviation,
+    })
+}
+
+/// A solid to mesh with its name (for messages and files) and colour (sRGB bytes).
+#[derive(Debug, Clone)]
+pub struct NamedSolid {
+    /// E.g. `HEART (line 3)`.
+    pub name: String,
+    /// The solid.
+    pub solid: PolynomialSolid,
+    /// Its diffuse colour as sRGB bytes.
+    pub colour: [u8; 3],
+}
+
+/// The polynomial solids of a scene (its HEART and IMPLICIT objects), in scene order.
+pub fn scene_solids(scene: &crate::scene::Scene) -> Vec<NamedSolid> {
+    scene
+        .objects
+        .iter()
+        .filter_map(|o| {
+            let solid = o.shape.polynomial_solid()?;
+            Some(NamedSolid {
+                name: format!("{} (line {})", o.keyword, o.line),
+                solid,
+                colour: o
+                    .material
+                    .diffuse
+                    .to_array()
+                    .map(crate::film::linear_to_srgb8),
+            })
+        })
+        .collect()
+}
+
+/// The finished, checked mesh of one or more solids: what a file holds.
+#[derive(Debug, Clone)]
+pub struct Printable {
+    /// The mesh as written (after `--size` scaling, coordinates rounded to `f32`).
+    pub mesh: TriangleMesh,
+    /// The guarantees checked on exactly that mesh, with its counts and volume.
+    pub verified: check::Verified,
+    /// Each solid's mesh and measurements (world units, before scaling).
+    pub parts: Vec<MeshedSolid>,
+    /// The factor the world coordinates were multiplied by (`--size`), else 1.
+    pub scale: f64,
+}
+
+/// Meshes every solid, joins them, scales the whole so its largest extent is `size`
+/// (moved so its box starts at the origin) when given, rounds to `f32` as the files store it,
+/// and checks every guarantee on the result ([`check::verify`]: solids that overlap each
+/// other are refused there, as their meshes would cross). `progress(i, done, total)`:
+/// solid `i`'s grid layers.
+pub fn mesh_solids(
+    solids: &[NamedSolid],
+    request: &MeshRequest,
+    size: Option<f64>,
+    progress: &(dyn Fn(usize, usize, usize) + Sync),
+) -> Result<Printable, MeshError> {
+    if solids.is_empty() {
+        return Err(MeshError::Invalid(
+            "nothing to mesh: the scene has no HEART or IMPLICIT object".into(),
+        ));
+    }
+    let mut parts = Vec::new();
+    let mut joined = TriangleMesh::default();
+    for (i, s) in solids.iter().enumerate() {
+        let part = mesh_solid(&s.solid, request, &|done, total| progress(i, done, total)).map_err(
+            |e| match e {
+                MeshError::Empty => MeshError::Invalid(format!("{}: {e}", s.name)),
+                e => e,
+            },
+        )?;
+        joined.append(&part.mesh);
+        parts.push(part);
+    }
+    let mut scale = 1.0;
+    if let Some(size) = size {
+        if !(size > 0.0 && size.is_finite()) {
+            return Err(MeshError::Invalid(format!(
+                "--size must be a finite number of millimetres greater than 0, not {size}"
+            )));
+        }
+        let (lo, hi) = joined.extent();
+        scale = size / (hi - lo).max_element();
+        joined = joined.mapped(|p| (p - lo) * scale, false);
+    }
+    let mesh = joined.rounded_to_f32();
+    let verified = check::verify(&mesh).map_err(MeshError::Broken)?;
+    Ok(Printable {
+        mesh,
+        verified,
+        parts,
+        scale,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes::implicit::{expand, preset};
+    use std::sync::Arc;
+
+    pub(crate) fn solid(equation: &str, radius: f64) -> PolynomialSolid {
+        PolynomialSolid {
+            polynomial: Arc::new(expand(equation).unwrap()),
+            clip_radius: radius,
+            frame: Frame::identity(),
+        }
+    }
+
+    fn mesh(s: &PolynomialSolid, kind: SolidKind, tolerance: f64) -> MeshedSolid {
+        let request = MeshRequest {
+            kind,
+            tolerance: Some(tolerance),
+            ..MeshRequest::default()
+        };
+        mesh_solid(s, &request, &|_, _| {}).unwrap()
+    }
+
+    #[test]
+    fn a_sphere_is_one_closed_piece_of_its_volume() {
+        let m = mesh(&solid("x^2 + y^2 + z^2 = 1", 1.5), SolidKind::Inside, 0.02);
+        let v = check::verify(&m.mesh).unwrap();
+        assert_eq!((v.components, v.euler_characteristic), (1, 2));
+        let exact = 4.0 / 3.0 * std::f64::consts::PI;
+        assert!((v.volume - exact).abs() < 0.01 * exact, "{}", v.volume);
+        assert!(m.kinds.iter().all(|&k| k == VertexKind::Surface));
+        assert!(m.deviation.vertex < 1e-12, "{:?}", m.deviation);
+        assert!(m.deviation.hausdorff() < 0.02, "{:?}", m.deviation);
+        assert_eq!(m.deviation.vertices_beyond, 0);
+    }
+
+    #[test]
+    fn a_clipped_unbounded_surface_is_closed_by_its_cap_on_the_sphere() {
+        // The region below the plane z = 0.3 inside the ball of radius 1.
+        let m = mesh(&solid("z = 0.3", 1.0), SolidKind::Inside, 0.03);
+        check::verify(&m.mesh).unwrap();
+        for (p, k) in m.mesh.vertices.iter().zip(&m.kinds) {
+            match k {
+                VertexKind::Cap => assert!((p.length() - 1.0).abs() < 1e-12),
+                VertexKind::Surface => assert!((p.z - 0.3).abs() < 1e-12),
+            }
+        }
+        assert!(m.kinds.contains(&VertexKind::Cap));
+    }
+
+    #[test]
+    fn nodal_surfaces_give_manifold_solids_inside_outside_and_as_shells() {
+        for (name, params) in [("kummer", vec![1.3]), ("barth_sextic", vec![])] {
+            let p = preset(name, &params).unwrap();
+            let s = solid(&p.equation, p.bound);
+            for kind in [
+                SolidKind::Inside,
+                SolidKind::Outside,
+                SolidKind::Shell { thickness: 0.1 },
+            ] {
+                let m = mesh(&s, kind, 0.05);
+                let v = check::verify(&m.mesh).unwrap_or_else(|e| panic!("{name} {kind:?}: {e}"));
+                assert!(v.volume > 0.0);
+                if kind != (SolidKind::Shell { thickness: 0.1 }) {
+                    assert_eq!(m.deviation.vertices_beyond, 0, "{name} {kind:?}");
+                    assert!(
+                        m.deviation.vertex <= 0.05,
+                        "{name} {kind:?} {:?}",
+                        m.deviation
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_placement_carries_the_mesh_and_keeps_it_outward() {
+        let mut s = solid("x^2 + y^2 + z^2 = 1", 1.5);
+        // A mirror (negative determinant) that also stretches x by 2.
+        s.frame = Frame::new(
+            DVec3::new(5.0, 0.0, 0.0),
+            DVec3::X * -2.0,
+            DVec3::Y,
+            DVec3::Z,
+        )
+        .unwrap();
+        let m = mesh(&s, SolidKind::Inside, 0.04);
+        let v = check::verify(&m.mesh).unwrap();
+        let exact = 2.0 * 4.0 / 3.0 * std::f64::consts::PI;
+        assert!((v.volume - exact).abs() < 0.02 * exact, "{}", v.volume);
+        let (lo, hi) = m.mesh.extent();
+        assert!((lo.x - 3.0).abs() < 0.05 && (hi.x - 7.0).abs() < 0.05);
+    }
+
+    #[test]
+    fn too_fine_a_tolerance_is_refused() {
+        let s = solid("x^2 + y^2 + z^2 = 1", 1.5);
+        let request = MeshRequest {
+            tolerance: Some(1e-6),
+            ..MeshRequest::default()
+        };
+        assert!(matches!(
+            mesh_solid(&s, &request, &|_, _| {}),
+            Err(MeshError::TooFine { .. })
+        ));
+    }
+}

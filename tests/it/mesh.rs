@@ -1,0 +1,335 @@
+//! `kardia mesh` (docs/mesh.md): the guarantees on every preset, every shipped scene's HEART
+//! and IMPLICIT objects and the nodal surfaces, checked by the library's own checks, and the
+//! files read by independent tools — admesh, and trimesh with manifold3d in Python
+//! (tests/mesh/check.py, in the virtual environment `.ci/run` makes as `.venv-mesh`).
+
+use kardia::geometry::Frame;
+use kardia::mesh::{self, check, MeshRequest, NamedSolid, SolidKind, VertexKind};
+use kardia::scene::{self, LoadOptions};
+use kardia::shapes::implicit::{Implicit, PRESETS};
+use kardia::shapes::Shape;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A preset with the parameters its tests use.
+fn preset_params(name: &str) -> Vec<f64> {
+    match name {
+        "torus" => vec![1.0, 0.35],
+        "kummer" => vec![1.3],
+        "chmutov" => vec![6.0],
+        _ => Vec::new(),
+    }
+}
+
+fn preset_solid(name: &str) -> NamedSolid {
+    let shape = Implicit::from_preset(name, &preset_params(name), Frame::identity(), None).unwrap();
+    NamedSolid {
+        name: name.into(),
+        solid: shape.polynomial_solid().unwrap(),
+        colour: [200, 100, 50],
+    }
+}
+
+fn request(kind: SolidKind, tolerance: f64) -> MeshRequest {
+    MeshRequest {
+        kind,
+        tolerance: Some(tolerance),
+        ..MeshRequest::default()
+    }
+}
+
+/// Meshes and asserts every guarantee, and that each surface vertex is within the
+/// tolerance of the exact surface (measured by the root finder).
+fn assert_guarantees(what: &str, solids: &[NamedSolid], kind: SolidKind, tolerance: f64) {
+    let printable = mesh::mesh_solids(solids, &request(kind, tolerance), None, &|_, _, _| {})
+        .unwrap_or_else(|e| panic!("{what} {kind:?}: {e}"));
+    // mesh_solids has verified the result; verify again here, independently of its path.
+    let v = check::verify(&printable.mesh).unwrap_or_else(|e| panic!("{what} {kind:?}: {e}"));
+    assert!(v.volume > 0.0, "{what}");
+    for part in &printable.parts {
+        let d = part.deviation;
+        if matches!(kind, SolidKind::Shell { .. }) && !d.measured {
+            continue;
+        }
+        assert!(d.measured, "{what} {kind:?}");
+        // Known gap (see docs/mesh.md): at Barth's nodes on a coarse grid (tolerance 0.05)
+        // 8 of 8 040 surface vertices have no root found within the tolerance on the lines
+        // searched, though placed on a root along their edge; at most 1 in 500 is allowed.
+        assert!(
+            d.vertices_beyond * 500 <= d.vertices,
+            "{what} {kind:?}: {d:?}"
+        );
+        assert!(d.vertex <= part.tolerance, "{what} {kind:?}: {d:?}");
+        assert!(d.hausdorff().is_finite(), "{what} {kind:?}: {d:?}");
+        assert!(part.kinds.contains(&VertexKind::Surface), "{what}");
+    }
+}
+
+#[test]
+fn every_preset_meshes_as_a_closed_manifold_solid() {
+    for &(name, _) in PRESETS {
+        let s = preset_solid(name);
+        let tolerance = 0.025 * s.solid.clip_radius;
+        assert_guarantees(name, &[s], SolidKind::Inside, tolerance);
+    }
+}
+
+#[test]
+fn the_nodal_surfaces_mesh_inside_outside_and_as_shells() {
+    for name in ["kummer", "barth_sextic"] {
+        let s = preset_solid(name);
+        let tolerance = 0.02 * s.solid.clip_radius;
+        for kind in [
+            SolidKind::Inside,
+            SolidKind::Outside,
+            SolidKind::Shell { thickness: 0.08 },
+        ] {
+            assert_guarantees(name, std::slice::from_ref(&s), kind, tolerance);
+        }
+    }
+}
+
+#[test]
+fn every_shipped_scene_meshes_as_closed_manifold_solids() {
+    let mut scenes: Vec<PathBuf> = Vec::new();
+    for dir in ["scenes", "scenes/implicit"] {
+        for entry in std::fs::read_dir(root().join(dir)).unwrap() {
+            let p = entry.unwrap().path();
+            if p.extension().is_some_and(|e| e == "scene") {
+                scenes.push(p);
+            }
+        }
+    }
+    scenes.sort();
+    assert!(scenes.len() >= 15);
+    for path in scenes {
+        let scene = scene::parse_file(&path, &LoadOptions::default()).unwrap();
+        let solids = mesh::scene_solids(&scene);
+        assert!(!solids.is_empty(), "{}", path.display());
+        let tolerance = solids
+            .iter()
+            .map(|s| 0.02 * s.solid.clip_radius * mesh::stretch(&s.solid.frame.m))
+            .fold(f64::INFINITY, f64::min);
+        assert_guarantees(
+            &path.display().to_string(),
+            &solids,
+            SolidKind::Inside,
+            tolerance,
+        );
+    }
+}
+
+#[test]
+fn the_command_writes_every_format_and_refuses_bad_input_without_a_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let kardia = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_kardia"))
+            .arg("mesh")
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    for ext in ["stl", "obj", "ply", "3mf"] {
+        let out = dir.path().join(format!("sphere.{ext}"));
+        let o = kardia(&[
+            "--equation",
+            "x^2 + y^2 + z^2 = 1",
+            "--tolerance",
+            "0.05",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{stdout}{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(stdout.contains("1 component,"), "{stdout}");
+        assert!(stdout.contains("Hausdorff estimate"), "{stdout}");
+        assert!(out.metadata().unwrap().len() > 1000);
+    }
+    let bad = dir.path().join("bad.stl");
+    for args in [
+        vec!["--equation", "x^2 + y^2 = 1"], // unbounded, no --bound
+        vec!["--preset", "nosuch"],
+        vec!["--equation", "x^2 + y^2 + z^2 = 1", "--tolerance", "1e-9"],
+        vec!["--equation", "x^2 + y^2 + z^2 = 1", "--shell", "0"],
+    ] {
+        let mut all = args.clone();
+        all.extend(["-o", bad.to_str().unwrap()]);
+        let o = kardia(&all);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        assert!(!bad.exists(), "{args:?}");
+    }
+    let o = kardia(&["--equation", "x^2 + y^2 + z^2 = 1", "-o", "x.png"]);
+    assert_eq!(o.status.code(), Some(1));
+}
+
+/// The project's virtual environment with trimesh and manifold3d (made by `.ci/run`).
+fn mesh_python() -> Option<PathBuf> {
+    let python = root().join(".venv-mesh/bin/python");
+    python.exists().then_some(python)
+}
+
+fn admesh_complaints(path: &Path) -> Result<(), String> {
+    let o = Command::new("admesh")
+        .arg(path)
+        .output()
+        .map_err(|e| format!("admesh: {e}"))?;
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    if !o.status.success() {
+        return Err(format!("admesh failed:\n{text}"));
+    }
+    for line in text.lines() {
+        let zero_expected = [
+            "Facets with 1 disconnected edge",
+            "Facets with 2 disconnected edges",
+            "Facets with 3 disconnected edges",
+            "Total disconnected facets",
+            "Degenerate facets",
+            "Edges fixed",
+            "Facets removed",
+            "Facets added",
+            "Facets reversed",
+            "Backwards edges",
+            "Normals fixed",
+        ];
+        for key in zero_expected {
+            if let Some(rest) = line.trim().strip_prefix(key) {
+                let counts: Vec<&str> = rest
+                    .trim_start_matches([' ', ':'])
+                    .split_whitespace()
+                    .take_while(|w| w.chars().all(|c| c.is_ascii_digit()))
+                    .collect();
+                if counts.iter().any(|c| *c != "0") {
+                    return Err(format!("admesh: {line}\n{text}"));
+                }
+            }
+        }
+    }
+    let volume = text
+        .split("Volume   :")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|v| v.parse::<f64>().ok());
+    match volume {
+        Some(v) if v > 0.0 => Ok(()),
+        _ => Err(format!("admesh: volume not positive\n{text}")),
+    }
+}
+
+#[test]
+fn admesh_trimesh_and_manifold3d_accept_the_files() {
+    let in_ci = std::env::var_os("CI").is_some();
+    let python = mesh_python();
+    let admesh = Command::new("admesh").arg("--version").output().is_ok();
+    if python.is_none() || !admesh {
+        assert!(
+            !in_ci,
+            "CI must run the independent mesh checks: .ci/run installs admesh and .venv-mesh"
+        );
+        eprintln!(
+            "\n\n!!!!! SKIPPED the independent mesh checks: admesh (apt-get install admesh) and \
+             .venv-mesh with trimesh, manifold3d and numpy (see .ci/run) are needed !!!!!\n\n"
+        );
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    let cases: &[(&str, &[&str])] = &[
+        (
+            "kummer_shell",
+            &[
+                "--preset",
+                "kummer",
+                "1.3",
+                "--shell",
+                "0.1",
+                "--tolerance",
+                "0.05",
+            ],
+        ),
+        (
+            "heart_scene",
+            &["scenes/heart.scene", "--tolerance", "0.03", "--size", "50"],
+        ),
+        (
+            "kummer_solid",
+            &["--preset", "kummer", "1.3", "--tolerance", "0.05"],
+        ),
+        (
+            "kummer_outside",
+            &[
+                "--preset",
+                "kummer",
+                "1.3",
+                "--outside",
+                "--tolerance",
+                "0.05",
+            ],
+        ),
+        (
+            "barth_solid",
+            &["--preset", "barth_sextic", "--tolerance", "0.05"],
+        ),
+        (
+            "barth_shell",
+            &[
+                "--preset",
+                "barth_sextic",
+                "--shell",
+                "0.08",
+                "--tolerance",
+                "0.05",
+            ],
+        ),
+        (
+            "torus",
+            &["--preset", "torus", "1", "0.35", "--tolerance", "0.03"],
+        ),
+    ];
+    for (i, (name, args)) in cases.iter().enumerate() {
+        // Every format for the first two cases (the reader of each is checked), STL for all.
+        let formats: &[&str] = if i < 2 {
+            &["stl", "obj", "ply", "3mf"]
+        } else {
+            &["stl"]
+        };
+        for ext in formats {
+            let out = dir.path().join(format!("{name}.{ext}"));
+            let o = Command::new(env!("CARGO_BIN_EXE_kardia"))
+                .current_dir(root())
+                .arg("mesh")
+                .args(*args)
+                .args(["--quiet", "-o", out.to_str().unwrap()])
+                .output()
+                .unwrap();
+            assert!(
+                o.status.success(),
+                "{name}: {}{}",
+                String::from_utf8_lossy(&o.stdout),
+                String::from_utf8_lossy(&o.stderr)
+            );
+            if *ext == "stl" {
+                admesh_complaints(&out).unwrap_or_else(|e| panic!("{name}: {e}"));
+            }
+            files.push(out);
+        }
+    }
+    let o = Command::new(python.unwrap())
+        .arg(root().join("tests/mesh/check.py"))
+        .args(&files)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "tests/mesh/check.py complained:\n{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
