@@ -332,31 +332,9 @@ fn half_area(b: &Aabb) -> f64 {
 /// same slab arithmetic, so never a miss where the items' own tests would meet).
 #[inline(always)]
 fn meets(bounds: &Aabb, ray: &Ray, inv: DVec3, t_min: f64, t_max: f64) -> bool {
-    let (mut t0, mut t1) = (t_min, t_max);
-    for axis in 0..3 {
-        let (o, d) = (ray.origin[axis], ray.dir[axis]);
-        let (lo, hi) = (bounds.min[axis], bounds.max[axis]);
-        if d == 0.0 {
-            if o < lo || o > hi {
-                return false;
-            }
-            continue;
-        }
-        let (mut a, mut b) = ((lo - o) * inv[axis], (hi - o) * inv[axis]);
-        if a > b {
-            std::mem::swap(&mut a, &mut b);
-        }
-        if a > t0 {
-            t0 = a;
-        }
-        if b < t1 {
-            t1 = b;
-        }
-        if t0 > t1 {
-            return false;
-        }
-    }
-    true
+    bounds
+        .clip_by(ray, |axis| inv[axis], t_min, t_max)
+        .is_some()
 }
 
 #[cfg(test)]

@@ -144,6 +144,21 @@ impl Aabb {
     /// components (a ray parallel to a slab is inside it iff its origin is).
     #[inline]
     pub fn clip(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
+        self.clip_by(ray, |axis| 1.0 / ray.dir[axis], t_min, t_max)
+    }
+
+    /// [`Aabb::clip`] with the direction's reciprocals given by `inverse(axis)` (asked only
+    /// for an axis whose direction component is not zero): the same slab arithmetic, so the
+    /// same answer as `clip` when `inverse(axis)` is `1 / ray.dir[axis]`, whether computed
+    /// here (`clip`) or once per ray ahead of many boxes (the scene's hierarchy).
+    #[inline(always)]
+    pub fn clip_by(
+        &self,
+        ray: &Ray,
+        inverse: impl Fn(usize) -> f64,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<(f64, f64)> {
         let mut t0 = t_min;
         let mut t1 = t_max;
         for axis in 0..3 {
@@ -156,7 +171,7 @@ impl Aabb {
                 }
                 continue;
             }
-            let inv = 1.0 / d;
+            let inv = inverse(axis);
             let (mut a, mut b) = ((lo - o) * inv, (hi - o) * inv);
             if a > b {
                 std::mem::swap(&mut a, &mut b);
