@@ -8,7 +8,8 @@
 
 use std::ops::Range;
 
-use super::cursor::{shorten, Cursor, Source};
+use super::cursor::{Cursor, Source};
+use super::words::shorten;
 use super::expr::{self, Names};
 use super::lexer::{lex_line, LexError, Token, TokenKind};
 use super::parser::Builder;

@@ -3,7 +3,8 @@
 
 use std::collections::HashMap;
 
-use super::cursor::{parse_number, shorten, suggest, Cursor, NumberError};
+use super::cursor::{parse_number, Cursor, NumberError};
+use super::words::{shorten, suggest};
 use super::lexer::{lex_line, Token, TokenKind};
 use super::limits;
 use super::SceneError;
