@@ -816,7 +816,10 @@ pub(super) fn read_let(line: &Line) -> (Result<LetDefinition, LetFail>, bool) {
             "`{}` is not a valid name: names contain only letters, digits and `_`",
             shorten(word, 30)
         );
-        return (at(name_span.start..p.span.end, message, "invalid name"), false);
+        return (
+            at(name_span.start..p.span.end, message, "invalid name"),
+            false,
+        );
     }
     if is_reserved(&name) {
         let message = format!(
@@ -844,7 +847,10 @@ pub(super) fn read_let(line: &Line) -> (Result<LetDefinition, LetFail>, bool) {
         }
         None => {
             let message = "expected `=` after the name, found end of line".into();
-            return (at(name_span.end..name_span.end, message, "expected `=`"), false);
+            return (
+                at(name_span.end..name_span.end, message, "expected `=`"),
+                false,
+            );
         }
     }
     let mut reader = Reader {

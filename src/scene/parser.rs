@@ -6,13 +6,13 @@
 use std::ops::Range;
 
 use super::cursor::{parse_number, Cursor, NumberError, Source, VecArg};
-use super::words::{shorten, suggest};
 use super::error::{ceil_boundary, floor_boundary};
 use super::expr::Names;
 use super::lexer::{Token, TokenKind};
 use super::limits::{self, Limits};
 use super::repeat::{self, Header};
 use super::surface::{end_after_surface, is_reserved, property, surface, Materials};
+use super::words::{shorten, suggest};
 use super::{Animation, LoadOptions, Object, ObjectIndex, Scene, SceneError};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::{DVec3, Frame, FrameError};

@@ -9,10 +9,10 @@
 use std::ops::Range;
 
 use super::cursor::{Cursor, Source};
-use super::words::shorten;
 use super::expr::{self, Names};
 use super::lexer::{lex_line, LexError, Token, TokenKind};
 use super::parser::Builder;
+use super::words::shorten;
 use super::SceneError;
 
 type Result<T> = std::result::Result<T, SceneError>;

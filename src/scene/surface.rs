@@ -4,9 +4,9 @@
 use std::collections::HashMap;
 
 use super::cursor::{parse_number, Cursor, NumberError};
-use super::words::{shorten, suggest};
 use super::lexer::{lex_line, Token, TokenKind};
 use super::limits;
+use super::words::{shorten, suggest};
 use super::SceneError;
 use crate::materials::Material;
 

@@ -92,6 +92,9 @@ fn the_kubernetes_job_validates_offline_and_its_pods_render_the_sequence() {
     for f in 0..frames {
         let pod = std::fs::read(d.join(format!("work/volume/out/frame_{f:04}.png"))).unwrap();
         let seq = std::fs::read(d.join(format!("seq_{f:04}.png"))).unwrap();
-        assert!(pod == seq, "frame {f} from its pod differs from the sequential run");
+        assert!(
+            pod == seq,
+            "frame {f} from its pod differs from the sequential run"
+        );
     }
 }

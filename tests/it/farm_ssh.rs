@@ -137,11 +137,23 @@ fn gnu_parallel_over_ssh_to_127_0_0_1_gives_the_files_of_one_machine() {
     // Frames: the scene and the output as absolute paths (remote jobs start in $HOME).
     let scene = d.join("a.scene").display().to_string();
     let farm = d.join("farm").display().to_string();
-    run_recipe(d, "parallel-frames.sh", &[&scene, &farm, "--spp", "2"], &nodes);
+    run_recipe(
+        d,
+        "parallel-frames.sh",
+        &[&scene, &farm, "--spp", "2"],
+        &nodes,
+    );
     ok(
         d,
         &[
-            "render", "a.scene", "--spp", "2", "--frames", "0..3", "--quiet", "-o",
+            "render",
+            "a.scene",
+            "--spp",
+            "2",
+            "--frames",
+            "0..3",
+            "--quiet",
+            "-o",
             "seq_####.png",
         ],
     );
@@ -161,11 +173,23 @@ fn gnu_parallel_over_ssh_to_127_0_0_1_gives_the_files_of_one_machine() {
     );
     ok(
         d,
-        &["render", "a.scene", "--spp", "2", "--quiet", "-o", "single.png"],
+        &[
+            "render",
+            "a.scene",
+            "--spp",
+            "2",
+            "--quiet",
+            "-o",
+            "single.png",
+        ],
     );
     assert!(
-        std::fs::read(d.join("joined.png")).unwrap() == std::fs::read(d.join("single.png")).unwrap(),
+        std::fs::read(d.join("joined.png")).unwrap()
+            == std::fs::read(d.join("single.png")).unwrap(),
         "tiles over ssh do not join into the single render"
     );
-    assert!(!d.join("joined.png.parts").exists(), "the parts folder is removed");
+    assert!(
+        !d.join("joined.png.parts").exists(),
+        "the parts folder is removed"
+    );
 }
