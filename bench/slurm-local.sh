@@ -4,11 +4,15 @@
 # munged, slurmctld and slurmd, builds kardia, submits examples/farm/slurm-submit.sh for a
 # scene (a tiled frame joined by a dependent assemble step, and the frames as an array), waits
 # for the jobs, checks the joined frame against a single render byte for byte, prints the
-# queue's accounting and stops the daemons it started.
+# queue's accounting; then kills a band mid-way (scancel of one array task), checks that the
+# join still runs (afterany), fails naming that band and prints the line that re-runs it,
+# runs that line, and checks the recovered frame byte for byte too; and stops the daemons it
+# started.
 #
 #   bench/slurm-local.sh [SCENE] [TILES] [OUTDIR]
 #
-# Defaults: scenes/heartbeat.scene, 4 tiles, a fresh temporary directory.
+# Defaults: scenes/heartbeat.scene, 4 tiles, a fresh temporary directory. KARDIA: the binary
+# (default: a release build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 repo=$PWD
@@ -22,8 +26,11 @@ if ! command -v slurmctld >/dev/null 2>&1 || ! command -v munged >/dev/null 2>&1
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq slurm-wlm munge >/dev/null
 fi
 
-cargo build --release --quiet
-export KARDIA=$repo/target/release/kardia
+if [[ -z "${KARDIA:-}" ]]; then
+  cargo build --release --quiet
+  KARDIA=$repo/target/release/kardia
+fi
+export KARDIA
 
 host=$(hostname -s)
 cpus=$(nproc)
@@ -112,3 +119,50 @@ else
 fi
 frames=$(ls "$out"/frame_[0-9][0-9][0-9][0-9].png | wc -l)
 echo "frames rendered by the array: $frames"
+
+echo "== a band killed mid-way, and the recovery the join prints"
+killed=$out/killed
+mkdir -p "$killed"
+export KARDIA_ARGS="--spp 64"
+export SCENE=$repo/$scene OUT=$killed TILES=$tiles IMAGE=frame_0000_tiled.png RECIPES=$repo/examples/farm
+tiles_job=$(sbatch --parsable --chdir="$killed" --array=0-$((tiles - 1)) --export=ALL examples/farm/slurm-tiles.sbatch)
+join_job=$(sbatch --parsable --chdir="$killed" --dependency=afterany:"$tiles_job" --export=ALL examples/farm/slurm-assemble.sbatch)
+echo "tiles array: $tiles_job  assemble (afterany): $join_job"
+victim=${tiles_job}_1
+for _ in $(seq 1 120); do
+  [ "$(squeue -h -j "$victim" -o %T 2>/dev/null)" = RUNNING ] && break
+  sleep 0.5
+done
+sleep 1
+scancel "$victim"
+echo "scancel $victim (band 1, running)"
+for _ in $(seq 1 600); do
+  if [ -z "$(squeue -h -u "$(id -un)")" ]; then break; fi
+  sleep 1
+done
+if [ -n "$(squeue -h -u "$(id -un)")" ]; then
+  echo "jobs still queued after the killed band:" >&2
+  squeue >&2
+  exit 1
+fi
+echo "join job $join_job: $(scontrol -o show job "$join_job" | grep -oE 'JobState=[A-Z]+|ExitCode=[0-9:]+' | tr '\n' ' ')"
+echo "its log:"
+sed 's/^/  /' "$killed/kardia-assemble.log"
+leftovers=$(find "$killed" -name '.*.tmp' | wc -l)
+echo "temporary files left by the killed band: $leftovers"
+recovery=$(grep -A1 '^Re-run them and this join with:' "$killed/kardia-assemble.log" | tail -1)
+[ -n "$recovery" ] || { echo "the join printed no recovery line" >&2; exit 1; }
+rm "$killed/kardia-assemble.log"
+echo "== recovery: the printed line"
+eval "$recovery"
+for _ in $(seq 1 600); do
+  if [ -z "$(squeue -h -u "$(id -un)")" ]; then break; fi
+  sleep 1
+done
+"$KARDIA" render "$repo/$scene" --spp 64 --quiet -o "$killed/single_render.png"
+if cmp "$killed/frame_0000_tiled.png" "$killed/single_render.png"; then
+  echo "recovered: joined tiles == single render (byte for byte)"
+else
+  echo "the recovered frame differs from the single render" >&2
+  exit 1
+fi

@@ -4,6 +4,9 @@
 //! equal those of one sequential run.
 
 pub mod animated;
+mod sequence;
+
+pub use sequence::{render_animated_file, render_frames_to_files, Done, FrameEvent};
 
 use std::path::{Path, PathBuf};
 
@@ -126,28 +129,17 @@ pub fn orbit(camera: &Camera, frame: u32, count: u32) -> Camera {
         .unwrap_or_else(|_| camera.clone())
 }
 
-/// A scene text to be read at many frames.
+/// A scene text to be read at many frames. For a foreign file (`.jsurf`, `.pic`) it is the
+/// translation ([`crate::formats::Loaded::text`]), never the file's own text.
 #[derive(Debug, Clone)]
 pub struct SceneSource {
-    /// The scene text.
+    /// kardia's scene text.
     pub text: String,
     /// Its name in error messages (usually the file path).
     pub name: String,
 }
 
 impl SceneSource {
-    /// Reads a scene file (UTF-8).
-    pub fn from_file(path: &Path) -> Result<Self, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Unreadable {
-            path: path.display().to_string(),
-            reason: e.to_string(),
-        })?;
-        Ok(Self {
-            text,
-            name: path.display().to_string(),
-        })
-    }
-
     /// The built-in default scene.
     pub fn default_scene() -> Self {
         Self {
@@ -218,13 +210,20 @@ impl FrameJob {
     /// frame's seed, and the turntable's camera.
     pub fn frame(&self, frame: u32) -> Result<(Scene, RenderRequest), SceneError> {
         let scene = self.source.at_frame(&self.options, frame, self.count)?;
+        let request = self.request_at(frame, &scene);
+        Ok((scene, request))
+    }
+
+    /// The render request of `frame`, whose scene (read at that frame) is `scene`: the
+    /// frame's seed and the turntable's camera.
+    pub fn request_at(&self, frame: u32, scene: &Scene) -> RenderRequest {
         let mut request = self.request.clone();
         request.seed = frame_seed(self.request.seed, frame);
         if let Some(n) = self.turntable {
             let camera = request.camera.as_ref().unwrap_or(&scene.camera);
             request.camera = Some(orbit(camera, frame, n));
         }
-        Ok((scene, request))
+        request
     }
 
     /// The render key of `frame` (see [`tiles::render_key`]): the scene text and every
@@ -310,9 +309,24 @@ impl FrameJob {
         format: ImageFormat,
         path: &Path,
     ) -> Result<RenderSummary, FrameError> {
-        let (scene, request) = self.frame(frame)?;
-        let region = request.region_in(&scene)?;
-        let (full_width, full_height) = request.full_size(&scene)?;
+        let scene = self.source.at_frame(&self.options, frame, self.count)?;
+        self.render_scene_to_file(renderer, frame, &scene, control, format, path)
+    }
+
+    /// [`FrameJob::render_to_file`] with the scene of `frame` already read (`scene` must be
+    /// this job's scene at that frame: for a job of one frame, the scene read as a still).
+    pub fn render_scene_to_file(
+        &self,
+        renderer: &Renderer,
+        frame: u32,
+        scene: &Scene,
+        control: &Control,
+        format: ImageFormat,
+        path: &Path,
+    ) -> Result<RenderSummary, FrameError> {
+        let request = self.request_at(frame, scene);
+        let region = request.region_in(scene)?;
+        let (full_width, full_height) = request.full_size(scene)?;
         if region != Region::full(full_width, full_height) {
             if request.alpha {
                 return Err(OutputError::Encode(
@@ -320,7 +334,7 @@ impl FrameJob {
                 )
                 .into());
             }
-            let rendered = renderer.render(&scene, &request, control)?;
+            let rendered = renderer.render(scene, &request, control)?;
             let info = PartInfo {
                 full_width,
                 full_height,
@@ -328,12 +342,12 @@ impl FrameJob {
                 seed: request.seed,
                 spp: request.spp.max(1),
                 frame,
-                key: self.key(&scene, &request, frame),
+                key: self.key(scene, &request, frame),
             };
             tiles::write_part(&rendered.image, &info, format, path)?;
             return Ok(rendered.summary());
         }
-        let key = self.key(&scene, &request, frame);
+        let key = self.key(scene, &request, frame);
         let tag = Some(FileTag {
             name: tiles::KEY_TAG,
             text: &key,
@@ -347,7 +361,7 @@ impl FrameJob {
                 request.alpha,
                 tag,
                 |sink| {
-                    renderer.render_streamed(&scene, &request, control, &|row, rows, alpha| {
+                    renderer.render_streamed(scene, &request, control, &|row, rows, alpha| {
                         sink.rows(row, rows, alpha)
                     })
                 },
@@ -356,7 +370,7 @@ impl FrameJob {
             written?;
             rendered
         } else {
-            let rendered = renderer.render(&scene, &request, control)?;
+            let rendered = renderer.render(scene, &request, control)?;
             film::encode_tagged(&rendered.image, format, tag, &mut file)?;
             rendered.summary()
         };

@@ -2,10 +2,10 @@
 //! (rendering by [`crate::pipeline`]). Each subcommand lives in its own file with its
 //! arguments and its `run`.
 
-mod animate;
 mod assemble;
 mod convert;
 mod explore;
+mod frames;
 mod mesh;
 mod probe;
 mod progress;

@@ -1,14 +1,16 @@
-//! `kardia render`: arguments → [`crate::pipeline`] → an image file, and a summary line.
+//! `kardia render`: arguments → a plan of frames (`frames.rs`; a still is frame 0 alone) →
+//! [`crate::animation`] → image files, and a summary line.
 
-use super::animate::AnimationArgs;
+use super::frames::{frame_message, AnimationArgs};
 use super::progress::{Progress, DEFAULT_INTERVAL_SECONDS};
-use crate::animation::{FrameJob, SceneSource};
-use crate::film::{self, AtomicFile, FileTag, ImageFormat};
+use crate::animation::animated::AnimatedFormat;
+use crate::animation::{self, FrameError, FrameEvent, FrameJob, SceneSource};
+use crate::film::{self, ImageFormat};
 use crate::pipeline::{
     CancelToken, Control, Region, RenderError, RenderRequest, RenderSummary, Renderer, View,
 };
 use crate::roots::Solver;
-use crate::scene::{self, LoadOptions, Scene};
+use crate::scene::{LoadOptions, Scene};
 use crate::tiles;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
@@ -73,7 +75,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_INTERVAL_SECONDS,
           value_parser = parse_interval)]
     pub progress_every: f64,
-    /// Frames, turntables and tiles (see `animate.rs`).
+    /// Frames, turntables and tiles (see `frames.rs`).
     #[command(flatten)]
     pub animation: AnimationArgs,
 }
@@ -192,16 +194,18 @@ fn rate(per_second: f64) -> String {
 }
 
 /// Runs `kardia render`; returns the exit code (0 success, 1 any error, [`INTERRUPTED`] when
-/// `interrupt` was cancelled: then nothing is written and no temporary file is left).
+/// `interrupt` was cancelled: then the frame in progress is not written and no temporary file
+/// is left).
 pub fn run(args: RenderArgs, interrupt: &CancelToken) -> i32 {
-    if args.animation.applies(&args) {
-        return super::animate::run(&args, interrupt);
-    }
     match render(&args, interrupt) {
         Ok(()) => 0,
-        Err(Failure::Interrupted) => {
+        Err(Failure::Interrupted { still }) => {
             if !args.quiet {
-                eprintln!("kardia: interrupted, nothing written");
+                if still {
+                    eprintln!("kardia: interrupted, nothing written");
+                } else {
+                    eprintln!("kardia: interrupted; the frame in progress was not written");
+                }
             }
             INTERRUPTED
         }
@@ -213,8 +217,8 @@ pub fn run(args: RenderArgs, interrupt: &CancelToken) -> i32 {
 enum Failure {
     /// The error was printed.
     Reported,
-    /// The interrupt token was cancelled.
-    Interrupted,
+    /// The interrupt token was cancelled (while rendering a plain still, or frames or parts).
+    Interrupted { still: bool },
 }
 
 /// Prints `err` and gives up.
@@ -223,88 +227,194 @@ fn fail(err: impl miette::Diagnostic + Send + Sync + 'static) -> Failure {
     Failure::Reported
 }
 
-/// `kardia render` itself: check the output, load, render into an atomic file, commit, print.
+/// Prints a usage error and gives up.
+fn usage(message: String) -> Failure {
+    eprintln!("kardia: {message}");
+    Failure::Reported
+}
+
+/// `kardia render` itself, one flow for a still, frames, a turntable, an animated file, a
+/// tile or a region: check the output, load the scene (translated when foreign), plan the
+/// frames, render each into an atomic file (or all into one animated file), print.
 fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
-    // Everything that can fail before rendering is checked first.
-    let mut format = film::check_output_path(&args.output).map_err(fail)?;
-    if args.half && format == ImageFormat::ExrFloat {
-        format = ImageFormat::ExrHalf;
-    }
+    let a = &args.animation;
+    let animated = AnimatedFormat::from_path(&args.output);
+    // What can be checked of the output before loading is checked first (a frame pattern's
+    // files all share its folder and extension).
+    let format = if animated.is_some() || a.print_frame_count {
+        None
+    } else {
+        let first = animation::frame_path(&args.output, 0);
+        match film::check_output_path(&first).map_err(fail)? {
+            ImageFormat::ExrFloat if args.half => Some(ImageFormat::ExrHalf),
+            f => Some(f),
+        }
+    };
     let options = args.load_options();
-    let (scene, source) = match &args.scene {
+    let (still, source, declared) = match &args.scene {
         Some(path) => crate::formats::load(path, &options).map(|loaded| {
             if !args.quiet {
                 super::convert::print_warnings(path, &loaded.warnings);
             }
-            // A foreign file's key is that of its translation: the text that was rendered.
+            // A foreign file is read at every frame, and keyed, by its translation.
             let source = SceneSource {
                 text: loaded.text,
                 name: path.display().to_string(),
             };
-            (loaded.scene, source)
+            (loaded.scene, source, loaded.animation)
         }),
         None => {
             let source = SceneSource::default_scene();
-            scene::parse(&source.text, &source.name, &options).map(|scene| (scene, source))
+            source
+                .still(&options)
+                .map(|(scene, animation)| (scene, source, animation))
         }
     }
     .map_err(fail)?;
-    let request = args.request();
-    // The still's render key, stored in the file: what `--resume` and `assemble` compare.
-    let key = FrameJob::still(source, options, request.clone()).key(&scene, &request, 0);
-    let tag = Some(FileTag {
-        name: tiles::KEY_TAG,
-        text: &key,
-    });
-    let region = request.region_in(&scene).map_err(fail)?;
+    if a.print_frame_count {
+        println!("{}", a.turntable.or(declared.frames).unwrap_or(1));
+        return Ok(());
+    }
+    let plan = a
+        .plan(&args.output, args.region, args.alpha, &declared)
+        .map_err(usage)?;
+    let interrupted = Failure::Interrupted { still: plan.still };
+    let mut request = args.request();
+    let (full_width, full_height) = request.full_size(&still).map_err(fail)?;
+    if let Some((i, n)) = a.tile {
+        request.region = Some(tiles::band(i, n, full_width, full_height).map_err(usage)?);
+    }
+    let region = request.region_in(&still).map_err(fail)?;
+    let job = FrameJob {
+        source,
+        options,
+        request,
+        turntable: a.turntable,
+        count: plan.count,
+    };
     let renderer = Renderer::new(args.threads.map_or(0, |t| t as usize)).map_err(fail)?;
-
+    let range = plan.range;
+    let pixels_per_frame = region.pixel_count();
+    let template = if plan.still {
+        "kardia: rendering {wide_bar} {percent:>3}% {elapsed}, eta {eta}"
+    } else {
+        "kardia: {msg} {wide_bar} {percent:>3}% {elapsed}, eta {eta}"
+    };
     let progress = Progress::new(
         args.quiet,
-        region.pixel_count(),
+        pixels_per_frame * u64::from(range.len()),
         args.progress_every,
-        "kardia: rendering {wide_bar} {percent:>3}% {elapsed}, eta {eta}",
+        template,
     );
-    let control = Control::new(interrupt.clone(), |p| progress.inc(p.finished));
-    let mut file = AtomicFile::create(&args.output).map_err(fail)?;
-    let rendered = render_into(
-        &renderer, &scene, &request, &control, format, tag, &mut file,
-    );
-    progress.finish();
-    let rendered = rendered.map_err(|e| match e {
-        Failure::Reported if interrupt.is_cancelled() => Failure::Interrupted,
-        other => other,
-    })?;
-    if interrupt.is_cancelled() {
-        return Err(Failure::Interrupted); // `file` is dropped: its temporary file goes
-    }
-    file.commit().map_err(fail)?;
-    if !args.quiet {
-        let stats = rendered.stats;
-        // A still of the whole image: `--region` renders through `animate` (part metadata).
-        let size = format!("{}×{}", rendered.full_width, rendered.full_height);
-        let mut view = match args.view {
-            View::Shaded => String::new(),
-            other => format!(", {other} view"),
-        };
-        if args.alpha {
-            view.push_str(", transparent background");
+    let on_frame = |event: FrameEvent| match event {
+        FrameEvent::Rendering(frame) if !plan.still => {
+            progress.set_message(frame_message(frame, range))
         }
-        eprintln!(
-            "kardia: {size}{view}, {} spp, {} thread{}, {:.2} s, {} rays, {} → {}",
-            request.spp,
-            stats.threads,
-            if stats.threads == 1 { "" } else { "s" },
-            stats.elapsed.as_secs_f64(),
-            stats.rays,
-            rate(stats.rays_per_second()),
-            args.output.display()
-        );
-        if let Some(legend) = args.view.legend() {
-            eprint!("{}", legend_text(args.view, &legend));
+        FrameEvent::Rendering(_) => {}
+        FrameEvent::Skipped(frame) => {
+            progress.set_message(frame_message(frame, range));
+            progress.inc(pixels_per_frame);
+        }
+    };
+    let control = Control::new(interrupt.clone(), |p| progress.inc(p.finished));
+    let started = std::time::Instant::now();
+    let outcome = match (animated, format) {
+        (Some(kind), _) => animation::render_animated_file(
+            &job,
+            &renderer,
+            &control,
+            range,
+            kind,
+            &args.output,
+            declared.fps,
+            region,
+            a.resume,
+            &on_frame,
+        ),
+        (None, Some(format)) => animation::render_frames_to_files(
+            &job,
+            &renderer,
+            &control,
+            range,
+            format,
+            &args.output,
+            a.resume,
+            Some(&still),
+            &on_frame,
+        ),
+        (None, None) => unreachable!("a still output's format is checked above"),
+    };
+    progress.finish();
+    let done = match outcome {
+        Ok(done) => done,
+        Err(FrameError::Render(RenderError::Cancelled)) => return Err(interrupted),
+        Err(_) if interrupt.is_cancelled() => return Err(interrupted),
+        Err(e) => return Err(fail(e)),
+    };
+    if interrupt.is_cancelled() {
+        return Err(interrupted);
+    }
+    if args.quiet {
+        return Ok(());
+    }
+    match done.last {
+        Some(summary) if plan.still => print_still_summary(args, &summary),
+        _ => {
+            let skipped = if done.skipped > 0 {
+                format!(" ({} already complete, skipped)", done.skipped)
+            } else {
+                String::new()
+            };
+            eprintln!(
+                "kardia: {} frame{} of {}×{}{}, {} spp, {} thread{}, {:.2} s{skipped} → {}",
+                done.rendered,
+                if done.rendered == 1 { "" } else { "s" },
+                region.width,
+                region.height,
+                if a.tile.is_some() || args.region.is_some() {
+                    format!(
+                        " at ({}, {}) of {full_width}×{full_height}",
+                        region.x, region.y
+                    )
+                } else {
+                    String::new()
+                },
+                args.spp,
+                renderer.threads(),
+                if renderer.threads() == 1 { "" } else { "s" },
+                started.elapsed().as_secs_f64(),
+                args.output.display()
+            );
         }
     }
     Ok(())
+}
+
+/// The summary of a plain still: its size, view, samples, threads, time, rays and file, then
+/// a study view's legend.
+fn print_still_summary(args: &RenderArgs, rendered: &RenderSummary) {
+    let stats = &rendered.stats;
+    let size = format!("{}×{}", rendered.full_width, rendered.full_height);
+    let mut view = match args.view {
+        View::Shaded => String::new(),
+        other => format!(", {other} view"),
+    };
+    if args.alpha {
+        view.push_str(", transparent background");
+    }
+    eprintln!(
+        "kardia: {size}{view}, {} spp, {} thread{}, {:.2} s, {} rays, {} → {}",
+        args.spp,
+        stats.threads,
+        if stats.threads == 1 { "" } else { "s" },
+        stats.elapsed.as_secs_f64(),
+        stats.rays,
+        rate(stats.rays_per_second()),
+        args.output.display()
+    );
+    if let Some(legend) = args.view.legend() {
+        eprint!("{}", legend_text(args.view, &legend));
+    }
 }
 
 /// A view's legend as lines of text: the title, then each colour (`#rrggbb`) and its meaning.
@@ -318,53 +428,6 @@ fn legend_text(view: View, legend: &crate::integrator::Legend) -> String {
         out += &format!("  ({})\n", legend.note);
     }
     out
-}
-
-/// Renders `request` and encodes it in `format` into `file` (PNG rows are compressed while
-/// the rest of the image renders).
-fn render_into(
-    renderer: &Renderer,
-    scene: &Scene,
-    request: &RenderRequest,
-    control: &Control,
-    format: ImageFormat,
-    tag: Option<FileTag>,
-    file: &mut AtomicFile,
-) -> Result<RenderSummary, Failure> {
-    if format == ImageFormat::Png {
-        let region = request.region_in(scene).map_err(fail)?;
-        let (rendered, written) = film::encode_png_streaming_tagged(
-            file,
-            region.width,
-            region.height,
-            request.alpha,
-            tag,
-            |sink| {
-                renderer.render_streamed(scene, request, control, &|row, rows, alpha| {
-                    sink.rows(row, rows, alpha)
-                })
-            },
-        );
-        // A cancelled render leaves the PNG unfinished: say so, not what the encoder saw.
-        let rendered = rendered.map_err(render_failure)?;
-        written.map_err(fail)?;
-        Ok(rendered)
-    } else {
-        let rendered = renderer
-            .render(scene, request, control)
-            .map_err(render_failure)?;
-        film::encode_tagged(&rendered.image, format, tag, file).map_err(fail)?;
-        Ok(rendered.summary())
-    }
-}
-
-/// A render error as a failure of `kardia render`.
-fn render_failure(err: RenderError) -> Failure {
-    if err == RenderError::Cancelled {
-        Failure::Interrupted
-    } else {
-        fail(err)
-    }
 }
 
 #[cfg(test)]

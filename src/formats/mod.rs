@@ -8,7 +8,7 @@ pub mod pic;
 
 use std::path::Path;
 
-use crate::scene::{self, LoadOptions, Scene, SceneError};
+use crate::scene::{self, Animation, LoadOptions, Scene, SceneError};
 
 /// The kinds of file kardia reads, by extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -59,12 +59,15 @@ pub struct Translation {
     pub warnings: Vec<Warning>,
 }
 
-/// What [`load`] read: the scene, its text (translated when the file is foreign) and the
-/// reader's warnings.
+/// What [`load`] read: the scene, its text (translated when the file is foreign), what it
+/// says of its animation and the reader's warnings.
 #[derive(Debug)]
 pub struct Loaded {
-    /// The scene, ready to render.
+    /// The scene as a still (frame 0 of 1), ready to render.
     pub scene: Scene,
+    /// Its `FRAMES`, `FPS` and whether anything depends on the time (the translated text's,
+    /// for a foreign file).
+    pub animation: Animation,
     /// kardia's scene text for it (the file itself for a scene file).
     pub text: String,
     /// The reader's warnings (none for a scene file).
@@ -85,9 +88,11 @@ pub fn translate(format: Format, text: &str, file: &str) -> Result<Translation, 
     }
 }
 
-/// Reads the file at `path` of any supported kind (by [`Format::of_path`]) into a scene. An
-/// error in the translated scene (an equation kardia cannot read, say) is reported at the
-/// source file's line it came from, with the translated line quoted.
+/// Reads the file at `path` of any supported kind (by [`Format::of_path`]) into a scene (read
+/// as a still, whatever `options.time` says). An error in the translated scene (an equation
+/// kardia cannot read, say) is reported at the source file's line it came from, with the
+/// translated line quoted. Whatever reads the scene again (at other frames) must read
+/// [`Loaded::text`], never the file: a foreign file is not scene text.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Loaded, SceneError> {
     let source = std::fs::read_to_string(path).map_err(|e| SceneError::Unreadable {
         path: path.display().to_string(),
@@ -95,18 +100,25 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Loaded, SceneError> {
     })?;
     let name = path.display().to_string();
     let format = Format::of_path(path);
-    let translation = translate(format, &source, &name)?;
+    let still = LoadOptions {
+        time: None,
+        ..*options
+    };
     if format == Format::Scene {
-        let scene = scene::parse(&source, &name, options)?;
+        let (scene, animation) = scene::parse_animated(&source, &name, &still)?;
         return Ok(Loaded {
             scene,
+            animation,
             text: source,
             warnings: Vec::new(),
         });
     }
-    let scene = parse_translation(&translation, &source, &name, options)?;
+    let translation = translate(format, &source, &name)?;
+    let (scene, animation) = scene::parse_animated(&translation.text, &name, &still)
+        .map_err(|e| at_source_line(e, &translation, &source, &name))?;
     Ok(Loaded {
         scene,
+        animation,
         text: translation.text,
         warnings: translation.warnings,
     })
@@ -119,18 +131,27 @@ pub fn parse_translation(
     file: &str,
     options: &LoadOptions,
 ) -> Result<Scene, SceneError> {
-    scene::parse(&translation.text, file, options).map_err(|e| {
-        let Some((line, _)) = e.location() else {
-            return e;
-        };
-        let generated = translation.text.lines().nth(line - 1).unwrap_or("");
-        let source_line = translation.source_lines.get(line - 1).copied().unwrap_or(0);
-        let message = format!(
-            "{} (in the kardia scene line it became: {generated})",
-            e.message()
-        );
-        at_line(source, file, source_line.max(1), message, "here")
-    })
+    scene::parse(&translation.text, file, options)
+        .map_err(|e| at_source_line(e, translation, source, file))
+}
+
+/// An error in a translation's scene text as an error at the source file's line it came from.
+fn at_source_line(
+    e: SceneError,
+    translation: &Translation,
+    source: &str,
+    file: &str,
+) -> SceneError {
+    let Some((line, _)) = e.location() else {
+        return e;
+    };
+    let generated = translation.text.lines().nth(line - 1).unwrap_or("");
+    let source_line = translation.source_lines.get(line - 1).copied().unwrap_or(0);
+    let message = format!(
+        "{} (in the kardia scene line it became: {generated})",
+        e.message()
+    );
+    at_line(source, file, source_line.max(1), message, "here")
 }
 
 /// An error spanning line `line` (1-based) of `source`.

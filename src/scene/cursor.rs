@@ -3,9 +3,10 @@
 
 use std::ops::Range;
 
-use super::expr::{self, Names};
+use super::expr::{self, Fail, LetFail, Line, Names};
 use super::lexer::{Token, TokenKind};
 use super::limits::{self, Limits};
+use super::words::shorten;
 use super::SceneError;
 use crate::geometry::DVec3;
 
@@ -62,46 +63,6 @@ pub(super) fn parse_number(s: &str) -> std::result::Result<f64, NumberError> {
         )),
         Err(_) => Err(NumberError::NotANumber),
     }
-}
-
-/// The first `max` characters of `s`, with `…` when cut.
-pub(super) fn shorten(s: &str, max: usize) -> String {
-    match s.char_indices().nth(max) {
-        Some((i, _)) => format!("{}…", &s[..i]),
-        None => s.to_string(),
-    }
-}
-
-/// Levenshtein distance between two short ASCII-case-folded strings.
-pub(super) fn edit_distance(a: &str, b: &str) -> usize {
-    let a: Vec<char> = a.to_lowercase().chars().collect();
-    let b: Vec<char> = b.to_lowercase().chars().collect();
-    let mut prev: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.iter().enumerate() {
-        let mut cur = vec![i + 1; b.len() + 1];
-        for (j, cb) in b.iter().enumerate() {
-            let sub = prev[j] + usize::from(ca != cb);
-            cur[j + 1] = sub.min(prev[j + 1] + 1).min(cur[j] + 1);
-        }
-        prev = cur;
-    }
-    prev[b.len()]
-}
-
-/// The candidate closest to `word`, if it is close enough to be a likely typo.
-pub(super) fn suggest<'k>(
-    word: &str,
-    candidates: impl IntoIterator<Item = &'k str>,
-) -> Option<&'k str> {
-    if word.chars().count() > 40 {
-        return None;
-    }
-    candidates
-        .into_iter()
-        .map(|c| (edit_distance(word, c), c))
-        .filter(|&(d, c)| d <= 2 && d < c.len().max(2))
-        .min_by_key(|&(d, _)| d)
-        .map(|(_, c)| c)
 }
 
 /// One line being parsed.
@@ -254,7 +215,7 @@ impl<'a> Cursor<'a> {
         };
         let s = self.text(&t);
         match parse_number(s) {
-            Ok(x) if !expr::continues(self) => {
+            Ok(x) if !expr::continues(&self.line()) => {
                 self.pos += 1;
                 return Ok((x, t.span));
             }
@@ -270,9 +231,73 @@ impl<'a> Cursor<'a> {
             }
             _ => {}
         }
-        match expr::read(self, what)? {
-            Some(value) => Ok(value),
-            None => Err(self.unexpected(&format!("{what} (a number)"))),
+        let (read, uses_time) = expr::read(&self.line());
+        self.uses_time |= uses_time;
+        match read {
+            Ok(Some(read)) => {
+                self.pos = read.next_token;
+                Ok((read.value, read.span))
+            }
+            Ok(None) => Err(self.unexpected(&format!("{what} (a number)"))),
+            Err(fail) => Err(self.expression_error(what, fail)),
+        }
+    }
+
+    /// The rest of the line as an expression reads it.
+    fn line(&self) -> Line<'_> {
+        Line {
+            text: self.src.text,
+            tokens: &self.tokens,
+            pos: self.pos,
+            names: self.names,
+        }
+    }
+
+    /// The error for an expression read as `what` that failed.
+    fn expression_error(&self, what: &str, fail: Fail) -> SceneError {
+        match fail {
+            Fail::NotAnExpression => self.unexpected(&format!("{what} (a number)")),
+            Fail::Syntax {
+                span,
+                message,
+                label,
+                help,
+            } => {
+                let message = format!("in {what}: {message}");
+                match help {
+                    Some(h) => self.fail_help(span, message, label, h),
+                    None => self.fail(span, message, label),
+                }
+            }
+            Fail::Value { span, message } => self.fail(
+                span,
+                format!("{what} cannot be computed: {message}"),
+                "here",
+            ),
+        }
+    }
+
+    /// A `LET name = expression` statement after its keyword, to the end of the line: the
+    /// name, its value, whether the value depends on the time, and the span of the name.
+    pub(super) fn let_definition(&mut self) -> Result<(String, f64, bool, Span)> {
+        let (read, uses_time) = expr::read_let(&self.line());
+        self.uses_time |= uses_time;
+        match read {
+            Ok(d) => {
+                self.pos = d.next_token;
+                self.end()?;
+                Ok((d.name, d.value, d.uses_time, d.name_span))
+            }
+            Err(LetFail::Expected { what, at }) => {
+                self.pos = at;
+                Err(self.unexpected(&what))
+            }
+            Err(LetFail::At {
+                span,
+                message,
+                label,
+            }) => Err(self.fail(span, message, label)),
+            Err(LetFail::Expression { what, fail }) => Err(self.expression_error(&what, fail)),
         }
     }
 
@@ -473,12 +498,5 @@ mod tests {
         for s in ["abc", "1.2.3", "0x10", "", "1e"] {
             assert_eq!(parse_number(s), Err(NumberError::NotANumber), "{s}");
         }
-    }
-
-    #[test]
-    fn suggestions_catch_typos_only() {
-        assert_eq!(suggest("SPHER", ["SPHERE", "PLANE"]), Some("SPHERE"));
-        assert_eq!(suggest("elipsoid", ["ELLIPSOID", "BOX"]), Some("ELLIPSOID"));
-        assert_eq!(suggest("TEAPOT", ["SPHERE", "PLANE"]), None);
     }
 }

@@ -19,9 +19,8 @@
 use std::collections::HashMap;
 use std::ops::Range;
 
-use super::cursor::{shorten, suggest, Cursor};
-use super::lexer::TokenKind;
-use super::SceneError;
+use super::lexer::{Token, TokenKind};
+use super::words::{shorten, suggest};
 
 type Span = Range<usize>;
 
@@ -182,14 +181,28 @@ struct Piece {
     space_after: bool,
 }
 
-/// The pieces of the cursor's tokens from `cur.pos` up to the first string, or to the first
+/// The rest of one line from a token on, and the names in scope: what an expression is read
+/// from (the statement reader hands over its position).
+#[derive(Clone, Copy)]
+pub(super) struct Line<'a> {
+    /// The whole scene text (the tokens' spans index it).
+    pub(super) text: &'a str,
+    /// The line's tokens.
+    pub(super) tokens: &'a [Token],
+    /// The token the expression starts at.
+    pub(super) pos: usize,
+    /// The names expressions can use.
+    pub(super) names: &'a Names,
+}
+
+/// The pieces of the line's tokens from `line.pos` up to the first string, or to the first
 /// comma or unmatched `)` outside parentheses.
-fn pieces(cur: &Cursor) -> Vec<Piece> {
-    let text = cur.src.text;
+fn pieces(line: &Line) -> Vec<Piece> {
+    let text = line.text;
     let is_space = |c: Option<char>| c.is_none_or(char::is_whitespace);
     let mut out = Vec::new();
     let mut depth = 0usize;
-    for (index, t) in cur.tokens.iter().enumerate().skip(cur.pos) {
+    for (index, t) in line.tokens.iter().enumerate().skip(line.pos) {
         let mut push = |tk, span: Span, last| {
             out.push(Piece {
                 tk,
@@ -281,7 +294,7 @@ fn split_word(text: &str, word: Span) -> Vec<(Tk, Span)> {
 }
 
 /// Why an expression could not be read.
-enum Fail {
+pub(super) enum Fail {
     /// Not written as an expression: the caller reports what it expected instead.
     NotAnExpression,
     /// A mistake in how the expression is written.
@@ -623,18 +636,18 @@ impl Reader<'_> {
     }
 }
 
-/// True when the word at the cursor, a number as written, is followed by an operator that
+/// True when the word at `line.pos`, a number as written, is followed by an operator that
 /// continues it into an expression (so it cannot be read as a lone number). Looks at the
 /// next token only.
-pub(super) fn continues(cur: &Cursor) -> bool {
-    let Some(next) = cur
+pub(super) fn continues(line: &Line) -> bool {
+    let Some(next) = line
         .tokens
-        .get(cur.pos + 1)
+        .get(line.pos + 1)
         .filter(|t| t.kind == TokenKind::Word)
     else {
         return false;
     };
-    let text = cur.src.text;
+    let text = line.text;
     let Some((tk, span)) = split_word(text, next.span.clone()).into_iter().next() else {
         return false;
     };
@@ -649,13 +662,24 @@ pub(super) fn continues(cur: &Cursor) -> bool {
     }
 }
 
-/// Reads the expression at the cursor as `what` (for messages) and moves past it. Returns
-/// `Ok(None)` when the cursor is not at an expression (the caller reports what it expected).
-pub(super) fn read(cur: &mut Cursor, what: &str) -> Result<Option<Value>, SceneError> {
+/// An expression read: its value, its span and the index of the token after it.
+pub(super) struct Read {
+    /// The value (finite).
+    pub(super) value: f64,
+    /// Where it is written.
+    pub(super) span: Span,
+    /// The token after it.
+    pub(super) next_token: usize,
+}
+
+/// Reads the expression at `line.pos` in a list of values. `Ok(None)` when the line is not at
+/// an expression (the caller reports what it expected); with it, whether what was read
+/// depended on the time (so that an error can name the frame).
+pub(super) fn read(line: &Line) -> (Result<Option<Read>, Fail>, bool) {
     let mut reader = Reader {
-        text: cur.src.text,
-        names: cur.names,
-        pieces: pieces(cur),
+        text: line.text,
+        names: line.names,
+        pieces: pieces(line),
         at: 0,
         parens: 0,
         depth: 0,
@@ -663,19 +687,19 @@ pub(super) fn read(cur: &mut Cursor, what: &str) -> Result<Option<Value>, SceneE
         uses_time: false,
     };
     if !looks_like_expression(&reader) {
-        return Ok(None);
+        return (Ok(None), false);
     }
     match finish(&mut reader) {
-        Ok((x, span, next_token)) => {
-            cur.uses_time |= reader.uses_time;
-            cur.pos = next_token;
-            Ok(Some((x, span)))
-        }
-        Err(Fail::NotAnExpression) => Ok(None),
-        Err(fail) => {
-            cur.uses_time |= reader.uses_time;
-            Err(report(cur, what, fail))
-        }
+        Ok((value, span, next_token)) => (
+            Ok(Some(Read {
+                value,
+                span,
+                next_token,
+            })),
+            reader.uses_time,
+        ),
+        Err(Fail::NotAnExpression) => (Ok(None), false),
+        Err(fail) => (Err(fail), reader.uses_time),
     }
 }
 
@@ -743,93 +767,95 @@ fn finish(reader: &mut Reader) -> Result<(f64, Span, usize), Fail> {
     Ok((x, span, last.token + 1))
 }
 
-fn report(cur: &Cursor, what: &str, fail: Fail) -> SceneError {
-    match fail {
-        Fail::NotAnExpression => cur.unexpected(&format!("{what} (a number)")),
-        Fail::Syntax {
-            span,
-            message,
-            label,
-            help,
-        } => {
-            let message = format!("in {what}: {message}");
-            match help {
-                Some(h) => cur.fail_help(span, message, label, h),
-                None => cur.fail(span, message, label),
-            }
-        }
-        Fail::Value { span, message } => cur.fail(
-            span,
-            format!("{what} cannot be computed: {message}"),
-            "here",
-        ),
-    }
+/// A `LET` definition read: the name and where it is written, its value, whether the value
+/// depends on the time, and the token after the expression.
+pub(super) struct LetDefinition {
+    pub(super) name: String,
+    pub(super) name_span: Span,
+    pub(super) value: f64,
+    pub(super) uses_time: bool,
+    pub(super) next_token: usize,
 }
 
-/// A `LET name = expression` statement after its keyword: the name, its value, whether the
-/// value depends on the time, and the span of the name.
-pub(super) fn let_statement(cur: &mut Cursor) -> Result<(String, f64, bool, Span), SceneError> {
-    let ps = pieces(cur);
-    let Some(name_piece) = ps.first().filter(|p| p.tk == Tk::Name) else {
-        return Err(cur.unexpected("a name (letters, digits and `_`, starting with a letter)"));
+/// Why a `LET` could not be read.
+pub(super) enum LetFail {
+    /// Something else than `what` at token `at` ("expected …, found …").
+    Expected { what: String, at: usize },
+    /// A mistake at `span`.
+    At {
+        span: Span,
+        message: String,
+        label: String,
+    },
+    /// The value, read as `what`, failed.
+    Expression { what: String, fail: Fail },
+}
+
+/// Reads `name = expression` from `line.pos` (after the `LET` keyword); with it, whether the
+/// value's expression depended on the time.
+pub(super) fn read_let(line: &Line) -> (Result<LetDefinition, LetFail>, bool) {
+    let ps = pieces(line);
+    let at = |span: Span, message: String, label: &str| {
+        Err(LetFail::At {
+            span,
+            message,
+            label: label.into(),
+        })
     };
-    let name = cur.src.text[name_piece.span.clone()].to_string();
+    let Some(name_piece) = ps.first().filter(|p| p.tk == Tk::Name) else {
+        let what = "a name (letters, digits and `_`, starting with a letter)".into();
+        let fail = LetFail::Expected { what, at: line.pos };
+        return (Err(fail), false);
+    };
+    let name = line.text[name_piece.span.clone()].to_string();
     let name_span = name_piece.span.clone();
     if !name_piece.last && ps.get(1).is_some_and(|p| p.tk != Tk::Equals) {
         let p = &ps[1];
-        return Err(cur.fail(
-            name_span.start..p.span.end,
-            format!(
-                "`{}` is not a valid name: names contain only letters, digits and `_`",
-                shorten(cur.text(&cur.tokens[name_piece.token]), 30)
-            ),
-            "invalid name",
-        ));
+        let word = &line.text[line.tokens[name_piece.token].span.clone()];
+        let message = format!(
+            "`{}` is not a valid name: names contain only letters, digits and `_`",
+            shorten(word, 30)
+        );
+        return (
+            at(name_span.start..p.span.end, message, "invalid name"),
+            false,
+        );
     }
     if is_reserved(&name) {
-        return Err(cur.fail(
-            name_span,
-            format!(
-                "`{name}` is a built-in name and cannot be defined by LET{}",
-                if name.eq_ignore_ascii_case("pi") {
-                    " (it is already π: remove this line)"
-                } else {
-                    ""
-                }
-            ),
-            "reserved name",
-        ));
+        let message = format!(
+            "`{name}` is a built-in name and cannot be defined by LET{}",
+            if name.eq_ignore_ascii_case("pi") {
+                " (it is already π: remove this line)"
+            } else {
+                ""
+            }
+        );
+        return (at(name_span, message, "reserved name"), false);
     }
-    if let Some(d) = cur.names.lets.get(&name) {
-        return Err(cur.fail(
-            name_span,
-            format!("`{name}` is already defined on line {}", d.line),
-            "defined twice",
-        ));
+    if let Some(d) = line.names.lets.get(&name) {
+        let message = format!("`{name}` is already defined on line {}", d.line);
+        return (at(name_span, message, "defined twice"), false);
     }
     match ps.get(1) {
         Some(p) if p.tk == Tk::Equals => {}
         Some(p) => {
-            return Err(cur.fail(
-                p.span.clone(),
-                format!(
-                    "expected `=` after the name, found `{}`",
-                    shorten(&cur.src.text[p.span.clone()], 30)
-                ),
-                "expected `=`",
-            ))
+            let message = format!(
+                "expected `=` after the name, found `{}`",
+                shorten(&line.text[p.span.clone()], 30)
+            );
+            return (at(p.span.clone(), message, "expected `=`"), false);
         }
         None => {
-            return Err(cur.fail(
-                name_span.end..name_span.end,
-                "expected `=` after the name, found end of line",
-                "expected `=`",
-            ))
+            let message = "expected `=` after the name, found end of line".into();
+            return (
+                at(name_span.end..name_span.end, message, "expected `=`"),
+                false,
+            );
         }
     }
     let mut reader = Reader {
-        text: cur.src.text,
-        names: cur.names,
+        text: line.text,
+        names: line.names,
         pieces: ps[2..].to_vec(),
         at: 0,
         parens: 0,
@@ -838,20 +864,21 @@ pub(super) fn let_statement(cur: &mut Cursor) -> Result<(String, f64, bool, Span
         uses_time: false,
     };
     let what = format!("the value of {name}");
-    let result = finish(&mut reader);
-    cur.uses_time |= reader.uses_time;
-    match result {
-        Ok((x, _, next)) => {
-            cur.pos = next;
-            cur.end()?;
-            Ok((name, x, reader.uses_time, name_span))
-        }
-        Err(Fail::NotAnExpression) => {
-            cur.pos = ps.get(2).map_or(cur.tokens.len(), |p| p.token);
-            Err(cur.unexpected(&format!("{what} (an expression)")))
-        }
-        Err(fail) => Err(report(cur, &what, fail)),
-    }
+    let result = match finish(&mut reader) {
+        Ok((value, _, next_token)) => Ok(LetDefinition {
+            name,
+            name_span,
+            value,
+            uses_time: reader.uses_time,
+            next_token,
+        }),
+        Err(Fail::NotAnExpression) => Err(LetFail::Expected {
+            what: format!("{what} (an expression)"),
+            at: ps.get(2).map_or(line.tokens.len(), |p| p.token),
+        }),
+        Err(fail) => Err(LetFail::Expression { what, fail }),
+    };
+    (result, reader.uses_time)
 }
 
 /// Records a `LET` definition read on `line`.
@@ -869,22 +896,13 @@ pub(super) fn define(names: &mut Names, name: String, value: f64, uses_time: boo
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::cursor::Source;
     use crate::scene::lexer::lex_line;
 
-    /// A cursor over `text` as one whole line, reading names from `names`.
-    fn cursor_over<'a>(text: &'a str, names: &'a Names) -> Cursor<'a> {
-        Cursor {
-            src: Source { text, name: "t" },
-            tokens: lex_line(text, 0, text.len()).unwrap(),
-            pos: 0,
-            line: 1,
-            next_line: text.len(),
-            keyword: "",
-            usage: "",
-            part_usage: None,
-            names,
-            uses_time: false,
+    /// A failure's message, as the statement reader would start it.
+    fn message(fail: Fail) -> String {
+        match fail {
+            Fail::NotAnExpression => "not an expression".into(),
+            Fail::Syntax { message, .. } | Fail::Value { message, .. } => message,
         }
     }
 
@@ -894,12 +912,18 @@ mod tests {
         for (n, v) in lets {
             define(&mut names, n.to_string(), *v, false, 1);
         }
-        let mut cur = cursor_over(text, &names);
-        match read(&mut cur, "the value") {
-            Ok(Some((x, _))) if cur.pos == cur.tokens.len() => Ok(x),
-            Ok(Some(_)) => Err(format!("stopped at token {}", cur.pos)),
+        let tokens = lex_line(text, 0, text.len()).unwrap();
+        let line = Line {
+            text,
+            tokens: &tokens,
+            pos: 0,
+            names: &names,
+        };
+        match read(&line).0 {
+            Ok(Some(r)) if r.next_token == tokens.len() => Ok(r.value),
+            Ok(Some(r)) => Err(format!("stopped at token {}", r.next_token)),
             Ok(None) => Err("not an expression".into()),
-            Err(e) => Err(e.message()),
+            Err(fail) => Err(message(fail)),
         }
     }
 
@@ -1004,11 +1028,20 @@ mod tests {
     fn a_sign_after_a_space_starts_the_next_value() {
         let text = "1 -2 3-1 4 - 1 (5)";
         let names = Names::new(None);
-        let mut cur = cursor_over(text, &names);
+        let tokens = lex_line(text, 0, text.len()).unwrap();
+        let mut line = Line {
+            text,
+            tokens: &tokens,
+            pos: 0,
+            names: &names,
+        };
         let mut values = Vec::new();
-        while cur.pos < cur.tokens.len() {
-            match read(&mut cur, "v").unwrap() {
-                Some((x, _)) => values.push(x),
+        while line.pos < tokens.len() {
+            match read(&line).0.ok().flatten() {
+                Some(r) => {
+                    values.push(r.value);
+                    line.pos = r.next_token;
+                }
                 None => break,
             }
         }

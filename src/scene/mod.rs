@@ -10,6 +10,7 @@ pub mod limits;
 mod parser;
 pub mod repeat;
 mod surface;
+mod words;
 
 pub use error::{InvalidScene, SceneError};
 pub use expr::FrameTime;

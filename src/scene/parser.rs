@@ -5,13 +5,14 @@
 
 use std::ops::Range;
 
-use super::cursor::{parse_number, shorten, suggest, Cursor, NumberError, Source, VecArg};
+use super::cursor::{parse_number, Cursor, NumberError, Source, VecArg};
 use super::error::{ceil_boundary, floor_boundary};
-use super::expr::{self, Names};
+use super::expr::Names;
 use super::lexer::{Token, TokenKind};
 use super::limits::{self, Limits};
 use super::repeat::{self, Header};
 use super::surface::{end_after_surface, is_reserved, property, surface, Materials};
+use super::words::{shorten, suggest};
 use super::{Animation, LoadOptions, Object, ObjectIndex, Scene, SceneError};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::{DVec3, Frame, FrameError};
@@ -314,7 +315,7 @@ impl Builder {
 
     /// `LET name = expression`: the definition is recorded once the line is read.
     fn let_statement(&mut self, cur: &mut Cursor) -> Result<()> {
-        let (name, value, uses_time, _) = expr::let_statement(cur)?;
+        let (name, value, uses_time, _) = cur.let_definition()?;
         self.defined = Some((name, value, uses_time));
         Ok(())
     }

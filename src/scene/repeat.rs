@@ -8,10 +8,11 @@
 
 use std::ops::Range;
 
-use super::cursor::{shorten, Cursor, Source};
+use super::cursor::{Cursor, Source};
 use super::expr::{self, Names};
 use super::lexer::{lex_line, LexError, Token, TokenKind};
 use super::parser::Builder;
+use super::words::shorten;
 use super::SceneError;
 
 type Result<T> = std::result::Result<T, SceneError>;

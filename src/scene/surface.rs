@@ -3,9 +3,10 @@
 
 use std::collections::HashMap;
 
-use super::cursor::{parse_number, shorten, suggest, Cursor, NumberError};
+use super::cursor::{parse_number, Cursor, NumberError};
 use super::lexer::{lex_line, Token, TokenKind};
 use super::limits;
+use super::words::{shorten, suggest};
 use super::SceneError;
 use crate::materials::Material;
 

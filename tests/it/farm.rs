@@ -105,8 +105,16 @@ fn the_kubernetes_manifest_is_an_indexed_job_over_frames() {
     use yaml_rust2::YamlLoader;
     let text = std::fs::read_to_string(recipe("k8s-indexed-job.yaml")).unwrap();
     let docs = YamlLoader::load_from_str(&text).expect("valid YAML");
-    assert_eq!(docs.len(), 1);
-    let job = &docs[0];
+    let job = docs
+        .iter()
+        .find(|d| d["kind"].as_str() == Some("Job"))
+        .expect("a Job");
+    let claim = docs
+        .iter()
+        .find(|d| d["kind"].as_str() == Some("PersistentVolumeClaim"))
+        .expect("the shared volume's claim");
+    let modes = claim["spec"]["accessModes"].as_vec().unwrap();
+    assert!(modes.iter().any(|m| m.as_str() == Some("ReadWriteMany")));
     assert_eq!(job["apiVersion"].as_str(), Some("batch/v1"));
     assert_eq!(job["kind"].as_str(), Some("Job"));
     let spec = &job["spec"];
@@ -133,9 +141,24 @@ fn the_kubernetes_manifest_is_an_indexed_job_over_frames() {
     let line = command.join(" ");
     assert!(line.contains("kardia render"), "{line}");
     assert!(line.contains("--frame \"$JOB_COMPLETION_INDEX\""), "{line}");
-    assert!(line.contains("-o /shared/out/frame_####.png"), "{line}");
+    assert!(line.contains("mkdir -p \"$OUT\""), "a fresh volume: {line}");
+    assert!(line.contains("-o \"$OUT/frame_####.png\""), "{line}");
+    let env = container["env"].as_vec().unwrap();
+    let out = env
+        .iter()
+        .find(|e| e["name"].as_str() == Some("OUT"))
+        .and_then(|e| e["value"].as_str())
+        .unwrap();
     let mount = container["volumeMounts"][0]["mountPath"].as_str().unwrap();
-    assert!(line.contains(mount), "the output is on the shared volume");
+    assert!(out.starts_with(mount), "the output is on the shared volume");
+    assert_eq!(
+        pod["volumes"][0]["persistentVolumeClaim"]["claimName"].as_str(),
+        claim["metadata"]["name"].as_str()
+    );
+    assert!(
+        text.contains("Kubernetes 1.29 or newer"),
+        "the minimum version is stated"
+    );
 }
 
 #[test]
@@ -384,44 +407,66 @@ fn the_slurm_join_names_the_missing_bands_and_how_to_rerun_them() {
             ],
         );
     }
-    let join = |out: &Path| {
-        Command::new("bash")
-            .arg(recipe("slurm-assemble.sbatch"))
-            .env("KARDIA", env!("CARGO_BIN_EXE_kardia"))
-            .env("SCENE", d.join("a.scene"))
-            .env("OUT", out)
-            .env("TILES", "4")
-            .env("IMAGE", "joined.png")
-            .output()
-            .unwrap()
-    };
-    let out = join(d);
+    let recipes = recipe("");
+    let out = Command::new("bash")
+        .arg(recipe("slurm-assemble.sbatch"))
+        .env("KARDIA", env!("CARGO_BIN_EXE_kardia"))
+        .env("KARDIA_ARGS", "--spp 1")
+        .env("SCENE", d.join("a.scene"))
+        .env("OUT", d)
+        .env("TILES", "4")
+        .env("IMAGE", "joined.png")
+        .env("RECIPES", &recipes)
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "{err}");
     assert!(err.contains("bands 1,3 of 4 are missing"), "{err}");
-    assert!(
-        err.contains("--array=1,3") && err.contains("--dependency=afterany:"),
-        "{err}"
-    );
     assert!(!d.join("joined.png").exists());
-    for i in [1, 3] {
-        ok(
-            d,
-            &[
-                "render",
-                "a.scene",
-                "--spp",
-                "1",
-                "--quiet",
-                "--tile",
-                &format!("{i}/4"),
-                "-o",
-                &format!("part_{i}.png"),
-            ],
-        );
-    }
-    let out = join(d);
-    assert!(out.status.success(), "{out:?}");
+    let lines: Vec<&str> = err.lines().collect();
+    let at = lines
+        .iter()
+        .position(|l| *l == "Re-run them and this join with:")
+        .expect("the recovery is printed");
+    let recovery = lines[at + 1].trim();
+    assert!(
+        recovery.contains("--array=1,3") && recovery.contains("--dependency=afterany:"),
+        "{recovery}"
+    );
+    // The printed line, run as it is in a fresh shell (nothing exported) with a stand-in for
+    // sbatch that runs each script at once (each array task in turn), renders the missing
+    // bands as the first ones were and joins them.
+    let bin = d.join("bin");
+    std::fs::create_dir(&bin).unwrap();
+    std::fs::write(
+        bin.join("sbatch"),
+        "#!/usr/bin/env bash\n\
+         chdir=. array=\n\
+         for a in \"$@\"; do case $a in --chdir=*) chdir=${a#--chdir=};; \
+         --array=*) array=${a#--array=};; esac; script=$a; done\n\
+         cd \"$chdir\" || exit 1\n\
+         if [ -n \"$array\" ]; then for i in ${array//,/ }; do \
+         SLURM_ARRAY_TASK_ID=$i bash \"$script\" >&2 || exit 1; done; \
+         else bash \"$script\" >&2 || exit 1; fi\n\
+         echo 42\n",
+    )
+    .unwrap();
+    let path = format!("{}:/usr/bin:/bin", bin.display());
+    let rerun = Command::new("bash")
+        .args([
+            "-c",
+            &format!("chmod +x {}/sbatch && {recovery}", bin.display()),
+        ])
+        .env_clear()
+        .env("PATH", path)
+        .current_dir(d)
+        .output()
+        .unwrap();
+    assert!(
+        rerun.status.success(),
+        "{recovery}\n{}",
+        String::from_utf8_lossy(&rerun.stderr)
+    );
     ok(
         d,
         &[
@@ -463,4 +508,73 @@ fn kardia_prints_the_frame_count_turntable_included() {
         );
     }
     assert_eq!(crate::cli_render::listing(d), ["a.scene", "still.scene"]);
+}
+
+/// When a frame fails, the frame rendering beside it finishes and is written whole, no new
+/// frame starts, and the recipe exits non-zero (GNU parallel's `--halt soon,fail=1`; with
+/// `--halt now` frame 2 would be killed half-way and missing).
+#[test]
+fn gnu_parallel_lets_running_frames_finish_when_one_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Frame 3 of 4 divides by zero (a scene error at that frame); the others render.
+    let scene = SCENE.replace(
+        "LET s = 0.8 + 0.2*clock",
+        "LET s = 0.8 + 0.2*clock\nLET fails_at_3 = 1/(frame - 3)",
+    );
+    std::fs::write(d.join("a.scene"), scene).unwrap();
+    let out = Command::new("bash")
+        .arg(recipe("parallel-frames.sh"))
+        .args([
+            "a.scene",
+            "farm",
+            "--width",
+            "240",
+            "--spp",
+            "16",
+            "--threads",
+            "1",
+        ])
+        .env("KARDIA", env!("CARGO_BIN_EXE_kardia"))
+        .env("PARALLEL_OPTS", "-j 2")
+        .current_dir(d)
+        .output()
+        .expect("bash runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success(),
+        "a failed frame fails the recipe: {err}"
+    );
+    assert!(
+        err.contains("the value of fails_at_3 cannot be computed"),
+        "{err}"
+    );
+    // Frames 2 and 3 ran together (two at a time); 3 failed at once and 2 still finished.
+    let made = crate::cli_render::listing(&d.join("farm"));
+    assert_eq!(
+        made,
+        ["frame_0000.png", "frame_0001.png", "frame_0002.png"],
+        "{err}"
+    );
+    ok(
+        d,
+        &[
+            "render",
+            "a.scene",
+            "--width",
+            "240",
+            "--spp",
+            "16",
+            "--frame",
+            "2",
+            "--quiet",
+            "-o",
+            "alone_####.png",
+        ],
+    );
+    assert!(
+        std::fs::read(d.join("farm/frame_0002.png")).unwrap()
+            == std::fs::read(d.join("alone_0002.png")).unwrap(),
+        "frame 2 was written whole"
+    );
 }

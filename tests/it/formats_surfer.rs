@@ -559,3 +559,70 @@ fn convert_writes_a_scene_that_renders_the_same_image() {
         "{err}"
     );
 }
+
+/// `--frames`, `--turntable`, `--tile` and `--region` read a foreign file through its
+/// translation, as a still does: each file equals the one its converted scene gives, byte for
+/// byte (render keys included), and the tiles join into the still.
+#[test]
+fn frames_turntables_and_tiles_of_a_foreign_file_render_its_translation() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (name, text) in [("plane.jsurf", JSURF), ("plane.pic", PIC)] {
+        std::fs::write(d.join(name), text).unwrap();
+        let scene = format!("{name}.scene");
+        let o = kardia(d, &["convert", name, "-o", &scene, "--quiet"]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let small = ["--width", "32", "--height", "32", "--spp", "1", "--quiet"];
+        let runs: [(&[&str], &[&str]); 4] = [
+            (
+                &["--turntable", "3", "--frames", "0..2"],
+                &["f_0.png", "f_1.png", "f_2.png"],
+            ),
+            (&["--tile", "0/2"], &["t_0.png"]),
+            (&["--tile", "1/2"], &["t_1.png"]),
+            (&["--region", "3,4,10,9"], &["r.png"]),
+        ];
+        for (options, files) in runs {
+            for (input, prefix) in [(name, "direct"), (scene.as_str(), "via")] {
+                let output = if files.len() > 1 {
+                    format!("{prefix}_f_#.png")
+                } else {
+                    format!("{prefix}_{}", files[0])
+                };
+                let args = [&["render", input, "-o", &output][..], options, &small[..]].concat();
+                let o = kardia(d, &args);
+                assert!(
+                    o.status.success(),
+                    "{args:?}: {}",
+                    String::from_utf8_lossy(&o.stderr)
+                );
+            }
+            for file in files {
+                let direct = std::fs::read(d.join(format!("direct_{file}"))).unwrap();
+                let via = std::fs::read(d.join(format!("via_{file}"))).unwrap();
+                assert!(direct == via, "{name} {options:?}: {file} differs");
+            }
+        }
+        let o = kardia(
+            d,
+            &[&["render", name, "-o", "still.png"][..], &small[..]].concat(),
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let o = kardia(
+            d,
+            &[
+                "assemble",
+                "direct_t_0.png",
+                "direct_t_1.png",
+                "-o",
+                "joined.png",
+            ],
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(
+            std::fs::read(d.join("joined.png")).unwrap()
+                == std::fs::read(d.join("still.png")).unwrap(),
+            "{name}: the tiles do not join into the still"
+        );
+    }
+}

@@ -10,6 +10,8 @@ mod cli_render;
 mod explore;
 mod explore_browser;
 mod farm;
+mod farm_k8s;
+mod farm_ssh;
 mod formats_surfer;
 mod fuzz_scenes;
 mod heart_geometry;
