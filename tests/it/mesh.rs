@@ -56,13 +56,7 @@ fn assert_guarantees(what: &str, solids: &[NamedSolid], kind: SolidKind, toleran
             continue;
         }
         assert!(d.measured, "{what} {kind:?}");
-        // Known gap (see docs/mesh.md): at Barth's nodes on a coarse grid (tolerance 0.05)
-        // 8 of 8 040 surface vertices have no root found within the tolerance on the lines
-        // searched, though placed on a root along their edge; at most 1 in 500 is allowed.
-        assert!(
-            d.vertices_beyond * 500 <= d.vertices,
-            "{what} {kind:?}: {d:?}"
-        );
+        assert_eq!(d.vertices_beyond, 0, "{what} {kind:?}: {d:?}");
         assert!(d.vertex <= part.tolerance, "{what} {kind:?}: {d:?}");
         assert!(d.hausdorff().is_finite(), "{what} {kind:?}: {d:?}");
         assert!(part.kinds.contains(&VertexKind::Surface), "{what}");
