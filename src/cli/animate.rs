@@ -98,7 +98,7 @@ pub fn run(args: &RenderArgs, interrupt: &CancelToken) -> i32 {
         Err(e) => return report(e),
     };
     if a.print_frame_count {
-        println!("{}", a.turntable.or(declared.frames).unwrap_or(1));
+        outln!("{}", a.turntable.or(declared.frames).unwrap_or(1));
         return 0;
     }
     let animated = AnimatedFormat::from_path(&args.output);

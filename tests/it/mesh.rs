@@ -327,3 +327,35 @@ fn admesh_trimesh_and_manifold3d_accept_the_files() {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+#[test]
+fn printing_to_a_closed_pipe_does_not_panic() {
+    // `kardia mesh … | head -0`: the reader is gone before the summary is printed; the file is
+    // still written and the command still succeeds. The same for `kardia roots`.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sphere.stl");
+    let mesh_args = [
+        "mesh",
+        "--equation",
+        "x^2 + y^2 + z^2 = 1",
+        "--tolerance",
+        "0.05",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let roots_args = ["roots", "--in", "-3,3", "--", "-1", "0", "1"];
+    for args in [&mesh_args[..], &roots_args[..]] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_kardia"))
+            .args(args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let o = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {stderr}");
+    }
+    assert!(out.metadata().unwrap().len() > 1000);
+}
