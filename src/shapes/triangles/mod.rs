@@ -278,7 +278,7 @@ fn barycentric(p: DVec3, [a, b, c]: [DVec3; 3]) -> [f64; 3] {
     let (d00, d01, d11) = (e0.dot(e0), e0.dot(e1), e1.dot(e1));
     let (d20, d21) = (e2.dot(e0), e2.dot(e1));
     let denom = d00 * d11 - d01 * d01;
-    if !(denom > 0.0) {
+    if denom.is_nan() || denom <= 0.0 {
         return [1.0 / 3.0; 3];
     }
     let v = (d11 * d20 - d01 * d21) / denom;
