@@ -63,7 +63,7 @@ pub fn run(args: ExploreArgs, interrupt: &CancelToken) -> i32 {
         }
     };
     let ready = |url: &str| {
-        println!("kardia explore: {url}  (Ctrl-C stops)");
+        outln!("kardia explore: {url}  (Ctrl-C stops)");
         if open {
             open_browser(url);
         }

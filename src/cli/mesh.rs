@@ -142,7 +142,7 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
     };
     write_file(&printable.mesh, &meta, format, &args.output).map_err(|e| e.to_string())?;
     let v = printable.verified;
-    println!(
+    outln!(
         "kardia mesh: wrote {} ({} triangles, {} vertices, {} component{}, volume {:.6}{})",
         args.output.display(),
         v.triangles,
@@ -152,7 +152,7 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
         v.volume,
         if args.size.is_some() { " mm³" } else { "" },
     );
-    println!(
+    outln!(
         "  checked: closed (every edge in two triangles), one fan per vertex, outward \
          (positive volume), no zero-area triangles, no self-intersections; Euler \
          characteristic {}",
@@ -160,7 +160,7 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
     );
     for (s, part) in solids.iter().zip(&printable.parts) {
         let d = &part.deviation;
-        println!(
+        outln!(
             "  {}: tolerance {:.3e}, grid {}³ (step {:.3e} in object units)",
             s.name,
             part.tolerance,
@@ -168,7 +168,7 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
             part.grid.step()
         );
         if d.measured {
-            println!(
+            outln!(
                 "    deviation (scene units, by the root finder): surface vertices ≤ {:.2e} \
                  ({} measured, {} beyond the tolerance, {} at a node: f zero to rounding); Hausdorff estimate {:.2e} \
                  (mesh→surface {:.2e}, surface→mesh {:.2e} from {} surface samples{})",
@@ -187,20 +187,20 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
                 }
             );
         } else {
-            println!("    deviation not measured (the shell's polynomial is above degree 16)");
+            outln!("    deviation not measured (the shell's polynomial is above degree 16)");
         }
     }
-    println!(
+    outln!(
         "  singular points (nodes, pinches) are decided by the grid's labels: each is opened \
          or closed within one grid step, never left non-manifold"
     );
     if printable.scale != 1.0 {
-        println!(
+        outln!(
             "  scaled by {:.6} to {} mm (box from the origin; deviations above are before scaling)",
             printable.scale,
             args.size.unwrap_or(0.0)
         );
     }
-    println!("  time {:.2} s", started.elapsed().as_secs_f64());
+    outln!("  time {:.2} s", started.elapsed().as_secs_f64());
     Ok(())
 }

@@ -2,6 +2,16 @@
 //! (rendering by [`crate::pipeline`]). Each subcommand lives in its own file with its
 //! arguments and its `run`.
 
+/// `println!` to standard output that never panics: when the reader has gone
+/// (`kardia mesh … | head`), the rest of the printing is dropped quietly and the command's
+/// work and exit code stand (`println!` would panic on the broken pipe).
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
 mod assemble;
 mod convert;
 mod explore;

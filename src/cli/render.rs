@@ -272,7 +272,7 @@ fn render(args: &RenderArgs, interrupt: &CancelToken) -> Result<(), Failure> {
     }
     .map_err(fail)?;
     if a.print_frame_count {
-        println!("{}", a.turntable.or(declared.frames).unwrap_or(1));
+        outln!("{}", a.turntable.or(declared.frames).unwrap_or(1));
         return Ok(());
     }
     let plan = a

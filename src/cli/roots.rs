@@ -177,7 +177,7 @@ pub fn run(args: RootsArgs) -> i32 {
         sturm_roots(&coeffs, lo, hi)
     };
     for r in roots {
-        println!("{r:.16e}");
+        outln!("{r:.16e}");
     }
     0
 }

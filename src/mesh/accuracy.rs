@@ -18,6 +18,7 @@ use super::TriangleMesh;
 use crate::geometry::DVec3;
 use crate::roots::sturm_roots;
 use crate::shapes::implicit::MAX_DEGREE;
+pub use crate::shapes::triangles::closest_on_triangle;
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -263,60 +264,9 @@ impl<'a> NearestTriangle<'a> {
     }
 }
 
-/// The point of the triangle `a b c` nearest to `p` (by the regions of the triangle's
-/// corners, edges and face).
-pub fn closest_on_triangle(p: DVec3, [a, b, c]: [DVec3; 3]) -> DVec3 {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return b;
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    }
-    let denom = 1.0 / (va + vb + vc);
-    a + ab * (vb * denom) + ac * (vc * denom)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_closest_point_is_found_in_every_region() {
-        let t = [DVec3::ZERO, DVec3::X, DVec3::Y];
-        let cases = [
-            (DVec3::new(0.2, 0.2, 1.0), DVec3::new(0.2, 0.2, 0.0)),
-            (DVec3::new(-1.0, -1.0, 0.0), DVec3::ZERO),
-            (DVec3::new(2.0, -0.5, 0.3), DVec3::X),
-            (DVec3::new(0.5, -1.0, 0.0), DVec3::new(0.5, 0.0, 0.0)),
-            (DVec3::new(-1.0, 0.5, 0.0), DVec3::new(0.0, 0.5, 0.0)),
-            (DVec3::new(1.0, 1.0, 0.0), DVec3::new(0.5, 0.5, 0.0)),
-            (DVec3::new(-0.5, 3.0, 0.0), DVec3::Y),
-        ];
-        for (p, want) in cases {
-            assert!((closest_on_triangle(p, t) - want).length() < 1e-15, "{p}");
-        }
-    }
 
     #[test]
     fn surface_samples_are_on_the_surface() {

@@ -93,13 +93,26 @@ impl Field {
         self.f.eval(p.to_array())
     }
 
-    /// Whether `f` at `p` is zero up to the rounding of evaluating it (`|f| ≤ 1e-8 · Σ|terms|`):
-    /// a point on the surface as far as `f64` can tell, where the root finder may see a
-    /// double root at a node as none (inside and outside only; false for a shell).
+    /// Whether `φ` at `p` is zero up to the rounding of evaluating it: for the inside and
+    /// outside, `|f| ≤ 1e-8 · Σ|terms of f|`; for a shell, whose `φ` is a square less a
+    /// square, `|φ| ≤ 1e-16 · (F² + (T/2)²·Σ Gᵢ²)` with `F`, `Gᵢ` those sums for `f` and its
+    /// partial derivatives (the square of the same margin). A point on the surface as far as
+    /// `f64` can tell, where the root finder may see a double root at a node as none.
     pub fn at_rounding(&self, p: DVec3) -> bool {
         let q = p.to_array();
-        !matches!(self.kind, SolidKind::Shell { .. })
-            && self.f.eval(q).abs() <= 1e-8 * self.f.magnitude_bound(q)
+        let (margin, bound) = match self.kind {
+            SolidKind::Shell { .. } => {
+                let f = self.f.magnitude_bound(q);
+                let g: f64 = self
+                    .gradient
+                    .iter()
+                    .map(|d| d.magnitude_bound(q).powi(2))
+                    .sum();
+                (1e-16, f * f + self.half_thickness_sq * g)
+            }
+            _ => (1e-8, self.f.magnitude_bound(q)),
+        };
+        self.value(p).abs() <= margin * bound
     }
 
     /// `φ` at an object-space point (negative inside the solid, ignoring the ball).
@@ -207,8 +220,9 @@ impl Field {
 
     /// The distance from `p` to the nearest point of `φ = 0` on the line through `p` along
     /// `dir` (any length), within `reach` (object units), by the project's root finder
-    /// (every real root in the window); `None` when there is none within reach, or when `φ`
-    /// has degree above 16 along lines.
+    /// (every real root in the window; where it finds none, a double root at a node that
+    /// rounding hides: a root of its derivative where `φ` is zero to rounding); `None` when there is none within
+    /// reach, or when `φ` has degree above 16 along lines.
     pub fn distance_along(&self, p: DVec3, dir: DVec3, reach: f64) -> Option<f64> {
         let len = dir.length();
         if len.is_nan() || len <= 0.0 || self.degree() > MAX_DEGREE {
@@ -225,11 +239,38 @@ impl Field {
             .enumerate()
             .map(|(k, &x)| if k % 2 == 1 { -x } else { x })
             .collect();
-        sturm_roots(&c, -1.0 - 1e-12, 1.0)
+        let found = sturm_roots(&c, -1.0 - 1e-12, 1.0)
             .into_iter()
             .chain(self.solver.first_root(&c, 0.0, 1.0))
             .chain(self.solver.first_root(&mirrored, 0.0, 1.0))
             .map(|s| s.abs() * reach)
+            .reduce(f64::min);
+        found.or_else(|| {
+            self.hidden_double_root(p, dir * (reach / len), &c)
+                .map(|s| s * reach)
+        })
+    }
+
+    /// The nearest `|s| ≤ 1` where `φ(p + s·e)` (coefficients `c`) has a root that rounding
+    /// hides from the root finder: a double root at a node of the surface, where `φ` touches
+    /// 0 without changing sign and its computed values hover about 0 at the rounding of `f`.
+    /// Such a root is a simple root of the line polynomial's derivative (found by Sturm
+    /// sequences) at which `φ` is zero to its rounding ([`Field::at_rounding`]); a shell's
+    /// wall has such a point at each node of the surface.
+    fn hidden_double_root(&self, p: DVec3, e: DVec3, c: &[f64]) -> Option<f64> {
+        if c.len() < 3 {
+            return None;
+        }
+        let derivative: Vec<f64> = c
+            .iter()
+            .enumerate()
+            .skip(1)
+            .map(|(k, &x)| k as f64 * x)
+            .collect();
+        sturm_roots(&derivative, -1.0 - 1e-12, 1.0)
+            .into_iter()
+            .filter(|&s| self.at_rounding(p + s * e))
+            .map(f64::abs)
             .reduce(f64::min)
     }
 
@@ -311,5 +352,32 @@ mod tests {
             .unwrap();
         assert!((d - 0.1).abs() < 1e-14);
         assert!(f.distance_along(DVec3::ZERO, DVec3::X, 0.5).is_none());
+    }
+
+    #[test]
+    fn a_node_that_rounding_hides_from_the_root_finder_is_still_found() {
+        // (1, −1, −1) is one of Barth's nodes: along a line inside its cone the sextic
+        // touches 0 there (a double root) and its computed values hover about 0, so the root
+        // finder sees no root. A point 1e-4 from the node along (1, 1, 0), where a grid edge
+        // ending at the node puts its vertex, is within √2·1e-4 of the surface.
+        let p = crate::shapes::implicit::preset("barth_sextic", &[]).unwrap();
+        let poly = expand(&p.equation).unwrap();
+        let node = DVec3::new(1.0, -1.0, -1.0);
+        let near = node - DVec3::new(1e-4, 1e-4, 0.0);
+        for kind in [SolidKind::Inside, SolidKind::Outside] {
+            let f = Field::new(&poly, p.bound, kind);
+            assert!(f.at_rounding(node) && !f.at_rounding(near));
+            let d = f
+                .distance_along(near, DVec3::new(1.0, 1.0, 0.0), 0.05)
+                .unwrap();
+            assert!((d - 2f64.sqrt() * 1e-4).abs() < 1e-9, "{kind:?} {d}");
+        }
+        // A shell's wall has a pinhole at each node, where its φ touches 0 from below.
+        let shell = Field::new(&poly, p.bound, SolidKind::Shell { thickness: 0.1 });
+        assert!(shell.at_rounding(node) && !shell.at_rounding(near));
+        let d = shell
+            .distance_along(near, DVec3::new(1.0, 1.0, 0.0), 0.05)
+            .unwrap();
+        assert!(d <= 0.05, "{d}");
     }
 }

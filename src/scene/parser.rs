@@ -19,7 +19,10 @@ use crate::geometry::{DVec3, Frame, FrameError};
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::shapes::implicit::{preset_equation, EquationError, Implicit, PRESETS};
-use crate::shapes::{Ellipsoid, Heart, Parallelepiped, Plane, Polygon, Shape, ShapeError, Sphere};
+use crate::shapes::{
+    Ellipsoid, Heart, MeshNormals, MeshShape, Parallelepiped, Plane, Polygon, Shape, ShapeError,
+    Sphere,
+};
 
 type Span = Range<usize>;
 type Result<T> = std::result::Result<T, SceneError>;
@@ -105,6 +108,11 @@ pub(super) const STATEMENTS: &[Statement] = &[
         usage: "IMPLICIT \"equation\" (position) (u) (v) (w) <surface> [BOUND r]\n   \
                 or: IMPLICIT preset [params…] (position) (u) (v) (w) <surface> [BOUND r]",
         read: Builder::implicit,
+    },
+    Statement {
+        keyword: "MESH",
+        usage: "MESH \"file.stl|.obj|.ply\" (position) (u) (v) (w) <surface> [SMOOTH | FLAT]",
+        read: Builder::mesh,
     },
     Statement {
         keyword: "LET",
@@ -638,6 +646,38 @@ impl Builder {
         self.add(cur, Box::new(shape.with_solver(self.options.solver)), m)
     }
 
+    /// `MESH "file" (position) (u) (v) (w) <surface> [SMOOTH | FLAT]`: a triangle mesh read
+    /// from a file (a relative path is taken from the scene file's folder).
+    fn mesh(&mut self, cur: &mut Cursor) -> Result<()> {
+        let Some(t) = cur.peek().filter(|t| t.kind == TokenKind::Str) else {
+            return Err(cur.unexpected("the mesh file's name in quotes"));
+        };
+        cur.pos += 1;
+        let file = cur.src.text[t.inner()].to_string();
+        let p = cur.point("the mesh's position")?;
+        let names = ["u", "v", "w"];
+        let (u, v, w) = basis(cur, names)?;
+        let m = surface(cur, &self.materials)?;
+        let mut normals = MeshNormals::default();
+        if let Some(word) = cur.peek_word() {
+            if word.eq_ignore_ascii_case("FLAT") || word.eq_ignore_ascii_case("SMOOTH") {
+                normals = if word.eq_ignore_ascii_case("FLAT") {
+                    MeshNormals::Flat
+                } else {
+                    MeshNormals::Smooth
+                };
+                cur.pos += 1;
+                cur.end()?;
+            }
+        }
+        end_after_surface(cur)?;
+        check_frame(cur, &p, [&u, &v, &w], names)?;
+        let path = mesh_path(cur.src.name, &file);
+        let shape = MeshShape::from_file(&path, [p.v, u.v, v.v, w.v], normals)
+            .map_err(|e| shape_error(cur, t.span.clone(), e))?;
+        self.add(cur, Box::new(shape), m)
+    }
+
     /// The scene; `end` is where the last statement ends (for a missing-camera error).
     fn finish(self, src: Source, end: usize) -> Result<(Scene, Animation)> {
         let Some((camera, _)) = self.camera else {
@@ -667,6 +707,18 @@ impl Builder {
         Ok((scene, animation))
     }
 }
+/// Where the `MESH` file `file` named in the scene `scene_name` is: a relative path is taken
+/// from the folder of the scene file when `scene_name` names one, else from the current
+/// folder.
+fn mesh_path(scene_name: &str, file: &str) -> std::path::PathBuf {
+    let path = std::path::Path::new(file);
+    let scene = std::path::Path::new(scene_name);
+    match scene.parent() {
+        Some(folder) if path.is_relative() && scene.is_file() => folder.join(path),
+        _ => path.to_path_buf(),
+    }
+}
+
 /// An error about an invalid shape of the current statement, at `span`.
 fn shape_error(cur: &Cursor, span: Span, e: ShapeError) -> SceneError {
     cur.fail(

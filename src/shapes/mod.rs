@@ -14,6 +14,7 @@ mod polygon;
 pub mod report;
 pub mod solid;
 mod sphere;
+pub mod triangles;
 
 pub use boxes::Parallelepiped;
 pub use ellipsoid::Ellipsoid;
@@ -24,6 +25,7 @@ pub use polygon::Polygon;
 pub use report::{SettledBy, SolverReport};
 pub use solid::PolynomialSolid;
 pub use sphere::Sphere;
+pub use triangles::{MeshNormals, MeshShape};
 
 /// Why a shape's parameters do not describe a valid shape; the message completes the sentence
 /// "this shape is invalid because …" and names the offending parameter.

@@ -24,6 +24,7 @@ mod implicit_render;
 mod implicit_scene;
 mod implicit_specks;
 mod mesh;
+mod mesh_render;
 mod pipeline;
 mod probe_cli;
 mod render_golden;
