@@ -2020,6 +2020,102 @@ mod tests {
         }
     }
 
+    /// Points where rays from outside towards the centre meet `shape` (unit frame), with
+    /// its generic surface.
+    fn hits_of(shape: &Implicit, count: usize, seed: u64) -> Vec<DVec3> {
+        use crate::shapes::Shape;
+        let mut uniform = crate::testing::uniform_stream(seed);
+        let mut points = Vec::new();
+        for _ in 0..50 * count {
+            let mut v = || 2.0 * uniform() - 1.0;
+            let origin = DVec3::new(v(), v(), v()).normalize_or(DVec3::X) * 8.0;
+            let target = DVec3::new(v(), v(), v()) * 1.6;
+            let ray = Ray::new(origin, target - origin);
+            if let Some(t) = shape.intersect(&ray, 0.0, f64::INFINITY) {
+                points.push(ray.at(t));
+                if points.len() == count {
+                    break;
+                }
+            }
+        }
+        assert_eq!(points.len(), count, "too few hits");
+        points
+    }
+
+    /// Where the expansion cancels so much that `f64`'s gradient is not far enough above its
+    /// rounding (issue 36's cliffs: every such normal went to the sign-plane, hundreds of
+    /// double-double evaluations), the normal is `∇f` in double-double arithmetic: the exact
+    /// normal to 1e-9, and the sign-plane's to 1e-4 where that one answers.
+    #[test]
+    fn a_cancelling_expansion_takes_its_gradient_in_double_double() {
+        type Normal = fn(DVec3) -> DVec3;
+        let cases: [(&str, Normal); 3] = [
+            ("(x+y+z)^16 - 1", |p| {
+                DVec3::ONE.normalize() * (p.x + p.y + p.z).signum()
+            }),
+            ("(x^2+y^2+z^2-1)^8 - 1e-5", |p| {
+                p.normalize() * (p.length_squared() - 1.0).signum()
+            }),
+            ("(x^2+y^2-1)^8 - 1e-12", |p| {
+                let r = DVec3::new(p.x, p.y, 0.0);
+                r.normalize() * (r.length_squared() - 1.0).signum()
+            }),
+        ];
+        for (equation, exact) in cases {
+            let shape = Implicit::new(equation, Frame::identity(), Some(2.0)).unwrap();
+            let Kind::Generic(s) = &shape.object().kind else {
+                panic!("{equation}: the generic path")
+            };
+            let h = SIGN_SPHERE * 2.0;
+            let mut compared = 0;
+            let mut taken = 0;
+            for q in hits_of(&shape, 100, 0x9e37_79b9_7f4a_7c15) {
+                let (values, magnitudes) = s.gradient_with_bound(q.to_array());
+                let g = DVec3::from_array(values);
+                let scale = magnitudes.iter().fold(0.0f64, |m, &v| m.max(v));
+                let noise = ROUNDING * s.gradient.most_terms as f64 * scale;
+                if g.abs().max_element() > GRADIENT_MARGIN * noise {
+                    continue; // f64's gradient does
+                }
+                let n = s
+                    .smooth_gradient(q, h, g, noise)
+                    .unwrap_or_else(|| panic!("{equation} at {q}: smooth, yet not taken"));
+                taken += 1;
+                let n = n.normalize();
+                assert!((n - exact(q)).length() < 1e-9, "{equation} at {q}: {n}");
+                assert_eq!(s.normal_direction(q, h).normalize(), n, "{equation} at {q}");
+                if let Some(plane) = s.normal_from_signs(q, h) {
+                    assert!((plane - n).length() < 1e-4, "{equation} at {q}: {plane}");
+                    compared += 1;
+                }
+            }
+            assert!(taken >= 10, "{equation}: {taken} of 100 in double-double");
+            assert!(2 * compared >= taken, "{equation}: {compared} sign-planes");
+        }
+    }
+
+    /// Near a point where `∇f` vanishes (a cone's apex within the sign sphere) its direction
+    /// swings across the probes: the double-double gradient is not taken, whatever its size.
+    #[test]
+    fn a_gradient_that_swings_across_the_sign_sphere_is_not_taken() {
+        let shape = Implicit::new("x^2 + y^2 - z^2", Frame::identity(), Some(2.0)).unwrap();
+        let Kind::Generic(s) = &shape.object().kind else {
+            panic!("the generic path")
+        };
+        let h = SIGN_SPHERE * 2.0;
+        for q in [
+            DVec3::new(2e-6, 0.0, 2e-6),
+            DVec3::new(0.0, -1e-5, 1e-5),
+            DVec3::new(3e-5, 4e-5, -5e-5),
+        ] {
+            let g = s.gradient(q);
+            assert_eq!(s.smooth_gradient(q, h, g, 1e-300), None, "{q}");
+        }
+        // Far from the apex the cone is smooth across the sphere: taken.
+        let q = DVec3::new(0.6, 0.8, 1.0);
+        assert!(s.smooth_gradient(q, h, s.gradient(q), 1e-300).is_some());
+    }
+
     /// A sphere clipped by its own radius, and by radii one ulp either side, is hit at its
     /// near side by every ray that meets it (none drops the hit at the chord's end and
     /// shows the far side, none misses), one ray at a time and four at once alike.
