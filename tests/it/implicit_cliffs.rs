@@ -55,7 +55,10 @@ fn plane(ray: &Ray, level: f64) -> Vec<f64> {
     vec![(level - (ray.origin.x + ray.origin.y + ray.origin.z)) / s]
 }
 
-fn cases() -> Vec<(&'static str, Exact, fn(DVec3) -> DVec3)> {
+/// The direction of the normal at a point of the zero set, by its closed form (either sign).
+type Outward = fn(DVec3) -> DVec3;
+
+fn cases() -> Vec<(&'static str, Exact, Outward)> {
     // (x²+y²+z²−1)⁸ = 1e-5: r² = 1 ± 1e-5^(1/8); (x²+y²−1)⁸ = 1e-12 likewise.
     vec![
         (

@@ -306,7 +306,9 @@ impl Surface {
         let noise_dd = noise * f64::EPSILON;
         let g0 = self.gradient_dd(q);
         let n0 = g0.abs().max_element();
-        if !(n0 > GRADIENT_MARGIN * noise_dd) {
+        // False for a NaN too.
+        let clear = n0 > GRADIENT_MARGIN * noise_dd;
+        if !clear {
             return None;
         }
         let dir0 = g0 / g0.length();
@@ -336,7 +338,9 @@ impl Surface {
                     gk.abs().max_element() > GRADIENT_MARGIN * 2.0 * noise_dd,
                 )
             };
-            if !clear || !((gk / gk.length() - dir0).length() <= FLAT_ANGLE) {
+            // False for a NaN too.
+            let flat = (gk / gk.length() - dir0).length() <= FLAT_ANGLE;
+            if !clear || !flat {
                 return None;
             }
         }
