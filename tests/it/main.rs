@@ -18,6 +18,7 @@ mod heart_geometry;
 mod heart_hard_cases;
 mod heart_solvers;
 mod implicit_algebra;
+mod implicit_cliffs;
 mod implicit_lanes;
 mod implicit_measure;
 mod implicit_render;

@@ -243,6 +243,9 @@ impl Surface {
         if g.abs().max_element() > GRADIENT_MARGIN * noise {
             return g;
         }
+        if let Some(n) = self.smooth_gradient(q, h, g, noise) {
+            return n;
+        }
         if let Some(n) = self.normal_from_signs(q, h) {
             return n;
         }
@@ -259,6 +262,17 @@ impl Surface {
 /// (the direction is then good to about the inverse of this, in radians).
 const GRADIENT_MARGIN: f64 = 1e6;
 
+/// Largest angle (radians) between `∇f` at a point and at the probes about it for
+/// [`Surface::smooth_gradient`] to take `∇f` as the normal: 0.006°, far below what a
+/// pixel's shading shows, and the turn of a normal across the probes' sphere on a surface
+/// curved at a radius of a tenth of the clip radius.
+const FLAT_ANGLE: f64 = 1e-4;
+
+/// How far above its rounding `∇f` in `f64` must be at a point for
+/// [`Surface::smooth_gradient`] to read the probes' directions in `f64` (each then good to
+/// about a tenth of [`FLAT_ANGLE`]).
+const PROBE_MARGIN: f64 = 10.0 / FLAT_ANGLE;
+
 /// Radius, relative to the clip radius, of the sphere on which
 /// [`Surface::normal_from_signs`] reads the signs of `f`: large enough for `f` to be far
 /// above its double-double rounding there even where it vanishes to high order, small enough
@@ -267,6 +281,72 @@ const GRADIENT_MARGIN: f64 = 1e6;
 const SIGN_SPHERE: f64 = 1e-5;
 
 impl Surface {
+    /// `∇f` at `p` in double-double arithmetic, rounded to `f64`.
+    fn gradient_dd(&self, p: DVec3) -> DVec3 {
+        let p = p.to_array();
+        DVec3::from_array(self.grad.each_ref().map(|g| g.eval_dd(p).to_f64()))
+    }
+
+    /// `∇f` at `q` as the outward normal direction where its `f64` value was not far enough
+    /// above its rounding (`g`, with the rounding bound `noise`) but the gradient is smooth
+    /// about `q`: the usual case of an equation whose expansion cancels heavily, such as
+    /// `(x + y + z)^16 = 1` (terms of 10⁸ summing to 16) or `(x² + y² + z² − 1)^8 = 10⁻⁵`
+    /// (`|∇f|` of 10⁻⁴ beside terms of 10³), where the rounding, not the geometry, hides the
+    /// direction. Taken when, at `q` and at the four corners of a tetrahedron on the sphere
+    /// of radius `h` about it (the sphere [`Surface::normal_from_signs`] reads), `∇f` is far
+    /// above its rounding ([`GRADIENT_MARGIN`] times, in double-double arithmetic where
+    /// `f64` is not [`PROBE_MARGIN`] times clear of it) and its directions agree within
+    /// [`FLAT_ANGLE`]: the surface is then flat across the sphere to that angle, so `∇f` at `q`
+    /// is its normal at least as closely as the plane separating the signs of `f` there
+    /// (which this replaces, at a few evaluations instead of hundreds), however far `q` lies
+    /// from the surface within `h`. `None` (the sign-plane's turn) near a curve where `∇f`
+    /// vanishes (the heart's equator, a node), where its direction swings across the sphere.
+    fn smooth_gradient(&self, q: DVec3, h: f64, g: DVec3, noise: f64) -> Option<DVec3> {
+        // Double-double evaluation rounds about `ε` times less than `f64`'s.
+        let noise_dd = noise * f64::EPSILON;
+        let g0 = self.gradient_dd(q);
+        let n0 = g0.abs().max_element();
+        // False for a NaN too.
+        let clear = n0 > GRADIENT_MARGIN * noise_dd;
+        if !clear {
+            return None;
+        }
+        let dir0 = g0 / g0.length();
+        // The probes' directions need only be good to a fraction of `FLAT_ANGLE`: `f64`
+        // serves where `∇f` at `q` is that far above its rounding (the magnitudes of the
+        // terms at the probes are those at `q` to within `(1 + h/|q|)^degree`: twice
+        // covers it).
+        let in_f64 = g.abs().max_element() > PROBE_MARGIN * noise;
+        let sign = [
+            [1.0, 1.0, 1.0],
+            [1.0, -1.0, -1.0],
+            [-1.0, 1.0, -1.0],
+            [-1.0, -1.0, 1.0],
+        ];
+        for s in sign {
+            let p = q + h / 3f64.sqrt() * DVec3::from_array(s);
+            let (gk, clear) = if in_f64 {
+                let (values, magnitudes) = self.gradient_with_bound(p.to_array());
+                let gk = DVec3::from_array(values);
+                let scale = magnitudes.iter().fold(0.0f64, |m, &v| m.max(v));
+                let noise_k = ROUNDING * self.gradient.most_terms as f64 * scale;
+                (gk, gk.abs().max_element() > PROBE_MARGIN * noise_k)
+            } else {
+                let gk = self.gradient_dd(p);
+                (
+                    gk,
+                    gk.abs().max_element() > GRADIENT_MARGIN * 2.0 * noise_dd,
+                )
+            };
+            // False for a NaN too.
+            let flat = (gk / gk.length() - dir0).length() <= FLAT_ANGLE;
+            if !clear || !flat {
+                return None;
+            }
+        }
+        Some(g0)
+    }
+
     /// The sign of `f` at `p`, in double-double arithmetic (0 where even that is zero).
     fn sign_dd(&self, p: DVec3) -> f64 {
         let v = self.f.eval_dd(p.to_array()).hi;
@@ -1942,6 +2022,102 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Points where rays from outside towards the centre meet `shape` (unit frame), with
+    /// its generic surface.
+    fn hits_of(shape: &Implicit, count: usize, seed: u64) -> Vec<DVec3> {
+        use crate::shapes::Shape;
+        let mut uniform = crate::testing::uniform_stream(seed);
+        let mut points = Vec::new();
+        for _ in 0..50 * count {
+            let mut v = || 2.0 * uniform() - 1.0;
+            let origin = DVec3::new(v(), v(), v()).normalize_or(DVec3::X) * 8.0;
+            let target = DVec3::new(v(), v(), v()) * 1.6;
+            let ray = Ray::new(origin, target - origin);
+            if let Some(t) = shape.intersect(&ray, 0.0, f64::INFINITY) {
+                points.push(ray.at(t));
+                if points.len() == count {
+                    break;
+                }
+            }
+        }
+        assert_eq!(points.len(), count, "too few hits");
+        points
+    }
+
+    /// Where the expansion cancels so much that `f64`'s gradient is not far enough above its
+    /// rounding (issue 36's cliffs: every such normal went to the sign-plane, hundreds of
+    /// double-double evaluations), the normal is `∇f` in double-double arithmetic: the exact
+    /// normal to 1e-9, and the sign-plane's to 1e-4 where that one answers.
+    #[test]
+    fn a_cancelling_expansion_takes_its_gradient_in_double_double() {
+        type Normal = fn(DVec3) -> DVec3;
+        let cases: [(&str, Normal); 3] = [
+            ("(x+y+z)^16 - 1", |p| {
+                DVec3::ONE.normalize() * (p.x + p.y + p.z).signum()
+            }),
+            ("(x^2+y^2+z^2-1)^8 - 1e-5", |p| {
+                p.normalize() * (p.length_squared() - 1.0).signum()
+            }),
+            ("(x^2+y^2-1)^8 - 1e-12", |p| {
+                let r = DVec3::new(p.x, p.y, 0.0);
+                r.normalize() * (r.length_squared() - 1.0).signum()
+            }),
+        ];
+        for (equation, exact) in cases {
+            let shape = Implicit::new(equation, Frame::identity(), Some(2.0)).unwrap();
+            let Kind::Generic(s) = &shape.object().kind else {
+                panic!("{equation}: the generic path")
+            };
+            let h = SIGN_SPHERE * 2.0;
+            let mut compared = 0;
+            let mut taken = 0;
+            for q in hits_of(&shape, 100, 0x9e37_79b9_7f4a_7c15) {
+                let (values, magnitudes) = s.gradient_with_bound(q.to_array());
+                let g = DVec3::from_array(values);
+                let scale = magnitudes.iter().fold(0.0f64, |m, &v| m.max(v));
+                let noise = ROUNDING * s.gradient.most_terms as f64 * scale;
+                if g.abs().max_element() > GRADIENT_MARGIN * noise {
+                    continue; // f64's gradient does
+                }
+                let n = s
+                    .smooth_gradient(q, h, g, noise)
+                    .unwrap_or_else(|| panic!("{equation} at {q}: smooth, yet not taken"));
+                taken += 1;
+                let n = n.normalize();
+                assert!((n - exact(q)).length() < 1e-9, "{equation} at {q}: {n}");
+                assert_eq!(s.normal_direction(q, h).normalize(), n, "{equation} at {q}");
+                if let Some(plane) = s.normal_from_signs(q, h) {
+                    assert!((plane - n).length() < 1e-4, "{equation} at {q}: {plane}");
+                    compared += 1;
+                }
+            }
+            assert!(taken >= 10, "{equation}: {taken} of 100 in double-double");
+            assert!(2 * compared >= taken, "{equation}: {compared} sign-planes");
+        }
+    }
+
+    /// Near a point where `∇f` vanishes (a cone's apex within the sign sphere) its direction
+    /// swings across the probes: the double-double gradient is not taken, whatever its size.
+    #[test]
+    fn a_gradient_that_swings_across_the_sign_sphere_is_not_taken() {
+        let shape = Implicit::new("x^2 + y^2 - z^2", Frame::identity(), Some(2.0)).unwrap();
+        let Kind::Generic(s) = &shape.object().kind else {
+            panic!("the generic path")
+        };
+        let h = SIGN_SPHERE * 2.0;
+        for q in [
+            DVec3::new(2e-6, 0.0, 2e-6),
+            DVec3::new(0.0, -1e-5, 1e-5),
+            DVec3::new(3e-5, 4e-5, -5e-5),
+        ] {
+            let g = s.gradient(q);
+            assert_eq!(s.smooth_gradient(q, h, g, 1e-300), None, "{q}");
+        }
+        // Far from the apex the cone is smooth across the sphere: taken.
+        let q = DVec3::new(0.6, 0.8, 1.0);
+        assert!(s.smooth_gradient(q, h, s.gradient(q), 1e-300).is_some());
     }
 
     /// A sphere clipped by its own radius, and by radii one ulp either side, is hit at its
