@@ -651,7 +651,10 @@ pub(super) fn continues(cur: &Cursor) -> bool {
 
 /// Reads the expression at the cursor as `what` (for messages) and moves past it. Returns
 /// `Ok(None)` when the cursor is not at an expression (the caller reports what it expected).
-pub(super) fn read(cur: &mut Cursor, what: &str) -> Result<Option<Value>, SceneError> {
+pub(super) fn read(
+    cur: &mut Cursor,
+    what: impl std::fmt::Display + Copy,
+) -> Result<Option<Value>, SceneError> {
     let mut reader = Reader {
         text: cur.src.text,
         names: cur.names,
@@ -743,7 +746,7 @@ fn finish(reader: &mut Reader) -> Result<(f64, Span, usize), Fail> {
     Ok((x, span, last.token + 1))
 }
 
-fn report(cur: &Cursor, what: &str, fail: Fail) -> SceneError {
+fn report(cur: &Cursor, what: impl std::fmt::Display, fail: Fail) -> SceneError {
     match fail {
         Fail::NotAnExpression => cur.unexpected(&format!("{what} (a number)")),
         Fail::Syntax {
