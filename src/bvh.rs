@@ -282,24 +282,29 @@ impl Bvh {
         if self.nodes.is_empty() {
             return;
         }
+        // The lanes that are not idle, as a mask (bit `i` for lane `i`).
+        let active = |t_max: &[f64; LANES]| {
+            (0..LANES).fold(0u32, |mask, i| mask | ((t_max[i] >= t_min[i]) as u32) << i)
+        };
+        let mut awake = active(&t_max);
         let mut stack = [0u32; MAX_DEPTH];
         let mut top = 0;
         let mut node = 0usize;
         loop {
             let n = &self.nodes[node];
-            let met = rays.meet(&n.bounds, t_min, t_max);
-            // An idle lane meets nothing (`meet` finds its range empty, NaN bounds aside).
-            let lead = (0..LANES).find(|&lane| met[lane] && t_max[lane] >= t_min[lane]);
-            if let Some(lead) = lead {
+            let met = rays.meet(&n.bounds, t_min, t_max) & awake;
+            if met != 0 {
                 if n.count > 0 {
                     let first = n.offset as usize;
                     for &id in &self.items[first..first + n.count as usize] {
                         visit(id, &mut t_max);
                     }
-                    if (0..LANES).all(|lane| !(t_max[lane] >= t_min[lane])) {
+                    awake = active(&t_max);
+                    if awake == 0 {
                         return;
                     }
                 } else {
+                    let lead = met.trailing_zeros() as usize;
                     let (near, far) = if rays.dir[n.axis as usize][lead] >= 0.0 {
                         (node + 1, n.offset as usize)
                     } else {

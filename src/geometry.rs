@@ -313,12 +313,12 @@ impl RayLanes {
         }
     }
 
-    /// Which lanes meet `bounds` on their ranges: lane `i` is exactly
+    /// Which lanes meet `bounds` on their ranges, as a mask: bit `i` is set exactly where
     /// `bounds.clip(&rays[i], t_min[i], t_max[i]).is_some()` (the same slab arithmetic as
     /// [`Aabb::clip`], on all lanes at once and without branches; in AVX2 registers where the
-    /// processor has them).
+    /// processor has them). Bits from [`LANES`] up are clear.
     #[inline(always)]
-    pub fn meet(&self, bounds: &Aabb, t_min: [f64; LANES], t_max: [f64; LANES]) -> [bool; LANES] {
+    pub fn meet(&self, bounds: &Aabb, t_min: [f64; LANES], t_max: [f64; LANES]) -> u32 {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is set only where the processor has AVX2.
@@ -329,12 +329,7 @@ impl RayLanes {
 
     /// [`RayLanes::meet`] in plain arithmetic, lane by lane.
     #[inline(always)]
-    fn meet_portable(
-        &self,
-        bounds: &Aabb,
-        t_min: [f64; LANES],
-        t_max: [f64; LANES],
-    ) -> [bool; LANES] {
+    fn meet_portable(&self, bounds: &Aabb, t_min: [f64; LANES], t_max: [f64; LANES]) -> u32 {
         let (mut t0, mut t1) = (t_min, t_max);
         let mut alive = [true; LANES];
         for axis in 0..3 {
@@ -352,7 +347,7 @@ impl RayLanes {
                 alive[i] &= if moving { !empty } else { !outside };
             }
         }
-        alive
+        (0..LANES).fold(0, |mask, i| mask | (alive[i] as u32) << i)
     }
 
     /// [`RayLanes::meet`] on AVX2 registers (lane `i` of each): the same operations as
@@ -363,17 +358,13 @@ impl RayLanes {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn meet_avx2(
-        &self,
-        bounds: &Aabb,
-        t_min: [f64; LANES],
-        t_max: [f64; LANES],
-    ) -> [bool; LANES] {
+    unsafe fn meet_avx2(&self, bounds: &Aabb, t_min: [f64; LANES], t_max: [f64; LANES]) -> u32 {
         use std::arch::x86_64::*;
         // `if c {a} else {b}`.
         let pick = |c: __m256d, a: __m256d, b: __m256d| _mm256_blendv_pd(b, a, c);
         let zero = _mm256_setzero_pd();
-        let load = |x: &[f64; LANES]| _mm256_set_pd(x[3], x[2], x[1], x[0]);
+        // Each array holds the four `f64`s read.
+        let load = |x: &[f64; LANES]| _mm256_loadu_pd(x.as_ptr());
         let mut t0 = load(&t_min);
         let mut t1 = load(&t_max);
         let mut alive = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
@@ -410,8 +401,7 @@ impl RayLanes {
             let empty = _mm256_cmp_pd::<_CMP_GT_OQ>(t0, t1);
             alive = _mm256_andnot_pd(pick(moving, empty, outside), alive);
         }
-        let mask = _mm256_movemask_pd(alive);
-        std::array::from_fn(|i| mask >> i & 1 != 0)
+        _mm256_movemask_pd(alive) as u32
     }
 }
 
@@ -589,21 +579,17 @@ mod tests {
             });
             let lanes = RayLanes::new(&rays);
             for b in &boxes {
-                let expected: [bool; LANES] =
-                    std::array::from_fn(|i| b.clip(&rays[i], t_min[i], t_max[i]).is_some());
+                let expected = (0..LANES).fold(0, |mask, i| {
+                    mask | (b.clip(&rays[i], t_min[i], t_max[i]).is_some() as u32) << i
+                });
                 assert_eq!(
                     lanes.meet_portable(b, t_min, t_max),
                     expected,
                     "{b:?} {rays:?}"
                 );
                 assert_eq!(lanes.meet(b, t_min, t_max), expected, "{b:?} {rays:?}");
-                for hit in expected {
-                    if hit {
-                        met += 1;
-                    } else {
-                        missed += 1;
-                    }
-                }
+                met += expected.count_ones();
+                missed += LANES as u32 - expected.count_ones();
             }
         }
         // Both answers are common.

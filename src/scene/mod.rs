@@ -289,7 +289,7 @@ impl Scene {
             let obj = &self.objects[i];
             let met = lanes.meet(&obj.bounds, t_min, t_max);
             let open: [bool; LANES] = std::array::from_fn(|lane| {
-                !blocked[lane] && t_max[lane] > t_min[lane] && met[lane]
+                !blocked[lane] && t_max[lane] > t_min[lane] && met & 1 << lane != 0
             });
             if !open.contains(&true) {
                 return;
@@ -457,11 +457,11 @@ impl Scene {
             let limit: [f64; LANES] =
                 std::array::from_fn(|lane| nearer_limit(i, best[lane], t_max));
             let met = lanes.meet(&obj.bounds, [t_min; LANES], limit);
-            if !met.contains(&true) {
+            if met == 0 {
                 return;
             }
             let ask = std::array::from_fn(|lane| {
-                if met[lane] {
+                if met & 1 << lane != 0 {
                     limit[lane]
                 } else {
                     f64::NEG_INFINITY
