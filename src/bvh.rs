@@ -7,7 +7,7 @@
 //! a leaf the ray meets to a visitor, which asks the item itself and may shrink the ray's
 //! range; what "nearest" means (ties, any hit) is the visitor's to say.
 
-use crate::geometry::{Aabb, DVec3, Ray, LANES};
+use crate::geometry::{Aabb, DVec3, Ray, RayLanes, LANES};
 
 /// Most items a leaf holds.
 const MAX_LEAF: usize = 4;
@@ -266,12 +266,15 @@ impl Bvh {
     /// each leaf whose box some lane's ray meets within that lane's current range (lane `i`
     /// on `(t_min[i], t_max[i])`; a lane with `t_max[i] < t_min[i]` is idle), nearest child
     /// first along the first active lane's direction. `visit` asks the item for the lanes it
-    /// chooses and may lower any lane's `t_max`. Every item whose box meets some lane's ray
-    /// on its range as it stands when the item's leaf is reached is visited.
-    #[inline]
+    /// chooses and may lower any lane's `t_max`; the walk ends once every lane is idle. Every
+    /// item whose box meets some lane's ray on its range as it stands when the item's leaf is
+    /// reached is visited. Each node is tested against the four lanes at once
+    /// ([`RayLanes::meet`]); inlined into its caller, so that it is compiled for the
+    /// caller's instruction set.
+    #[inline(always)]
     pub fn walk_lanes(
         &self,
-        rays: &[Ray; LANES],
+        rays: &RayLanes,
         t_min: [f64; LANES],
         mut t_max: [f64; LANES],
         mut visit: impl FnMut(u32, &mut [f64; LANES]),
@@ -279,29 +282,30 @@ impl Bvh {
         if self.nodes.is_empty() {
             return;
         }
-        let inv: [DVec3; LANES] = std::array::from_fn(|lane| DVec3::ONE / rays[lane].dir);
+        // The lanes that are not idle, as a mask (bit `i` for lane `i`).
+        let active = |t_max: &[f64; LANES]| {
+            (0..LANES).fold(0u32, |mask, i| mask | ((t_max[i] >= t_min[i]) as u32) << i)
+        };
+        let mut awake = active(&t_max);
         let mut stack = [0u32; MAX_DEPTH];
         let mut top = 0;
         let mut node = 0usize;
         loop {
             let n = &self.nodes[node];
-            let mut lead = None;
-            for lane in 0..LANES {
-                if t_max[lane] >= t_min[lane]
-                    && meets(&n.bounds, &rays[lane], inv[lane], t_min[lane], t_max[lane])
-                {
-                    lead = Some(lane);
-                    break;
-                }
-            }
-            if let Some(lead) = lead {
+            let met = rays.meet(&n.bounds, t_min, t_max) & awake;
+            if met != 0 {
                 if n.count > 0 {
                     let first = n.offset as usize;
                     for &id in &self.items[first..first + n.count as usize] {
                         visit(id, &mut t_max);
                     }
+                    awake = active(&t_max);
+                    if awake == 0 {
+                        return;
+                    }
                 } else {
-                    let (near, far) = if rays[lead].dir[n.axis as usize] >= 0.0 {
+                    let lead = met.trailing_zeros() as usize;
+                    let (near, far) = if rays.dir[n.axis as usize][lead] >= 0.0 {
                         (node + 1, n.offset as usize)
                     } else {
                         (n.offset as usize, node + 1)
@@ -455,9 +459,12 @@ mod tests {
             // The same for four rays at once: each lane's items are among those visited.
             let rays: [Ray; LANES] = std::array::from_fn(|_| random_ray(&mut rng));
             let mut seen = vec![false; items.len()];
-            bvh.walk_lanes(&rays, [t_min; LANES], [t_max; LANES], |id, _| {
-                seen[id as usize] = true
-            });
+            bvh.walk_lanes(
+                &RayLanes::new(&rays),
+                [t_min; LANES],
+                [t_max; LANES],
+                |id, _| seen[id as usize] = true,
+            );
             for (id, b) in items.iter().filter(|(_, b)| !is_empty(b)) {
                 if rays.iter().any(|r| b.clip(r, t_min, t_max).is_some()) {
                     assert!(seen[*id as usize], "item {id} missed by the lanes");

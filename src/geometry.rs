@@ -276,6 +276,135 @@ impl Aabb {
     }
 }
 
+/// [`LANES`] rays laid out by coordinate (`origin[axis][lane]`), with the reciprocals of their
+/// directions worked out once: what testing the rays of all lanes against many boxes needs
+/// ([`RayLanes::meet`], the hierarchy's walk).
+#[derive(Clone, Copy, Debug)]
+pub struct RayLanes {
+    /// Each lane's origin, by axis.
+    pub origin: [[f64; LANES]; 3],
+    /// Each lane's direction, by axis.
+    pub dir: [[f64; LANES]; 3],
+    /// `1 / dir`, by axis (infinite where a component is zero, which [`RayLanes::meet`] then
+    /// does not use).
+    pub inverse: [[f64; LANES]; 3],
+    /// Whether the processor has AVX2 (then [`RayLanes::meet`] tests the lanes in one
+    /// vector register each).
+    avx2: bool,
+}
+
+impl RayLanes {
+    /// The lanes of `rays` (lane `i` is `rays[i]`).
+    #[inline(always)]
+    pub fn new(rays: &[Ray; LANES]) -> Self {
+        let origin = std::array::from_fn(|axis| std::array::from_fn(|i| rays[i].origin[axis]));
+        let dir: [[f64; LANES]; 3] =
+            std::array::from_fn(|axis| std::array::from_fn(|i| rays[i].dir[axis]));
+        let inverse = dir.map(|d| d.map(|d| 1.0 / d));
+        #[cfg(target_arch = "x86_64")]
+        let avx2 = std::arch::is_x86_feature_detected!("avx2");
+        #[cfg(not(target_arch = "x86_64"))]
+        let avx2 = false;
+        Self {
+            origin,
+            dir,
+            inverse,
+            avx2,
+        }
+    }
+
+    /// Which lanes meet `bounds` on their ranges, as a mask: bit `i` is set exactly where
+    /// `bounds.clip(&rays[i], t_min[i], t_max[i]).is_some()` (the same slab arithmetic as
+    /// [`Aabb::clip`], on all lanes at once and without branches; in AVX2 registers where the
+    /// processor has them). Bits from [`LANES`] up are clear.
+    #[inline(always)]
+    pub fn meet(&self, bounds: &Aabb, t_min: [f64; LANES], t_max: [f64; LANES]) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is set only where the processor has AVX2.
+            return unsafe { self.meet_avx2(bounds, t_min, t_max) };
+        }
+        self.meet_portable(bounds, t_min, t_max)
+    }
+
+    /// [`RayLanes::meet`] in plain arithmetic, lane by lane.
+    #[inline(always)]
+    fn meet_portable(&self, bounds: &Aabb, t_min: [f64; LANES], t_max: [f64; LANES]) -> u32 {
+        let (mut t0, mut t1) = (t_min, t_max);
+        let mut alive = [true; LANES];
+        for axis in 0..3 {
+            let (lo, hi) = (bounds.min[axis], bounds.max[axis]);
+            let (o, d, inv) = (&self.origin[axis], &self.dir[axis], &self.inverse[axis]);
+            for i in 0..LANES {
+                let moving = d[i] != 0.0;
+                let (a, b) = ((lo - o[i]) * inv[i], (hi - o[i]) * inv[i]);
+                let (a, b) = if a > b { (b, a) } else { (a, b) };
+                let outside = (o[i] < lo) | (o[i] > hi);
+                t0[i] = if moving & (a > t0[i]) { a } else { t0[i] };
+                t1[i] = if moving & (b < t1[i]) { b } else { t1[i] };
+                // `t0 > t1` is `clip`'s test for an empty interval (a NaN bound passes it).
+                let empty = t0[i] > t1[i];
+                alive[i] &= if moving { !empty } else { !outside };
+            }
+        }
+        (0..LANES).fold(0, |mask, i| mask | (alive[i] as u32) << i)
+    }
+
+    /// [`RayLanes::meet`] on AVX2 registers (lane `i` of each): the same operations as
+    /// [`RayLanes::meet_portable`] and [`Aabb::clip_avx2`], so the same answers.
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn meet_avx2(&self, bounds: &Aabb, t_min: [f64; LANES], t_max: [f64; LANES]) -> u32 {
+        use std::arch::x86_64::*;
+        // `if c {a} else {b}`.
+        let pick = |c: __m256d, a: __m256d, b: __m256d| _mm256_blendv_pd(b, a, c);
+        let zero = _mm256_setzero_pd();
+        // Each array holds the four `f64`s read.
+        let load = |x: &[f64; LANES]| _mm256_loadu_pd(x.as_ptr());
+        let mut t0 = load(&t_min);
+        let mut t1 = load(&t_max);
+        let mut alive = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+        for axis in 0..3 {
+            let (lo, hi) = (
+                _mm256_set1_pd(bounds.min[axis]),
+                _mm256_set1_pd(bounds.max[axis]),
+            );
+            let (o, d, inv) = (
+                load(&self.origin[axis]),
+                load(&self.dir[axis]),
+                load(&self.inverse[axis]),
+            );
+            // `d != 0.0` (true for a NaN).
+            let moving = _mm256_cmp_pd::<_CMP_NEQ_UQ>(d, zero);
+            let a = _mm256_mul_pd(_mm256_sub_pd(lo, o), inv);
+            let b = _mm256_mul_pd(_mm256_sub_pd(hi, o), inv);
+            let swap = _mm256_cmp_pd::<_CMP_GT_OQ>(a, b);
+            let (a, b) = (pick(swap, b, a), pick(swap, a, b));
+            let outside = _mm256_or_pd(
+                _mm256_cmp_pd::<_CMP_LT_OQ>(o, lo),
+                _mm256_cmp_pd::<_CMP_GT_OQ>(o, hi),
+            );
+            t0 = pick(
+                _mm256_and_pd(moving, _mm256_cmp_pd::<_CMP_GT_OQ>(a, t0)),
+                a,
+                t0,
+            );
+            t1 = pick(
+                _mm256_and_pd(moving, _mm256_cmp_pd::<_CMP_LT_OQ>(b, t1)),
+                b,
+                t1,
+            );
+            let empty = _mm256_cmp_pd::<_CMP_GT_OQ>(t0, t1);
+            alive = _mm256_andnot_pd(pick(moving, empty, outside), alive);
+        }
+        _mm256_movemask_pd(alive) as u32
+    }
+}
+
 /// Why an object frame could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FrameError {
@@ -406,6 +535,68 @@ mod tests {
         assert_eq!(b.clip(&miss, 0.0, f64::INFINITY), None);
         let behind = Ray::new(DVec3::new(5.0, 0.0, 0.0), DVec3::X);
         assert_eq!(b.clip(&behind, 0.0, f64::INFINITY), None);
+    }
+
+    #[test]
+    fn ray_lanes_meet_a_box_exactly_where_clip_does() {
+        let mut next = crate::testing::uniform_stream(19);
+        let mut coordinate = |zero_often: bool| {
+            let u = next();
+            // Whole numbers put origins on slabs and directions at zero.
+            if zero_often && u < 0.3 {
+                0.0
+            } else if u < 0.5 {
+                (u * 20.0).round() - 5.0
+            } else {
+                (u - 0.75) * 16.0
+            }
+        };
+        let boxes = [
+            Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0)),
+            Aabb::new(DVec3::new(0.0, -2.0, 1.0), DVec3::new(3.0, 0.0, 1.0)),
+            Aabb::new(DVec3::splat(f64::NEG_INFINITY), DVec3::splat(f64::INFINITY)),
+            Aabb::new(
+                DVec3::new(f64::NEG_INFINITY, -1.0, f64::NEG_INFINITY),
+                DVec3::new(f64::INFINITY, 1.0, f64::INFINITY),
+            ),
+            Aabb::EMPTY,
+        ];
+        let (mut met, mut missed) = (0, 0);
+        for _ in 0..20_000 {
+            let rays: [Ray; LANES] = std::array::from_fn(|_| {
+                let o = DVec3::new(coordinate(false), coordinate(false), coordinate(false));
+                let mut d = DVec3::new(coordinate(true), coordinate(true), coordinate(true));
+                if d == DVec3::ZERO {
+                    d.x = 1.0;
+                }
+                Ray::new(o, d)
+            });
+            let t_min: [f64; LANES] = std::array::from_fn(|_| coordinate(false));
+            // Some lanes idle (an empty or reversed range), some unbounded.
+            let t_max: [f64; LANES] = std::array::from_fn(|i| match i {
+                3 => f64::INFINITY,
+                _ => coordinate(false),
+            });
+            let lanes = RayLanes::new(&rays);
+            for b in &boxes {
+                let expected = (0..LANES).fold(0, |mask, i| {
+                    mask | (b.clip(&rays[i], t_min[i], t_max[i]).is_some() as u32) << i
+                });
+                assert_eq!(
+                    lanes.meet_portable(b, t_min, t_max),
+                    expected,
+                    "{b:?} {rays:?}"
+                );
+                assert_eq!(lanes.meet(b, t_min, t_max), expected, "{b:?} {rays:?}");
+                met += expected.count_ones();
+                missed += LANES as u32 - expected.count_ones();
+            }
+        }
+        // Both answers are common.
+        assert!(
+            met > 20_000 && missed > 20_000,
+            "{met} met, {missed} missed"
+        );
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! Reading the arguments of one statement: numbers, vectors, colours and the end of the
 //! line, each with an error that says what was expected at the offending token.
 
+use std::fmt::Display;
 use std::ops::Range;
 
 use super::expr::{self, Fail, LetFail, Line, Names};
@@ -206,7 +207,7 @@ impl<'a> Cursor<'a> {
     }
 
     /// A finite number: a number as written, or an expression (see `expr`).
-    pub(super) fn number(&mut self, what: &str) -> Result<(f64, Span)> {
+    pub(super) fn number(&mut self, what: impl Display + Copy) -> Result<(f64, Span)> {
         let Some(t) = self
             .peek()
             .filter(|t| matches!(t.kind, TokenKind::Word | TokenKind::Open))
@@ -254,7 +255,7 @@ impl<'a> Cursor<'a> {
     }
 
     /// The error for an expression read as `what` that failed.
-    fn expression_error(&self, what: &str, fail: Fail) -> SceneError {
+    fn expression_error(&self, what: impl Display, fail: Fail) -> SceneError {
         match fail {
             Fail::NotAnExpression => self.unexpected(&format!("{what} (a number)")),
             Fail::Syntax {
@@ -303,21 +304,35 @@ impl<'a> Cursor<'a> {
 
     /// A number within `limits`; outside them, an error that states the range. Every
     /// bounded number of the scene language is read here, through [`Cursor::number`].
-    pub(super) fn number_in(&mut self, what: &str, limits: &Limits) -> Result<(f64, Span)> {
+    pub(super) fn number_in(
+        &mut self,
+        what: impl Display + Copy,
+        limits: &Limits,
+    ) -> Result<(f64, Span)> {
         let (x, span) = self.number(what)?;
         self.check(x, &span, what, limits)?;
         Ok((x, span))
     }
 
     /// A whole number within `limits` (whole ones, of at most `u32::MAX`).
-    pub(super) fn whole_in(&mut self, what: &str, limits: &Limits) -> Result<(u32, Span)> {
+    pub(super) fn whole_in(
+        &mut self,
+        what: impl Display + Copy,
+        limits: &Limits,
+    ) -> Result<(u32, Span)> {
         debug_assert!(limits.whole && limits.max <= u32::MAX as f64);
         let (x, span) = self.number_in(what, limits)?;
         Ok((x as u32, span))
     }
 
     /// Fails unless `x` (written at `span`) is within `limits`.
-    pub(super) fn check(&self, x: f64, span: &Span, what: &str, limits: &Limits) -> Result<()> {
+    pub(super) fn check(
+        &self,
+        x: f64,
+        span: &Span,
+        what: impl Display + Copy,
+        limits: &Limits,
+    ) -> Result<()> {
         if limits.contains(x) {
             return Ok(());
         }
@@ -335,7 +350,7 @@ impl<'a> Cursor<'a> {
     }
 
     /// A vector `(a, b, c)`; commas are optional. `names` name the components in messages.
-    pub(super) fn vector(&mut self, what: &str, names: [&str; 3]) -> Result<VecArg> {
+    pub(super) fn vector(&mut self, what: impl Display + Copy, names: [&str; 3]) -> Result<VecArg> {
         let open = match self.peek() {
             Some(t) if t.kind == TokenKind::Open => t.span,
             _ => {
@@ -365,7 +380,8 @@ impl<'a> Cursor<'a> {
                     format!("expected the {} component", names[i]),
                 ));
             }
-            let (x, span) = self.number(&format!("the {} component of {what}", names[i]))?;
+            // The name is formatted only if a message needs it.
+            let (x, span) = self.number(format_args!("the {} component of {what}", names[i]))?;
             v[i] = x;
             parts[i] = span;
         }
@@ -395,17 +411,21 @@ impl<'a> Cursor<'a> {
     }
 
     /// A point, each coordinate within [`limits::COORDINATE`].
-    pub(super) fn point(&mut self, what: &str) -> Result<VecArg> {
+    pub(super) fn point(&mut self, what: impl Display + Copy) -> Result<VecArg> {
         let a = self.vector(what, ["x", "y", "z"])?;
         for (i, name) in ["x", "y", "z"].iter().enumerate() {
-            let part = format!("the {name} component of {what}");
-            self.check(a.v[i], &a.parts[i], &part, &limits::COORDINATE)?;
+            self.check(
+                a.v[i],
+                &a.parts[i],
+                format_args!("the {name} component of {what}"),
+                &limits::COORDINATE,
+            )?;
         }
         Ok(a)
     }
 
     /// A direction: a point-like vector whose length is within [`limits::DIRECTION_LENGTH`].
-    pub(super) fn direction(&mut self, what: &str) -> Result<VecArg> {
+    pub(super) fn direction(&mut self, what: impl Display + Copy) -> Result<VecArg> {
         let a = self.point(what)?;
         if a.v == DVec3::ZERO {
             return Err(self.fail(
@@ -430,7 +450,7 @@ impl<'a> Cursor<'a> {
     }
 
     /// A colour, each component within `limits` (which start at 0).
-    pub(super) fn colour(&mut self, what: &str, limits: &Limits) -> Result<VecArg> {
+    pub(super) fn colour(&mut self, what: impl Display + Copy, limits: &Limits) -> Result<VecArg> {
         let a = self.vector(what, ["r", "g", "b"])?;
         for (i, name) in ["red", "green", "blue"].iter().enumerate() {
             if a.v[i] < 0.0 {
@@ -447,7 +467,7 @@ impl<'a> Cursor<'a> {
             self.check(
                 a.v[i],
                 &a.parts[i],
-                &format!("the {name} component of {what}"),
+                format_args!("the {name} component of {what}"),
                 limits,
             )?;
         }

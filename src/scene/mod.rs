@@ -18,7 +18,7 @@ pub use index::ObjectIndex;
 pub use parser::{parse, parse_animated, parse_file, DEFAULT_SIZE};
 
 use crate::camera::Camera;
-use crate::geometry::{Aabb, DVec3, Ray};
+use crate::geometry::{Aabb, DVec3, Ray, RayLanes};
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::roots::Solver;
@@ -240,7 +240,9 @@ impl Scene {
     }
 
     /// [`Scene::occluded_lanes`] by the index: the unbounded objects, then those of the
-    /// hierarchy whose boxes a lane not yet blocked meets.
+    /// hierarchy whose boxes a lane not yet blocked meets. Compiled for AVX2 where the
+    /// processor has it, so that the four lanes' box tests run in vector registers (the
+    /// same answers).
     #[inline(never)]
     fn occluded_lanes_by_index(
         &self,
@@ -249,26 +251,57 @@ impl Scene {
         t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [bool; LANES] {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2.
+            return unsafe { self.occluded_lanes_by_index_avx2(built, rays, t_min, t_max) };
+        }
+        self.occluded_lanes_by_index_body(built, rays, t_min, t_max)
+    }
+
+    /// [`Scene::occluded_lanes_by_index`] compiled for AVX2.
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn occluded_lanes_by_index_avx2(
+        &self,
+        built: &index::Built,
+        rays: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [bool; LANES] {
+        self.occluded_lanes_by_index_body(built, rays, t_min, t_max)
+    }
+
+    /// The work of [`Scene::occluded_lanes_by_index`], inlined into each compiled form.
+    #[inline(always)]
+    fn occluded_lanes_by_index_body(
+        &self,
+        built: &index::Built,
+        rays: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [bool; LANES] {
         let mut blocked = [false; LANES];
+        let lanes = RayLanes::new(rays);
         let ask_object = |i: usize, blocked: &mut [bool; LANES]| {
             let obj = &self.objects[i];
-            let mut ask = [f64::NEG_INFINITY; LANES];
-            let mut any = false;
-            for lane in 0..LANES {
-                if !blocked[lane]
-                    && t_max[lane] > t_min[lane]
-                    && obj
-                        .bounds
-                        .clip(&rays[lane], t_min[lane], t_max[lane])
-                        .is_some()
-                {
-                    ask[lane] = t_max[lane];
-                    any = true;
-                }
-            }
-            if !any {
+            let met = lanes.meet(&obj.bounds, t_min, t_max);
+            let open: [bool; LANES] = std::array::from_fn(|lane| {
+                !blocked[lane] && t_max[lane] > t_min[lane] && met & 1 << lane != 0
+            });
+            if !open.contains(&true) {
                 return;
             }
+            let ask = std::array::from_fn(|lane| {
+                if open[lane] {
+                    t_max[lane]
+                } else {
+                    f64::NEG_INFINITY
+                }
+            });
             let hits = obj.shape.occludes_lanes(rays, t_min, ask);
             for lane in 0..LANES {
                 blocked[lane] |= hits[lane];
@@ -285,7 +318,7 @@ impl Scene {
                 t_max[lane]
             }
         });
-        built.bvh.walk_lanes(rays, t_min, range, |i, range| {
+        built.bvh.walk_lanes(&lanes, t_min, range, |i, range| {
             ask_object(i as usize, &mut blocked);
             for lane in 0..LANES {
                 if blocked[lane] {
@@ -375,6 +408,8 @@ impl Scene {
 
     /// [`Scene::nearest_lanes_in_order`]'s answers, asking only the objects of the index whose
     /// boxes the lanes' rays meet ([`nearer_limit`] keeps the objects' order in ties).
+    /// Compiled for AVX2 where the processor has it (see
+    /// [`Scene::occluded_lanes_by_index`]).
     #[inline(never)]
     fn nearest_lanes_by_index(
         &self,
@@ -383,21 +418,56 @@ impl Scene {
         t_min: f64,
         t_max: f64,
     ) -> [Option<(usize, f64)>; LANES] {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2.
+            return unsafe { self.nearest_lanes_by_index_avx2(built, rays, t_min, t_max) };
+        }
+        self.nearest_lanes_by_index_body(built, rays, t_min, t_max)
+    }
+
+    /// [`Scene::nearest_lanes_by_index`] compiled for AVX2.
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn nearest_lanes_by_index_avx2(
+        &self,
+        built: &index::Built,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+    ) -> [Option<(usize, f64)>; LANES] {
+        self.nearest_lanes_by_index_body(built, rays, t_min, t_max)
+    }
+
+    /// The work of [`Scene::nearest_lanes_by_index`], inlined into each compiled form.
+    #[inline(always)]
+    fn nearest_lanes_by_index_body(
+        &self,
+        built: &index::Built,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+    ) -> [Option<(usize, f64)>; LANES] {
         let mut best: [Option<(usize, f64)>; LANES] = [None; LANES];
+        let lanes = RayLanes::new(rays);
         let ask_object = |i: usize, best: &mut [Option<(usize, f64)>; LANES]| {
             let obj = &self.objects[i];
-            let mut ask = [f64::NEG_INFINITY; LANES];
-            let mut any = false;
-            for lane in 0..LANES {
-                let limit = nearer_limit(i, best[lane], t_max);
-                if obj.bounds.clip(&rays[lane], t_min, limit).is_some() {
-                    ask[lane] = limit;
-                    any = true;
-                }
-            }
-            if !any {
+            let limit: [f64; LANES] =
+                std::array::from_fn(|lane| nearer_limit(i, best[lane], t_max));
+            let met = lanes.meet(&obj.bounds, [t_min; LANES], limit);
+            if met == 0 {
                 return;
             }
+            let ask = std::array::from_fn(|lane| {
+                if met & 1 << lane != 0 {
+                    limit[lane]
+                } else {
+                    f64::NEG_INFINITY
+                }
+            });
             let hits = obj.shape.intersect_lanes(rays, [t_min; LANES], ask);
             for lane in 0..LANES {
                 if let Some(t) = hits[lane] {
@@ -411,7 +481,7 @@ impl Scene {
         let range = best.map(|hit| walk_limit(hit, t_max));
         built
             .bvh
-            .walk_lanes(rays, [t_min; LANES], range, |i, range| {
+            .walk_lanes(&lanes, [t_min; LANES], range, |i, range| {
                 ask_object(i as usize, &mut best);
                 *range = best.map(|hit| walk_limit(hit, t_max));
             });

@@ -744,9 +744,9 @@ fn once<T>(cur: &Cursor, slot: &Option<(T, usize)>) -> Result<()> {
 
 /// The three non-zero basis vectors of a placed shape.
 fn basis(cur: &mut Cursor, names: [&str; 3]) -> Result<(VecArg, VecArg, VecArg)> {
-    let u = cur.direction(&format!("the basis vector {}", names[0]))?;
-    let v = cur.direction(&format!("the basis vector {}", names[1]))?;
-    let w = cur.direction(&format!("the basis vector {}", names[2]))?;
+    let u = cur.direction(format_args!("the basis vector {}", names[0]))?;
+    let v = cur.direction(format_args!("the basis vector {}", names[1]))?;
+    let w = cur.direction(format_args!("the basis vector {}", names[2]))?;
     Ok((u, v, w))
 }
 
