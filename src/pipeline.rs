@@ -177,14 +177,15 @@ pub struct Progress {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Priority {
     /// The default: renders share the threads band by band (16 rows of the image each), and
-    /// hand them over to an `Interactive` render before their next row of a 16×16 tile,
-    /// going on where they stopped once no interactive render runs. Pixels and ray counts
-    /// are the same whatever the sharing.
+    /// hand them over to an `Interactive` render within a few pixels (before the next group
+    /// of pixels of a tile's row), going on from the start of that tile once no interactive
+    /// render runs. The pixels are the same whatever the sharing (the rays counted include
+    /// the part of a tile rendered again).
     #[default]
     Batch,
     /// Someone is waiting for this image (a live view's first frames after a change): it
-    /// takes the threads ahead of every `Batch` render, so it never waits for more than one
-    /// row of one tile of theirs; interactive renders share the threads band by band among
+    /// takes the threads ahead of every `Batch` render, so it never waits for more than a
+    /// few pixels of theirs; interactive renders share the threads band by band among
     /// themselves. Keep it for small, short renders, since batch renders stand still while
     /// it runs.
     Interactive,

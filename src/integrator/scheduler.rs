@@ -53,8 +53,8 @@ pub(crate) struct Hooks<'a> {
     /// unfinished by a cancellation.
     pub band_done: &'a BandDone<'a>,
     /// Someone waits for this image (a live view's first frames): it takes the threads ahead
-    /// of every render that is not, which hand them over before their next row of a tile
-    /// (see [`RenderPool`]).
+    /// of every render that is not, which hand them over before their next few pixels (see
+    /// [`RenderPool`]).
     pub interactive: bool,
 }
 
@@ -62,11 +62,16 @@ pub(crate) struct Hooks<'a> {
 /// renders running on them now. Renders started together share the threads band by band
 /// (each render's threads hand over after every band while another is running), except that
 /// an interactive render goes first: while one runs, every other render hands its threads
-/// over before its next row of a tile (and goes on from that tile once no interactive render
-/// is left), so a view a person waits for never waits for more than one row of another
-/// render's tile. Interactive renders share the threads band by band among themselves.
+/// over before its next group of pixels of a tile's row (and goes on from that tile once no
+/// interactive render is left), so a view a person waits for never waits for more than a
+/// few pixels of another render. Interactive renders share the threads band by band among themselves.
 pub(crate) struct RenderPool {
     threads: rayon::ThreadPool,
+    /// As many threads again, for interactive renders only: idle between them (batch
+    /// renders wait while one runs, so the two never compete for the cores), which also
+    /// keeps the operating system's scheduler from counting a long batch render's CPU time
+    /// against the threads a person waits for.
+    interactive_threads: rayon::ThreadPool,
     active: AtomicUsize,
     /// Interactive renders running now.
     interactive: AtomicUsize,
@@ -77,12 +82,15 @@ pub(crate) struct RenderPool {
 impl RenderPool {
     /// A pool of `threads` threads (0: one per available core).
     pub(crate) fn new(threads: usize) -> Result<Self, rayon::ThreadPoolBuildError> {
-        let threads = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .thread_name(|i| format!("kardia-render-{i}"))
-            .build()?;
+        let build = |name: &'static str| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .thread_name(move |i| format!("kardia-{name}-{i}"))
+                .build()
+        };
         Ok(Self {
-            threads,
+            threads: build("render")?,
+            interactive_threads: build("interactive")?,
             active: AtomicUsize::new(0),
             interactive: AtomicUsize::new(0),
             calm: (Mutex::new(()), Condvar::new()),
@@ -330,7 +338,12 @@ pub(crate) fn run<S: Shader>(
         if !hooks.interactive {
             pool.wait_for_interactive(hooks.cancelled);
         }
-        pool.threads.broadcast(|_| worker());
+        let threads = if hooks.interactive {
+            &pool.interactive_threads
+        } else {
+            &pool.threads
+        };
+        threads.broadcast(|_| worker());
     }
     drop(interactive);
     pool.active.fetch_sub(1, Ordering::Relaxed);
@@ -621,8 +634,9 @@ impl<'a> PixelSampler<'a> {
     /// `(region.x + x, region.y + y)` of the full image, and is sampled as that pixel. With
     /// alpha, a sample whose primary ray hit nothing adds nothing to the colour (which is thus
     /// premultiplied) and the pixel's alpha is the fraction of samples that hit.
-    /// `cancelled` is asked before each row of the tile (a tile at many samples a pixel takes
-    /// long enough for a page to notice): `false` with the rays so far when it says stop.
+    /// `cancelled` is asked before each row of the tile and each group of pixels of a row but
+    /// the first (a tile at many samples a pixel takes long enough for a page to notice):
+    /// `false` with the rays so far when it says stop.
     fn tile<S: Shader>(
         &self,
         shader: &S,
@@ -681,6 +695,11 @@ impl<'a> PixelSampler<'a> {
             let image_y = region.y + y;
             let mut x = x0;
             while x < x1 {
+                // Also between groups of a row: a row at many samples a pixel takes long
+                // enough to keep a waiting interactive render (or a cancel) waiting.
+                if x > x0 && cancelled() {
+                    return (rays, false);
+                }
                 // Whole groups of LANES neighbouring pixels go to the shader together.
                 let lanes = (x1 - x).min(LANES as u32);
                 if let Some(stored) = self.unseen(region.x + x, lanes, y) {

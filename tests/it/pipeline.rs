@@ -549,7 +549,7 @@ fn a_small_render_does_not_wait_for_a_long_one_on_the_same_renderer() {
 
 /// An interactive render goes ahead of a batch render already running on the same
 /// `Renderer`: while it runs, the batch render finishes no more than the tile each thread was
-/// in (it hands the threads over before its next row), and the batch render, suspended and
+/// in (it hands the threads over within a few pixels), and the batch render, suspended and
 /// resumed many times, still makes exactly the pixels and bands it makes alone (kept and
 /// streamed). Before the priority, the two shared the threads band by band: a 12-band
 /// interactive render let the batch render finish a band of 12 tiles before each of its own.
