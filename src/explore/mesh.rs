@@ -81,7 +81,8 @@ mod tests {
     fn a_sphere_meshes_into_both_formats_and_a_plane_scene_is_refused() {
         let text = "SIZE 40 30\nCAMERA (0, -5, 0) (0, 0, 0) (0, 0, 1) 40\n\
                     LIGHT (3, -4, 5) (1, 1, 1)\n\
-                    IMPLICIT \"x^2 + y^2 + z^2 - 1\" BOUND 1.5 (0.8, 0.2, 0.2)\n";
+                    IMPLICIT \"x^2 + y^2 + z^2 - 1\" (0, 0, 0) (1, 0, 0) (0, 1, 0) (0, 0, 1) \
+                    (0.8, 0.2, 0.2) BOUND 1.5\n";
         let fractions = std::sync::Mutex::new(vec![]);
         let stl = mesh_scene(text, MeshFormat::Stl, &|f| {
             fractions.lock().unwrap().push(f)
