@@ -173,13 +173,33 @@ pub struct Progress {
     pub total: u64,
 }
 
-/// The caller's hold on a running render: a cancel token and a progress callback (called from
-/// worker threads after each tile; keep it short).
+/// How a render shares the [`Renderer`]'s threads with the others running at the same time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Priority {
+    /// The default: renders share the threads band by band (16 rows of the image each), and
+    /// hand them over to an `Interactive` render within a few pixels (before the next group
+    /// of pixels of a tile's row), going on from the start of that tile once no interactive
+    /// render runs. The pixels are the same whatever the sharing (the rays counted include
+    /// the part of a tile rendered again).
+    #[default]
+    Batch,
+    /// Someone is waiting for this image (a live view's first frames after a change): it
+    /// takes the threads ahead of every `Batch` render, so it never waits for more than a
+    /// few pixels of theirs; interactive renders share the threads band by band among
+    /// themselves. Keep it for small, short renders, since batch renders stand still while
+    /// it runs.
+    Interactive,
+}
+
+/// The caller's hold on a running render: a cancel token, a progress callback (called from
+/// worker threads after each tile; keep it short) and the render's [`Priority`].
 pub struct Control<'a> {
     /// Cancels the render.
     pub cancel: CancelToken,
     /// Called after each finished tile.
     pub progress: Box<dyn Fn(Progress) + Send + Sync + 'a>,
+    /// How it shares the threads with other renders ([`Priority::Batch`] by default).
+    pub priority: Priority,
 }
 
 impl Default for Control<'_> {
@@ -187,6 +207,7 @@ impl Default for Control<'_> {
         Self {
             cancel: CancelToken::new(),
             progress: Box::new(|_| {}),
+            priority: Priority::Batch,
         }
     }
 }
@@ -205,7 +226,13 @@ impl<'a> Control<'a> {
         Self {
             cancel,
             progress: Box::new(progress),
+            ..Self::default()
         }
+    }
+
+    /// The same control with `priority`.
+    pub fn with_priority(self, priority: Priority) -> Self {
+        Self { priority, ..self }
     }
 }
 
@@ -213,6 +240,7 @@ impl std::fmt::Debug for Control<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Control")
             .field("cancel", &self.cancel)
+            .field("priority", &self.priority)
             .finish_non_exhaustive()
     }
 }
@@ -444,6 +472,7 @@ impl Renderer {
             cancelled: &cancelled,
             tile_done: &tile_done,
             band_done,
+            interactive: control.priority == Priority::Interactive,
         };
         let (image, rays) = integrator::render(&self.pool, request.view, &setup, &job, &hooks)
             .ok_or(RenderError::Cancelled)?;

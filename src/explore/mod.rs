@@ -8,6 +8,7 @@
 //! can be opened are embedded in the binary ([`gallery::SCENES`]).
 
 pub mod gallery;
+pub mod mesh;
 pub mod protocol;
 pub mod render;
 mod session;

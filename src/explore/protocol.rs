@@ -37,6 +37,36 @@ pub enum ClientMessage {
     /// The page is hidden: stop refining its view (the pass in flight is cancelled) until
     /// it sends a view again.
     Pause {},
+    /// What the root finder did for the camera ray through the centre of pixel `(x, y)`
+    /// (`(0, 0)` the top-left pixel) of this scene's view at this size; answered with a
+    /// `probe` message.
+    Probe {
+        /// Echoed in the reply.
+        seq: u64,
+        /// The whole scene text (its CAMERA is the view's camera).
+        scene: String,
+        /// View width in pixels.
+        width: u32,
+        /// View height in pixels.
+        height: u32,
+        /// Pixel column, 0 ..= width − 1.
+        x: u32,
+        /// Pixel row from the top, 0 ..= height − 1.
+        y: u32,
+    },
+    /// Mesh this scene as `kardia mesh` does (its HEART and IMPLICIT objects) and send the
+    /// file: `format` is `"stl"` or `"3mf"`.
+    Mesh {
+        /// Echoed in the reply.
+        seq: u64,
+        /// The whole scene text.
+        scene: String,
+        /// `"stl"` or `"3mf"`.
+        format: String,
+    },
+    /// Stop the save in flight (its reply is then an error saying it was cancelled); nothing
+    /// when none is rendering.
+    CancelSave {},
     /// Render this scene once at this size and samples, and send it as a PNG.
     Save {
         /// Echoed in the reply.
@@ -175,6 +205,35 @@ pub enum ServerMessage {
         /// Its default clip radius.
         bound: f64,
     },
+    /// What the root finder did for the pixel of probe request `seq`.
+    Probe {
+        /// The probe request.
+        seq: u64,
+        /// Its pixel column.
+        x: u32,
+        /// Its pixel row.
+        y: u32,
+        /// The report of the nearest polynomial surface the ray hits, else of the first whose
+        /// root finder it reaches; `None` when it reaches none (the study views' black).
+        report: Option<ProbeReport>,
+    },
+    /// How far the save of request `seq` has got (about every quarter second while it
+    /// renders).
+    SaveProgress {
+        /// The save request.
+        seq: u64,
+        /// Pixels finished.
+        done: u64,
+        /// Pixels of the image.
+        total: u64,
+    },
+    /// How far the mesh of request `seq` has got (about every quarter second).
+    MeshProgress {
+        /// The mesh request.
+        seq: u64,
+        /// 0 to 1.
+        fraction: f64,
+    },
     /// A request that was refused (malformed, too large, over a limit), or a failure.
     Error {
         /// The request it answers, when known.
@@ -182,6 +241,57 @@ pub enum ServerMessage {
         /// What was wrong, for the page to show.
         message: String,
     },
+}
+
+/// What the root finder did for one camera ray (a [`crate::shapes::SolverReport`] with its
+/// names spelled out as the study views' legends spell them).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct ProbeReport {
+    /// Whether the ray hits the surface.
+    pub hit: bool,
+    /// The ray parameter of the hit (world units along the unit camera ray), if any.
+    pub t: Option<f64>,
+    /// Distinct real roots of the ray's polynomial in the interval searched (the `roots`
+    /// view's count).
+    pub roots: u32,
+    /// Degree of the ray's polynomial.
+    pub degree: u32,
+    /// The method that settled the first root or proved there is none: the `path` view's
+    /// legend entry for this pixel.
+    pub settled_by: &'static str,
+    /// Refinement steps over all of the ray's queries (the `iterations` view's count).
+    pub refine_steps: u32,
+    /// Isolation steps (splits) over all of the ray's queries.
+    pub splits: u32,
+    /// First-root queries made.
+    pub queries: u32,
+    /// `|∇f|` at the hit, object space (the `conditioning` view's value); `None` for a miss.
+    pub gradient_norm: Option<f64>,
+}
+
+impl ProbeReport {
+    /// The report of `scene`'s camera ray through the centre of pixel `(x, y)` of a
+    /// `width × height` view through `camera`; `None` when the ray reaches no root finder.
+    pub fn of_pixel(
+        scene: &crate::scene::Scene,
+        camera: &crate::camera::Camera,
+        (width, height): (u32, u32),
+        (x, y): (u32, u32),
+    ) -> Option<Self> {
+        let ray = camera.ray(f64::from(x) + 0.5, f64::from(y) + 0.5, width, height);
+        let report = crate::integrator::solver_view::primary_report(scene, &ray)?;
+        Some(Self {
+            hit: report.hit.is_some(),
+            t: report.hit,
+            roots: report.distinct_roots,
+            degree: report.degree,
+            settled_by: report.settled_by.name(),
+            refine_steps: report.trace.refine_steps,
+            splits: report.trace.splits,
+            queries: report.trace.queries,
+            gradient_norm: report.gradient_norm,
+        })
+    }
 }
 
 /// A view's legend as the page shows it (see [`crate::integrator::Legend`]).
@@ -255,6 +365,17 @@ pub enum FrameHeader {
         rays: u64,
         /// Whether this is the last frame of the request (the samples limit is reached).
         done: bool,
+    },
+    /// A mesh file; payload: its bytes, as `kardia mesh` writes them.
+    Mesh {
+        /// The request it answers.
+        seq: u64,
+        /// `"stl"` or `"3mf"`.
+        format: String,
+        /// Triangles in the mesh.
+        triangles: usize,
+        /// Wall time of the meshing, milliseconds.
+        ms: f64,
     },
     /// A saved image; payload: the PNG file.
     Png {

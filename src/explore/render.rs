@@ -4,7 +4,7 @@
 
 use crate::camera::Camera;
 use crate::film::Image;
-use crate::pipeline::{Control, RenderError, RenderRequest, Renderer, View};
+use crate::pipeline::{Control, Priority, Progress, RenderError, RenderRequest, Renderer, View};
 use crate::scene::Scene;
 use std::sync::Arc;
 use std::time::Duration;
@@ -47,6 +47,10 @@ pub struct PassRequest {
     /// converge as the passes accumulate. `false` (a saved image): each light's `SAMPLES`,
     /// exactly as `kardia render`.
     pub preview: bool,
+    /// A person waits for this pass (a view's first frames after a change): it goes ahead of
+    /// every other render on the server ([`Priority::Interactive`]); `false`: it shares the
+    /// threads with the others ([`Priority::Batch`]).
+    pub interactive: bool,
 }
 
 /// One finished pass.
@@ -67,6 +71,18 @@ pub fn render_pass(
     request: &PassRequest,
     cancel: &CancelToken,
 ) -> Result<PassResult, NotRendered> {
+    render_pass_reporting(renderer, scene, request, cancel, |_| {})
+}
+
+/// [`render_pass`], telling `progress` the pixels done after every tile (from the render's
+/// threads: keep it short).
+pub fn render_pass_reporting(
+    renderer: &Renderer,
+    scene: &SharedScene,
+    request: &PassRequest,
+    cancel: &CancelToken,
+    progress: impl Fn(Progress) + Send + Sync,
+) -> Result<PassResult, NotRendered> {
     let render_request = RenderRequest {
         width: Some(request.width.max(1)),
         height: Some(request.height.max(1)),
@@ -78,12 +94,14 @@ pub fn render_pass(
         max_shadow_rays: request.preview.then_some(1),
         ..RenderRequest::default()
     };
+    let priority = if request.interactive {
+        Priority::Interactive
+    } else {
+        Priority::Batch
+    };
+    let control = Control::new(cancel.clone(), progress).with_priority(priority);
     let rendered = renderer
-        .render(
-            scene,
-            &render_request,
-            &Control::with_cancel(cancel.clone()),
-        )
+        .render(scene, &render_request, &control)
         .map_err(|e: RenderError| NotRendered(e.to_string()))?;
     Ok(PassResult {
         image: rendered.image,

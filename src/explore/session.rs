@@ -5,18 +5,20 @@
 //! cancelling the pass in flight when a newer job arrives or the page goes away.
 
 use super::protocol::{
-    binary, view_named, ClientMessage, FrameHeader, SceneProblem, ServerMessage,
+    binary, view_named, ClientMessage, FrameHeader, ProbeReport, SceneProblem, ServerMessage,
 };
-use super::render::{render_pass, share, CancelToken, PassRequest, SharedScene};
+use super::render::{
+    render_pass, render_pass_reporting, share, CancelToken, PassRequest, SharedScene,
+};
 use super::{gallery, Limits, Shared};
 use crate::camera::Camera;
 use crate::film::Image;
-use crate::pipeline::View;
+use crate::pipeline::{Progress, View};
 use crate::scene::{self, LoadOptions, Scene};
 use axum::extract::ws::{CloseFrame, Message, WebSocket};
 use futures_util::{SinkExt, StreamExt};
 use glam::Vec3;
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio::sync::{mpsc, watch};
@@ -85,14 +87,26 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
 
     let (jobs, job_rx) = watch::channel::<Option<ViewJob>>(None);
     let renderer = tokio::spawn(render_views(job_rx, out.clone(), shared.clone()));
-    let save_cancel = CancelToken::new();
+    let mut save_cancel = CancelToken::new();
     let mut save_task: Option<tokio::task::JoinHandle<()>> = None;
+    let mut mesh_task: Option<tokio::task::JoinHandle<()>> = None;
     let mut rate = RateLimit::new(limits.max_messages_per_second);
+    // The newest message over the rate limit, read once the window reopens: a burst loses its
+    // intermediate messages, never its last (the state the page settled on).
+    let mut deferred: Option<String> = None;
+    // The scene the last probe asked about (a probe of the same scene re-reads only its
+    // CAMERA line).
+    let mut probe_cache: Option<SceneCache> = None;
 
     let mut stopping = shared.stopping.clone();
     loop {
+        let reopens = tokio::time::Instant::from_std(rate.reopens());
         let received = tokio::select! {
             received = stream.next() => received,
+            () = tokio::time::sleep_until(reopens), if deferred.is_some() => {
+                rate.admit(Instant::now());
+                deferred.take().map(|text| Ok(Message::Text(text.into())))
+            }
             _ = stopping.changed() => {
                 let _ = out.send(close(1001, "the server is stopping")).await;
                 break;
@@ -124,18 +138,6 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                 break;
             }
         };
-        if !rate.admit(Instant::now()) {
-            let _ = out
-                .send(error_message(
-                    None,
-                    format!(
-                        "too many messages: at most {} a second are read; this one was dropped",
-                        limits.max_messages_per_second
-                    ),
-                ))
-                .await;
-            continue;
-        }
         if text.len() > limits.max_message_bytes {
             let _ = out
                 .send(error_message(
@@ -147,6 +149,24 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                     ),
                 ))
                 .await;
+            continue;
+        }
+        if deferred.is_some() || !rate.admit(Instant::now()) {
+            // Kept for when the window reopens, in place of the one kept before: a view or a
+            // pause replaced by a newer message is stale anyway; anything else is reported.
+            if let Some(dropped) = deferred.replace(text.to_string()) {
+                if !supersedable(&dropped) {
+                    let _ = out
+                        .send(error_message(
+                            None,
+                            format!(
+                                "too many messages: at most {} a second are read; one was dropped",
+                                limits.max_messages_per_second
+                            ),
+                        ))
+                        .await;
+                }
+            }
             continue;
         }
         let message: ClientMessage = match serde_json::from_str(&text) {
@@ -194,6 +214,63 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                     let _ = out.send(error_message(Some(seq), why)).await;
                 }
             },
+            ClientMessage::CancelSave {} => save_cancel.cancel(),
+            ClientMessage::Mesh { seq, scene, format } => {
+                if mesh_task.as_ref().is_some_and(|t| !t.is_finished()) {
+                    let _ = out
+                        .send(error_message(
+                            Some(seq),
+                            "a mesh is already being made: wait for it".into(),
+                        ))
+                        .await;
+                    continue;
+                }
+                match super::mesh::format_named(&format) {
+                    Ok(file_format) => {
+                        mesh_task = Some(tokio::spawn(make_mesh(
+                            seq,
+                            scene,
+                            (format, file_format),
+                            shared.clone(),
+                            out.clone(),
+                        )));
+                    }
+                    Err(why) => {
+                        let _ = out.send(error_message(Some(seq), why)).await;
+                    }
+                }
+            }
+            ClientMessage::Probe {
+                seq,
+                scene,
+                width,
+                height,
+                x,
+                y,
+            } => {
+                let reply =
+                    match check_size(width, height, limits.max_view_side, limits.max_view_pixels) {
+                        Err(why) => error_message(Some(seq), why),
+                        Ok(()) if x >= width || y >= height => error_message(
+                            Some(seq),
+                            format!("pixel {x},{y} is outside the {width}×{height} view"),
+                        ),
+                        Ok(()) => match load(&mut probe_cache, "explore.scene", &scene).await {
+                            Err(problem) => error_message(Some(seq), problem.message),
+                            Ok((scene, camera, _)) => {
+                                let report = tokio::task::spawn_blocking(move || {
+                                    ProbeReport::of_pixel(&scene, &camera, (width, height), (x, y))
+                                })
+                                .await
+                                .ok()
+                                .flatten();
+                                let message = ServerMessage::Probe { seq, x, y, report };
+                                Message::Text(message.to_json().into())
+                            }
+                        },
+                    };
+                let _ = out.send(reply).await;
+            }
             ClientMessage::Pause {} => {
                 // No job: the render task cancels its pass and waits for the next view.
                 jobs.send_if_modified(|current| current.take().is_some());
@@ -237,6 +314,7 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                         continue;
                     }
                 };
+                save_cancel = CancelToken::new();
                 save_task = Some(tokio::spawn(save(
                     seq,
                     scene,
@@ -254,6 +332,10 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
     let _ = renderer.await;
     if let Some(task) = save_task {
         let _ = task.await;
+    }
+    if let Some(task) = mesh_task {
+        // Meshing cannot be cancelled: the page is gone, so its file is not sent.
+        task.abort();
     }
     drop(out);
     let _ = writer.await;
@@ -302,6 +384,17 @@ fn check_save(limits: &Limits, width: u32, height: u32, spp: u32) -> Result<(), 
     Ok(())
 }
 
+/// Whether a newer message makes `text` stale: a view or a pause (judged by its `type`; a
+/// text that is not such a message is not).
+fn supersedable(text: &str) -> bool {
+    #[derive(serde::Deserialize)]
+    struct Kind {
+        #[serde(rename = "type")]
+        kind: String,
+    }
+    serde_json::from_str::<Kind>(text).is_ok_and(|k| k.kind == "view" || k.kind == "pause")
+}
+
 /// At most `per_second` messages in any one-second window.
 struct RateLimit {
     per_second: u32,
@@ -316,6 +409,11 @@ impl RateLimit {
             window_start: Instant::now(),
             count: 0,
         }
+    }
+
+    /// When the current window ends (a message over the limit can be read then).
+    fn reopens(&self) -> Instant {
+        self.window_start + Duration::from_secs(1)
     }
 
     fn admit(&mut self, now: Instant) -> bool {
@@ -486,6 +584,11 @@ fn plan(width: u32, height: u32, max_spp: u32) -> Vec<Pass> {
     passes
 }
 
+/// How long a page may go without a frame before a view's first pass is finished although a
+/// newer view is waiting (so a page dragging faster than the server renders still gets a
+/// frame about this often).
+const STARVED: Duration = Duration::from_millis(100);
+
 /// Runs the newest view job's passes; a newer job (or the page leaving) cancels the pass in
 /// flight.
 async fn render_views(
@@ -495,6 +598,8 @@ async fn render_views(
 ) {
     let limits = &shared.options.limits;
     let mut cache: Option<SceneCache> = None;
+    // When the last frame went out (see `STARVED`).
+    let mut last_frame = Instant::now();
     loop {
         let job = jobs.borrow_and_update().clone();
         let Some(job) = job else {
@@ -551,21 +656,35 @@ async fn render_views(
                 view: job.view,
                 alpha: false,
                 preview: true,
+                // The first frames of a change: a person waits for them.
+                interactive: !pass.accumulate,
             };
             let (scene_ref, cancel_ref, busy) = (scene.clone(), cancel.clone(), Busy::new(&shared));
             let mut task = tokio::task::spawn_blocking(move || {
                 render_pass(&busy.0.renderer, &scene_ref, &request, &cancel_ref)
             });
+            // A page whose views come faster than their first pass renders (a drag on a busy
+            // server) would see no frame at all if each view cancelled the one before: once
+            // no frame has gone out for STARVED, the first pass in flight is finished and
+            // sent although a newer view is waiting, and then the newest view is rendered.
+            let finish_anyway = index == 0 && last_frame.elapsed() >= STARVED;
+            let mut superseded = false;
             let result = tokio::select! {
                 result = &mut task => result,
                 next = jobs.changed() => {
-                    cancel.cancel();
-                    let _ = task.await;
                     if next.is_err() {
+                        cancel.cancel();
+                        let _ = task.await;
                         return;
                     }
                     changed = true;
-                    break;
+                    if !finish_anyway {
+                        cancel.cancel();
+                        let _ = task.await;
+                        break;
+                    }
+                    superseded = true;
+                    task.await
                 }
             };
             let Ok(Ok(result)) = result else {
@@ -602,7 +721,8 @@ async fn render_views(
                 rays: result.rays,
                 done: index + 1 == passes.len(),
             };
-            if jobs.has_changed().unwrap_or(true) {
+            if !finish_anyway && jobs.has_changed().unwrap_or(true) {
+                changed = true;
                 break;
             }
             if out
@@ -611,6 +731,11 @@ async fn render_views(
                 .is_err()
             {
                 return;
+            }
+            last_frame = Instant::now();
+            if superseded || jobs.has_changed().unwrap_or(true) {
+                changed = true;
+                break;
             }
         }
         if !changed && !wait_for_next(&mut jobs).await {
@@ -657,7 +782,8 @@ fn rgba(image: &Image) -> Vec<u8> {
 }
 
 /// Renders a scene once and sends it as a PNG (RGBA with straight alpha for a transparent
-/// background).
+/// background), with a `save_progress` message about every quarter second while it renders;
+/// cancelled by `cancel` (then an error saying so).
 async fn save(
     seq: u64,
     text: String,
@@ -667,7 +793,10 @@ async fn save(
     out: Outbox,
 ) {
     let busy = Busy::new(&shared);
-    let work = tokio::task::spawn_blocking(move || -> Result<(Vec<u8>, f64), String> {
+    let done = Arc::new(AtomicU64::new(0));
+    let total = u64::from(width) * u64::from(height);
+    let pixels_done = done.clone();
+    let mut work = tokio::task::spawn_blocking(move || -> Result<(Vec<u8>, f64), String> {
         let renderer = &busy.0.renderer;
         let scene: Scene = scene::parse(&text, "explore.scene", &LoadOptions::default())
             .map_err(|e| e.to_string())?;
@@ -682,15 +811,31 @@ async fn save(
             view,
             alpha,
             preview: false,
+            interactive: false,
         };
-        let result =
-            render_pass(renderer, &shared, &request, &cancel).map_err(|e| e.to_string())?;
+        let progress = |p: Progress| pixels_done.store(p.done, Ordering::Relaxed);
+        let result = render_pass_reporting(renderer, &shared, &request, &cancel, progress)
+            .map_err(|e| e.to_string())?;
         let mut png = vec![];
         crate::film::encode_png(&result.image, &mut png)
             .map_err(|e| format!("cannot encode the PNG: {e}"))?;
         Ok((png, result.elapsed.as_secs_f64() * 1e3))
-    })
-    .await;
+    });
+    let mut ticks = tokio::time::interval(Duration::from_millis(250));
+    let work = loop {
+        tokio::select! {
+            work = &mut work => break work,
+            _ = ticks.tick() => {
+                let message = ServerMessage::SaveProgress {
+                    seq,
+                    done: done.load(Ordering::Relaxed),
+                    total,
+                };
+                // Skipped when the page is slow to read: the next one says more.
+                let _ = out.try_send(Message::Text(message.to_json().into()));
+            }
+        }
+    };
     let message = match work {
         Ok(Ok((png, ms))) => Message::Binary(
             binary(
@@ -707,6 +852,56 @@ async fn save(
         ),
         Ok(Err(why)) => error_message(Some(seq), format!("save failed: {why}")),
         Err(e) => error_message(Some(seq), format!("save failed: {e}")),
+    };
+    let _ = out.send(message).await;
+}
+
+/// Meshes a scene as `kardia mesh` does and sends the file, with a `mesh_progress` message
+/// about every quarter second.
+async fn make_mesh(
+    seq: u64,
+    text: String,
+    (format, file_format): (String, crate::mesh::write::MeshFormat),
+    shared: Arc<Shared>,
+    out: Outbox,
+) {
+    let busy = Busy::new(&shared);
+    let fraction = Arc::new(AtomicU64::new(0));
+    let reported = fraction.clone();
+    let start = Instant::now();
+    let mut work = tokio::task::spawn_blocking(move || {
+        let _busy = busy;
+        let progress = |f: f64| reported.store(f.to_bits(), Ordering::Relaxed);
+        super::mesh::mesh_scene(&text, file_format, &progress)
+    });
+    let mut ticks = tokio::time::interval(Duration::from_millis(250));
+    let work = loop {
+        tokio::select! {
+            work = &mut work => break work,
+            _ = ticks.tick() => {
+                let message = ServerMessage::MeshProgress {
+                    seq,
+                    fraction: f64::from_bits(fraction.load(Ordering::Relaxed)),
+                };
+                let _ = out.try_send(Message::Text(message.to_json().into()));
+            }
+        }
+    };
+    let message = match work {
+        Ok(Ok(file)) => Message::Binary(
+            binary(
+                &FrameHeader::Mesh {
+                    seq,
+                    format,
+                    triangles: file.triangles,
+                    ms: start.elapsed().as_secs_f64() * 1e3,
+                },
+                &file.bytes,
+            )
+            .into(),
+        ),
+        Ok(Err(why)) => error_message(Some(seq), format!("mesh failed: {why}")),
+        Err(e) => error_message(Some(seq), format!("mesh failed: {e}")),
     };
     let _ = out.send(message).await;
 }

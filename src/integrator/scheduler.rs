@@ -14,7 +14,8 @@ use crate::geometry::{DVec3, Ray};
 use crate::scene::Scene;
 use crate::shapes::LANES;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::{Condvar, Mutex};
+use std::time::Duration;
 
 /// What one render samples: the camera, the full image's size, the region of it to render,
 /// the samples per pixel and the seed, and whether to measure coverage.
@@ -51,33 +52,92 @@ pub(crate) struct Hooks<'a> {
     /// finish in nearly ascending order, each exactly once; never called for a band left
     /// unfinished by a cancellation.
     pub band_done: &'a BandDone<'a>,
+    /// Someone waits for this image (a live view's first frames): it takes the threads ahead
+    /// of every render that is not, which hand them over before their next few pixels (see
+    /// [`RenderPool`]).
+    pub interactive: bool,
 }
 
 /// The threads renders run on, shared by every render of a `Renderer`, with the number of
-/// renders running on them now: when there is more than one, each render's threads hand
-/// over after every band, so that renders started together share the threads band by band
-/// (a page's coarse frame does not wait for another page's long refinement pass).
+/// renders running on them now. Renders started together share the threads band by band
+/// (each render's threads hand over after every band while another is running), except that
+/// an interactive render goes first: while one runs, every other render hands its threads
+/// over before its next group of pixels of a tile's row (and goes on from that tile once no
+/// interactive render is left), so a view a person waits for never waits for more than a
+/// few pixels of another render. Interactive renders share the threads band by band among themselves.
 pub(crate) struct RenderPool {
     threads: rayon::ThreadPool,
+    /// As many threads again, for interactive renders only: idle between them (batch
+    /// renders wait while one runs, so the two never compete for the cores), which also
+    /// keeps the operating system's scheduler from counting a long batch render's CPU time
+    /// against the threads a person waits for.
+    interactive_threads: rayon::ThreadPool,
     active: AtomicUsize,
+    /// Interactive renders running now.
+    interactive: AtomicUsize,
+    /// Told when the last interactive render ends (the others wait on it).
+    calm: (Mutex<()>, Condvar),
 }
 
 impl RenderPool {
     /// A pool of `threads` threads (0: one per available core).
     pub(crate) fn new(threads: usize) -> Result<Self, rayon::ThreadPoolBuildError> {
-        let threads = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .thread_name(|i| format!("kardia-render-{i}"))
-            .build()?;
+        let build = |name: &'static str| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .thread_name(move |i| format!("kardia-{name}-{i}"))
+                .build()
+        };
         Ok(Self {
-            threads,
+            threads: build("render")?,
+            interactive_threads: build("interactive")?,
             active: AtomicUsize::new(0),
+            interactive: AtomicUsize::new(0),
+            calm: (Mutex::new(()), Condvar::new()),
         })
     }
 
     /// Threads in the pool.
     pub(crate) fn threads(&self) -> usize {
         self.threads.current_num_threads()
+    }
+
+    /// Whether an interactive render is running (a render that is not hands its threads over).
+    fn interactive_running(&self) -> bool {
+        self.interactive.load(Ordering::SeqCst) > 0
+    }
+
+    /// Waits until no interactive render is running, or `cancelled` says stop (asked every
+    /// few milliseconds).
+    fn wait_for_interactive(&self, cancelled: &(dyn Fn() -> bool + Sync)) {
+        let (lock, calm) = &self.calm;
+        let mut guard = lock.lock().unwrap_or_else(|e| e.into_inner());
+        while self.interactive_running() && !cancelled() {
+            guard = calm
+                .wait_timeout(guard, Duration::from_millis(5))
+                .unwrap_or_else(|e| e.into_inner())
+                .0;
+        }
+    }
+
+    /// Counts an interactive render in (until the guard is dropped).
+    fn enter_interactive(&self) -> InteractiveGuard<'_> {
+        self.interactive.fetch_add(1, Ordering::SeqCst);
+        InteractiveGuard(self)
+    }
+}
+
+/// An interactive render running on a [`RenderPool`]; dropping it wakes the renders waiting
+/// for the last one to end.
+struct InteractiveGuard<'a>(&'a RenderPool);
+
+impl Drop for InteractiveGuard<'_> {
+    fn drop(&mut self) {
+        let (lock, calm) = &self.0.calm;
+        let _guard = lock.lock().unwrap_or_else(|e| e.into_inner());
+        if self.0.interactive.fetch_sub(1, Ordering::SeqCst) == 1 {
+            calm.notify_all();
+        }
     }
 }
 
@@ -86,8 +146,29 @@ impl std::fmt::Debug for RenderPool {
         f.debug_struct("RenderPool")
             .field("threads", &self.threads())
             .field("active", &self.active.load(Ordering::Relaxed))
+            .field("interactive", &self.interactive.load(Ordering::Relaxed))
             .finish()
     }
+}
+
+/// How a band's rendering ended.
+enum BandEnd {
+    /// Every tile done (and the band handed to the hook).
+    Finished,
+    /// Cancelled: the render stops.
+    Cancelled,
+    /// Handed the threads to an interactive render before the tile from this column, which
+    /// is rendered (again, whole) when the band goes on.
+    Suspended(u32),
+}
+
+/// A band left part-way for an interactive render (see [`BandEnd::Suspended`]).
+struct Suspended {
+    band: usize,
+    /// The first column of the tile to render next.
+    x0: u32,
+    /// A streamed render's buffer holding the band's finished tiles.
+    buffer: Option<BandBuffer>,
 }
 
 /// Renders `job.region` with `shader` on the threads of `pool`; returns the region's image
@@ -112,10 +193,11 @@ pub(crate) fn run<S: Shader>(
     // Kept, each band of TILE_SIZE rows is a disjoint slice of the image, filled in place tile
     // by tile: no per-tile buffers, so the film exists once. Streamed, a band is filled in a
     // buffer of the render's, which goes back to it once the hook has had the band: at most
-    // as many buffers as threads, so the render's memory is a few bands whatever the image's
-    // size (and the film's pages are never faulted in).
-    // Workers take the next band from a shared counter: bands finish in order from the top,
-    // and a worker that runs out of work waits for one band at most.
+    // as many buffers as threads (and bands suspended), so the render's memory is a few bands
+    // whatever the image's size (and the film's pages are never faulted in).
+    // Workers take a suspended band first, else the next band from a shared counter: bands
+    // finish in order from the top, and a worker that runs out of work waits for one band at
+    // most.
     let band_len = width as usize * TILE_SIZE as usize;
     let band_count = height.div_ceil(TILE_SIZE) as usize;
     let kept: Option<Vec<Mutex<Band>>> = image.as_mut().map(|image| {
@@ -130,73 +212,140 @@ pub(crate) fn run<S: Shader>(
             .collect()
     });
     let buffers: Mutex<Vec<BandBuffer>> = Mutex::new(Vec::new());
+    let suspended: Mutex<Vec<Suspended>> = Mutex::new(Vec::new());
     let next_band = AtomicUsize::new(0);
     let rays = AtomicU64::new(0);
     let stopped = AtomicBool::new(false);
-    // Band `band`'s rows rendered into `out`, which the hook is then handed; false when
-    // cancelled first.
-    let render_band = |band: usize, out: &mut Band| -> bool {
+    // A render that is not interactive hands its threads over while an interactive one runs.
+    let give_way = || !hooks.interactive && pool.interactive_running();
+    let stop_row = || (hooks.cancelled)() || give_way();
+    // Band `band`'s rows from the tile at column `x0` on rendered into `out`, which the hook
+    // is then handed.
+    let render_band = |band: usize, x0: u32, out: &mut Band| -> BandEnd {
         let y0 = band as u32 * TILE_SIZE;
         let y1 = (y0 + TILE_SIZE).min(height);
         let mut band_rays = 0;
-        for x0 in (0..width).step_by(TILE_SIZE as usize) {
+        let mut end = BandEnd::Finished;
+        for x0 in (x0..width).step_by(TILE_SIZE as usize) {
             if (hooks.cancelled)() {
-                rays.fetch_add(band_rays, Ordering::Relaxed);
-                return false;
+                end = BandEnd::Cancelled;
+                break;
+            }
+            if give_way() {
+                end = BandEnd::Suspended(x0);
+                break;
             }
             let x1 = (x0 + TILE_SIZE).min(width);
             let (tile_rays, finished) =
-                sampler.tile(shader, region, (x0, x1), (y0, y1), out, hooks.cancelled);
+                sampler.tile(shader, region, (x0, x1), (y0, y1), out, &stop_row);
             band_rays += tile_rays;
             if !finished {
-                rays.fetch_add(band_rays, Ordering::Relaxed);
-                return false;
+                end = if (hooks.cancelled)() {
+                    BandEnd::Cancelled
+                } else {
+                    BandEnd::Suspended(x0)
+                };
+                break;
             }
             (hooks.tile_done)(((x1 - x0) * (y1 - y0)) as u64);
         }
         rays.fetch_add(band_rays, Ordering::Relaxed);
-        (hooks.band_done)(y0, &*out.pixels, out.alpha.as_deref());
-        true
+        if let BandEnd::Finished = end {
+            (hooks.band_done)(y0, &*out.pixels, out.alpha.as_deref());
+        }
+        end
     };
     let worker = || loop {
-        let band = next_band.fetch_add(1, Ordering::Relaxed);
-        if band >= band_count {
+        if give_way() {
             return;
         }
-        let finished = match &kept {
+        let resumed = suspended.lock().unwrap_or_else(|e| e.into_inner()).pop();
+        let (band, x0, buffer) = match resumed {
+            Some(s) => (s.band, s.x0, s.buffer),
+            None => {
+                let band = next_band.fetch_add(1, Ordering::Relaxed);
+                if band >= band_count {
+                    return;
+                }
+                (band, 0, None)
+            }
+        };
+        let (end, buffer) = match &kept {
             Some(bands) => {
-                // Each band is taken once, so its lock is never contended.
+                // A band is worked on by one thread at a time, so its lock is never contended.
                 let mut out = bands[band].lock().unwrap_or_else(|e| e.into_inner());
-                render_band(band, &mut out)
+                (render_band(band, x0, &mut out), None)
             }
             None => {
                 let rows = (height - band as u32 * TILE_SIZE).min(TILE_SIZE) as usize;
                 let len = rows * width as usize;
-                let taken = buffers.lock().unwrap_or_else(|e| e.into_inner()).pop();
-                let mut buffer = taken.unwrap_or_else(|| BandBuffer::new(band_len, job.alpha));
-                let finished = render_band(band, &mut buffer.band(len));
-                buffers
-                    .lock()
-                    .unwrap_or_else(|e| e.into_inner())
-                    .push(buffer);
-                finished
+                let mut buffer = buffer.unwrap_or_else(|| {
+                    let taken = buffers.lock().unwrap_or_else(|e| e.into_inner()).pop();
+                    taken.unwrap_or_else(|| BandBuffer::new(band_len, job.alpha))
+                });
+                (render_band(band, x0, &mut buffer.band(len)), Some(buffer))
             }
         };
-        if !finished {
-            stopped.store(true, Ordering::Relaxed);
-            return;
+        match end {
+            BandEnd::Finished => {
+                if let Some(buffer) = buffer {
+                    buffers
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .push(buffer);
+                }
+            }
+            BandEnd::Cancelled => {
+                stopped.store(true, Ordering::Relaxed);
+                return;
+            }
+            BandEnd::Suspended(x0) => {
+                suspended
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .push(Suspended { band, x0, buffer });
+                return;
+            }
         }
-        if pool.active.load(Ordering::Relaxed) > 1 {
+        let others = if hooks.interactive {
+            pool.interactive.load(Ordering::Relaxed)
+        } else {
+            pool.active.load(Ordering::Relaxed)
+        };
+        if others > 1 {
             // Another render waits for these threads: let it have them for a band.
             return;
         }
     };
     pool.active.fetch_add(1, Ordering::Relaxed);
-    // Until every band is taken (or the render is cancelled): each round ends when every
-    // thread has left the worker, after one band each while other renders are running.
-    while !stopped.load(Ordering::Relaxed) && next_band.load(Ordering::Relaxed) < band_count {
-        pool.threads.broadcast(|_| worker());
+    let interactive = hooks.interactive.then(|| pool.enter_interactive());
+    // Until every band is done (or the render is cancelled): each round ends when every
+    // thread has left the worker, after one band each while other renders are running, or
+    // at once while an interactive render runs and this one is not (it waits for it to end).
+    loop {
+        let left = next_band.load(Ordering::Relaxed) < band_count
+            || !suspended
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .is_empty();
+        if stopped.load(Ordering::Relaxed) || !left {
+            break;
+        }
+        if (hooks.cancelled)() {
+            stopped.store(true, Ordering::Relaxed);
+            break;
+        }
+        if !hooks.interactive {
+            pool.wait_for_interactive(hooks.cancelled);
+        }
+        let threads = if hooks.interactive {
+            &pool.interactive_threads
+        } else {
+            &pool.threads
+        };
+        threads.broadcast(|_| worker());
     }
+    drop(interactive);
     pool.active.fetch_sub(1, Ordering::Relaxed);
     drop(kept);
     if stopped.into_inner() {
@@ -485,8 +634,9 @@ impl<'a> PixelSampler<'a> {
     /// `(region.x + x, region.y + y)` of the full image, and is sampled as that pixel. With
     /// alpha, a sample whose primary ray hit nothing adds nothing to the colour (which is thus
     /// premultiplied) and the pixel's alpha is the fraction of samples that hit.
-    /// `cancelled` is asked before each row of the tile (a tile at many samples a pixel takes
-    /// long enough for a page to notice): `false` with the rays so far when it says stop.
+    /// `cancelled` is asked before each row of the tile and each group of pixels of a row but
+    /// the first (a tile at many samples a pixel takes long enough for a page to notice):
+    /// `false` with the rays so far when it says stop.
     fn tile<S: Shader>(
         &self,
         shader: &S,
@@ -545,6 +695,11 @@ impl<'a> PixelSampler<'a> {
             let image_y = region.y + y;
             let mut x = x0;
             while x < x1 {
+                // Also between groups of a row: a row at many samples a pixel takes long
+                // enough to keep a waiting interactive render (or a cancel) waiting.
+                if x > x0 && cancelled() {
+                    return (rays, false);
+                }
                 // Whole groups of LANES neighbouring pixels go to the shader together.
                 let lanes = (x1 - x).min(LANES as u32);
                 if let Some(stored) = self.unseen(region.x + x, lanes, y) {
@@ -743,6 +898,7 @@ mod tests {
             band_done: &|_, pixels, band_alpha| {
                 assert_eq!(band_alpha.map(<[f32]>::len), alpha.then_some(pixels.len()));
             },
+            interactive: false,
         };
         let (image, rays) = run(&pool, shader, &job, &hooks).unwrap();
         (image.expect("a kept image"), rays)

@@ -123,9 +123,13 @@ fn split_binary(bytes: &[u8]) -> (Value, Vec<u8>) {
 }
 
 async fn next_binary(ws: &mut Ws) -> (Value, Vec<u8>) {
-    match next_message(ws).await {
-        Some(Message::Binary(b)) => split_binary(&b),
-        other => panic!("expected a binary message, got {other:?}"),
+    loop {
+        match next_message(ws).await {
+            Some(Message::Binary(b)) => return split_binary(&b),
+            // A save's or a mesh's progress may come before its file.
+            Some(Message::Text(t)) if t.contains("_progress\"") => continue,
+            other => panic!("expected a binary message, got {other:?}"),
+        }
     }
 }
 

@@ -8,7 +8,7 @@ use kardia::film::{self, Image, ImageFormat, Region};
 use kardia::geometry::DVec3;
 use kardia::lights::Light;
 use kardia::pipeline::{
-    CancelToken, Control, Progress, RenderError, RenderRequest, Rendered, Renderer, View,
+    CancelToken, Control, Priority, Progress, RenderError, RenderRequest, Rendered, Renderer, View,
 };
 use kardia::scene::{self, LoadOptions, Scene};
 use std::path::Path;
@@ -545,4 +545,93 @@ fn a_small_render_does_not_wait_for_a_long_one_on_the_same_renderer() {
     );
     long.join().unwrap();
     assert!(long_done.lock().unwrap().unwrap() > small_done);
+}
+
+/// An interactive render goes ahead of a batch render already running on the same
+/// `Renderer`: while it runs, the batch render finishes no more than the tile each thread was
+/// in (it hands the threads over within a few pixels), and the batch render, suspended and
+/// resumed many times, still makes exactly the pixels and bands it makes alone (kept and
+/// streamed). Before the priority, the two shared the threads band by band: a 12-band
+/// interactive render let the batch render finish a band of 12 tiles before each of its own.
+#[test]
+fn an_interactive_render_goes_ahead_of_a_batch_render() {
+    let scene = Arc::new(default_heart());
+    let renderer = Arc::new(Renderer::new(2).unwrap());
+    let batch = RenderRequest {
+        width: Some(160),
+        height: Some(120),
+        spp: 24,
+        seed: 9,
+        ..RenderRequest::default()
+    };
+    let alone = renderer
+        .render(&scene, &batch, &Control::default())
+        .unwrap();
+    let interactive = RenderRequest {
+        width: Some(48),
+        height: Some(192),
+        spp: 1,
+        ..RenderRequest::default()
+    };
+    for streamed in [false, true] {
+        let tiles = Arc::new(AtomicU64::new(0));
+        let finished = Arc::new(AtomicU64::new(0));
+        let bands = Arc::new(Mutex::new(vec![None::<Vec<film::Vec3>>; 8]));
+        let long = {
+            let (scene, renderer, batch) = (scene.clone(), renderer.clone(), batch.clone());
+            let (tiles, finished, bands) = (tiles.clone(), finished.clone(), bands.clone());
+            std::thread::spawn(move || {
+                let progress = move |_: Progress| {
+                    tiles.fetch_add(1, Ordering::SeqCst);
+                };
+                let control = Control::new(CancelToken::new(), progress);
+                let hook = |row: u32, rows: &[film::Vec3], _: Option<&[f32]>| {
+                    bands.lock().unwrap()[row as usize / 16] = Some(rows.to_vec());
+                };
+                let image = if streamed {
+                    renderer
+                        .render_streamed(&scene, &batch, &control, &hook)
+                        .map(|_| None)
+                } else {
+                    renderer
+                        .render_in_bands(&scene, &batch, &control, &hook)
+                        .map(|r| Some(r.image))
+                };
+                finished.store(1, Ordering::SeqCst);
+                image.unwrap()
+            })
+        };
+        while tiles.load(Ordering::SeqCst) == 0 {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let mut most_during = 0;
+        let mut runs = 0;
+        while finished.load(Ordering::SeqCst) == 0 && runs < 40 {
+            let before = tiles.load(Ordering::SeqCst);
+            let control = Control::default().with_priority(Priority::Interactive);
+            renderer.render(&scene, &interactive, &control).unwrap();
+            let during = tiles.load(Ordering::SeqCst) - before;
+            most_during = most_during.max(during);
+            runs += 1;
+            std::thread::sleep(Duration::from_millis(3));
+        }
+        let image = long.join().unwrap();
+        assert!(
+            runs >= 3,
+            "only {runs} interactive renders ran during the batch render"
+        );
+        // Each thread may finish the tile it was in, and one more may start before the
+        // interactive render is counted in.
+        assert!(
+            most_during <= 4,
+            "the batch render finished {most_during} tiles during one interactive render"
+        );
+        if let Some(image) = image {
+            assert_eq!(image.pixels, alone.image.pixels, "kept");
+        }
+        let bands = bands.lock().unwrap();
+        for (band, rows) in alone.image.pixels.chunks(160 * 16).zip(bands.iter()) {
+            assert_eq!(Some(band), rows.as_deref(), "streamed {streamed}");
+        }
+    }
 }

@@ -37,7 +37,7 @@ let pendingSave = null;
 const stats = { firstInput: 0 };
 // For tests and the measuring script: what the page received and sent.
 window.kardia = {
-  state, frames: [], views: [], errors: [], messages: [], problems: [], lastProblem: null, extent: null,
+  state, frames: [], views: [], errors: [], messages: [], saveProgress: [], meshProgress: [], problems: [], lastProblem: null, extent: null,
   sent: () => seq, currentScene: () => currentScene(),
 };
 
@@ -269,10 +269,14 @@ function onText(m) {
   if (m.type === "scene_error") return showProblem(m.seq, m.problem);
   if (m.type === "preset") return onPreset(m);
   if (m.type === "extent") return onExtent(m);
+  if (m.type === "save_progress") return onSaveProgress(m);
+  if (m.type === "probe") return onProbe(m);
+  if (m.type === "mesh_progress") return onMeshProgress(m);
   if (m.type === "error") {
     window.kardia.errors.push(m.message);
     say(m.message);
     if (pendingSave && m.seq === pendingSave.seq) endSave();
+    if (pendingMesh && m.seq === pendingMesh.seq) pendingMesh = null;
   }
 }
 
@@ -282,6 +286,7 @@ function onBinary(buffer) {
   const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buffer, 4, n)));
   const payload = new Uint8Array(buffer, 4 + n);
   if (header.type === "png") return onPng(header, payload);
+  if (header.type === "mesh") return onMesh(header, payload);
   if (header.seq < drawnSeq) return;
   if (header.seq > drawnSeq) clearProblem();
   drawnSeq = header.seq;
@@ -599,7 +604,31 @@ function showLineNumbers(badLine = 0) {
   }
   gutter.scrollTop = $("scene-text").scrollTop;
 }
-$("scene-text").addEventListener("scroll", () => { $("scene-lines").scrollTop = $("scene-text").scrollTop; });
+$("scene-text").addEventListener("scroll", () => {
+  const area = $("scene-text");
+  $("scene-lines").scrollTop = area.scrollTop;
+  $("scene-marks").scrollTop = area.scrollTop;
+  $("scene-marks").scrollLeft = area.scrollLeft;
+});
+
+// Marks `length` characters (at least one) from 1-based `line` and `column` of the scene
+// text, behind the textarea (no mark: line 0).
+function markSceneText(line = 0, column = 1, length = 1) {
+  const marks = $("scene-marks");
+  marks.replaceChildren();
+  if (!line) return;
+  const lines = $("scene-text").value.split("\n");
+  const text = lines[line - 1] ?? "";
+  const at = Math.min(text.length, Math.max(0, column - 1));
+  const mark = document.createElement("mark");
+  mark.textContent = text.slice(at, at + Math.max(1, length)) || " ";
+  mark.dataset.line = line;
+  mark.dataset.column = at + 1;
+  // Lines above the mark keep their height; the text itself is transparent.
+  marks.append(lines.slice(0, line - 1).map((l) => l + "\n").join("") + text.slice(0, at), mark, "\n");
+  marks.scrollTop = $("scene-text").scrollTop;
+  marks.scrollLeft = $("scene-text").scrollLeft;
+}
 
 $("scene-file").addEventListener("change", () => {
   const entry = hello.scenes.find(([n]) => n === $("scene-file").value);
@@ -608,6 +637,7 @@ $("scene-file").addEventListener("change", () => {
 });
 $("scene-text").addEventListener("input", () => {
   state.sceneText = $("scene-text").value;
+  markSceneText();
   showLineNumbers();
   const c = cameraFromText(state.sceneText);
   if (c) state.camera = c;
@@ -642,6 +672,8 @@ let legends = {};
 function showLegend() {
   const box = $("legend");
   const legend = legends[state.view];
+  $("probe").hidden = !legend;
+  $("probe").textContent = legend ? "hover or tap a pixel: what the root finder did there" : "";
   box.hidden = !legend;
   box.replaceChildren();
   if (!legend) return;
@@ -656,6 +688,7 @@ function showLegend() {
     chip.style.background = colour;
     chip.dataset.colour = colour;
     item.append(chip, label);
+    item.dataset.label = label;
     list.appendChild(item);
   }
   box.append(title, list);
@@ -679,6 +712,7 @@ function clearProblem() {
   $("equation").classList.remove("bad");
   $("equation").removeAttribute("aria-invalid");
   $("scene-text").classList.remove("bad");
+  markSceneText();
   canvas.classList.remove("stale");
   showLineNumbers();
   window.kardia.lastProblem = null;
@@ -735,6 +769,7 @@ function showProblem(problemSeq, problem) {
     let start = 0;
     for (let i = 0; i < problem.line - 1 && i < lines.length; i++) start += lines[i].length + 1;
     const column = Math.max(0, problem.column - 1);
+    markSceneText(problem.line, problem.column, problem.length);
     if (document.activeElement !== area) {
       area.setSelectionRange(start + column, start + column + Math.max(1, problem.length));
       area.scrollTop = Math.max(0, (problem.line - 4) * 16);
@@ -763,7 +798,10 @@ function pan(dx, dy) {
   const forward = sub(c.look, c.eye);
   const right = unit(cross(forward, c.up));
   const trueUp = unit(cross(right, forward));
-  const perPixel = (2 * len(forward) * Math.tan((c.fov * Math.PI) / 360)) / canvas.clientWidth;
+  // A pinhole camera's field of view is horizontal (degrees) and spans the distance to the
+  // look-at point; an orthographic camera's `fov` is its view's height in world units.
+  const perPixel = c.orthographic ? c.fov / canvas.clientHeight
+    : (2 * len(forward) * Math.tan((c.fov * Math.PI) / 360)) / canvas.clientWidth;
   const move = add(mul(right, -dx * perPixel), mul(trueUp, dy * perPixel));
   c.eye = add(c.eye, move);
   c.look = add(c.look, move);
@@ -771,6 +809,11 @@ function pan(dx, dy) {
 
 function zoom(factor) {
   const c = state.camera;
+  if (c.orthographic) {
+    // Moving an orthographic eye changes nothing on screen: the view's height is the zoom.
+    c.fov = Math.max(1e-6, Math.min(1e6, c.fov * factor));
+    return;
+  }
   const offset = sub(c.eye, c.look);
   const d = Math.max(1e-3, Math.min(1e4, len(offset) * factor));
   c.eye = add(c.look, mul(unit(offset), d));
@@ -823,6 +866,60 @@ const endDrag = (e) => {
   if (pointers.size === 0) canvas.classList.remove("dragging");
 };
 canvas.addEventListener("pointerup", endDrag);
+
+// ---------- the study views' probe: what the root finder did at a pixel ----------
+let probeSeq = 0;
+let probeTimer = null;
+let probeAt = null;
+function probe(e) {
+  if (!legends[state.view]) return;
+  const r = canvas.getBoundingClientRect();
+  const x = Math.floor(((e.clientX - r.left) * canvas.width) / r.width);
+  const y = Math.floor(((e.clientY - r.top) * canvas.height) / r.height);
+  if (x < 0 || y < 0 || x >= canvas.width || y >= canvas.height) return;
+  probeAt = [x, y];
+  if (probeTimer) return; // at most one probe every 80 ms, of the newest pixel
+  const sendProbe = () => {
+    probeTimer = null;
+    if (!probeAt) return;
+    const [px, py] = probeAt;
+    probeAt = null;
+    probeSeq += 1;
+    send({ type: "probe", seq: probeSeq, scene: currentScene(), width: canvas.width, height: canvas.height, x: px, y: py });
+    probeTimer = setTimeout(sendProbe, 80);
+  };
+  sendProbe();
+}
+canvas.addEventListener("pointermove", (e) => { if (pointers.size === 0) probe(e); });
+canvas.addEventListener("pointerdown", (e) => { if (e.pointerType !== "mouse") probe(e); });
+
+const num = (v) => (v === null || v === undefined ? "–" : Number(v.toPrecision(4)).toString());
+function onProbe(m) {
+  if (m.seq !== probeSeq) return;
+  window.kardia.lastProbe = m;
+  for (const li of document.querySelectorAll("#legend li")) {
+    li.classList.remove("probed");
+    li.removeAttribute("aria-current");
+  }
+  const r = m.report;
+  if (!r) {
+    $("probe").textContent = `pixel ${m.x}, ${m.y}: no root finder reached (the ray misses every surface's bounds)`;
+    return;
+  }
+  const what = r.hit ? `${r.settled_by} settled the first root, t = ${num(r.t)}`
+    : `${r.settled_by} proved there is no root`;
+  $("probe").textContent = `pixel ${m.x}, ${m.y}: ${what}; ${r.roots} distinct root${r.roots === 1 ? "" : "s"} ` +
+    `in the interval (degree ${r.degree}); ${r.refine_steps} refinement step${r.refine_steps === 1 ? "" : "s"}, ` +
+    `${r.splits} split${r.splits === 1 ? "" : "s"}, ${r.queries} quer${r.queries === 1 ? "y" : "ies"}; ` +
+    `|∇f| = ${num(r.gradient_norm)}`;
+  if (state.view === "path") {
+    const li = [...document.querySelectorAll("#legend li")].find((l) => l.dataset.label === r.settled_by);
+    if (li) {
+      li.classList.add("probed");
+      li.setAttribute("aria-current", "true");
+    }
+  }
+}
 canvas.addEventListener("pointercancel", endDrag);
 canvas.addEventListener("wheel", (e) => {
   e.preventDefault();
@@ -854,17 +951,82 @@ $("reset").onclick = () => {
 
 // ---------- export and share ----------
 $("save").onclick = () => {
+  if (pendingSave) return say("a save is rendering: wait for it or cancel it");
   const [width, height] = saveSize();
   const spp = saveSpp();
-  pendingSave = { seq: seq + 1000000 };
+  pendingSave = { seq: seq + 1000000, width, height, spp };
   say(`rendering ${width}×${height} at ${spp} spp…`);
+  const bar = $("save-progress");
+  bar.value = 0;
+  $("save-cancel").disabled = false;
   const alpha = $("save-alpha").checked;
   send({ type: "save", seq: pendingSave.seq, scene: currentScene(), width, height, spp, view: state.view, alpha });
+};
+$("save-cancel").onclick = () => {
+  if (!pendingSave) return;
+  send({ type: "cancel_save" });
+  say("cancelling the save…");
 };
 $("save-alpha").addEventListener("change", () => writeUrl());
 function endSave() {
   pendingSave = null;
+  $("save-cancel").disabled = true;
 }
+// The save's progress, from the server about every quarter second.
+function onSaveProgress(m) {
+  if (!pendingSave || m.seq !== pendingSave.seq) return;
+  const fraction = m.total > 0 ? m.done / m.total : 0;
+  $("save-progress").value = fraction;
+  window.kardia.saveProgress.push(fraction);
+  const { width, height, spp } = pendingSave;
+  say(`rendering ${width}×${height} at ${spp} spp: ${Math.floor(fraction * 100)} %`);
+}
+// Download STL / 3MF: the server meshes the scene as `kardia mesh` does.
+let pendingMesh = null;
+let meshSeq = 2000000;
+function requestMesh(format) {
+  if (pendingMesh) return say("a mesh is being made: wait for it");
+  meshSeq += 1;
+  pendingMesh = { seq: meshSeq, format };
+  $("mesh-progress").value = 0;
+  say(`meshing the surface for ${format.toUpperCase()}…`);
+  send({ type: "mesh", seq: meshSeq, scene: currentScene(), format });
+}
+$("mesh-stl").onclick = () => requestMesh("stl");
+$("mesh-3mf").onclick = () => requestMesh("3mf");
+function onMeshProgress(m) {
+  if (!pendingMesh || m.seq !== pendingMesh.seq) return;
+  $("mesh-progress").value = m.fraction;
+  window.kardia.meshProgress.push(m.fraction);
+  say(`meshing the surface for ${pendingMesh.format.toUpperCase()}: ${Math.floor(m.fraction * 100)} %`);
+}
+function onMesh(header, payload) {
+  if (!pendingMesh || header.seq !== pendingMesh.seq) return;
+  pendingMesh = null;
+  $("mesh-progress").value = 1;
+  const type = header.format === "3mf" ? "model/3mf" : "model/stl";
+  const blob = new Blob([payload], { type });
+  window.kardia.lastMesh = blob;
+  const a = document.createElement("a");
+  a.href = URL.createObjectURL(blob);
+  a.download = fileName().replace(/\.png$/, "." + header.format);
+  a.click();
+  setTimeout(() => URL.revokeObjectURL(a.href), 10000);
+  say(`saved ${a.download}: ${header.triangles} triangles, ${header.ms.toFixed(0)} ms`);
+}
+
+// Save scene: the scene text exactly as Copy scene copies it, as a .scene file.
+$("save-scene").onclick = () => {
+  const text = currentScene();
+  const blob = new Blob([text], { type: "text/plain" });
+  const a = document.createElement("a");
+  a.href = URL.createObjectURL(blob);
+  a.download = fileName().replace(/\.png$/, ".scene");
+  window.kardia.lastSceneFile = { name: a.download, text };
+  a.click();
+  setTimeout(() => URL.revokeObjectURL(a.href), 10000);
+  say(`saved ${a.download}`);
+};
 
 // A file name from the surface and its parameters.
 function fileName() {
@@ -878,6 +1040,7 @@ function fileName() {
 
 function onPng(header, payload) {
   endSave();
+  $("save-progress").value = 1;
   const blob = new Blob([payload], { type: "image/png" });
   window.kardia.lastPng = blob;
   const a = document.createElement("a");
