@@ -5,7 +5,7 @@
 
 use crate::mesh::write::{write_3mf, write_stl, MeshFormat, MeshMetadata};
 use crate::mesh::{mesh_solids, scene_solids, MeshRequest, SolidKind};
-use crate::scene::{self, LoadOptions};
+use crate::scene;
 
 /// `kardia mesh`'s default `--max-cells`.
 const MAX_CELLS: usize = 512;
@@ -39,8 +39,8 @@ pub fn mesh_scene(
     format: MeshFormat,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<MeshFile, String> {
-    let scene =
-        scene::parse(text, "explore.scene", &LoadOptions::default()).map_err(|e| e.to_string())?;
+    let scene = scene::parse(text, "explore.scene", &super::session::page_load_options())
+        .map_err(|e| e.to_string())?;
     let solids = scene_solids(&scene);
     let request = MeshRequest {
         kind: SolidKind::Inside,

@@ -341,6 +341,15 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
     let _ = writer.await;
 }
 
+/// How a page's scene text is loaded: as the command line loads it, but reading no file (a
+/// `MESH` is refused), since the text comes from a web page.
+pub(super) fn page_load_options() -> LoadOptions {
+    LoadOptions {
+        forbid_files: true,
+        ..LoadOptions::default()
+    }
+}
+
 fn error_message(seq: Option<u64>, message: String) -> Message {
     Message::Text(ServerMessage::Error { seq, message }.to_json().into())
 }
@@ -500,7 +509,7 @@ async fn load(
         .as_ref()
         .filter(|c| c.key == key)
         .map(|c| c.scene.clone());
-    let options = LoadOptions::default();
+    let options = page_load_options();
     if let Some(scene) = reuse {
         let camera_text = camera_lines_only(text);
         let parsed =
@@ -798,7 +807,7 @@ async fn save(
     let pixels_done = done.clone();
     let mut work = tokio::task::spawn_blocking(move || -> Result<(Vec<u8>, f64), String> {
         let renderer = &busy.0.renderer;
-        let scene: Scene = scene::parse(&text, "explore.scene", &LoadOptions::default())
+        let scene: Scene = scene::parse(&text, "explore.scene", &page_load_options())
             .map_err(|e| e.to_string())?;
         let camera = scene.camera.clone();
         let shared = share(scene);

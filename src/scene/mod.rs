@@ -35,6 +35,10 @@ pub struct LoadOptions {
     /// The frame to read the scene at (`clock`, `frame`, `frames`); `None` reads it as a still,
     /// frame 0 of 1.
     pub time: Option<FrameTime>,
+    /// True when the scene may read no file: a `MESH` statement is then an error. The
+    /// explorer sets it (its scenes come from a web page); false, the default, for the command
+    /// line and the library.
+    pub forbid_files: bool,
 }
 
 /// What a scene says about its animation, and whether anything in it moves.

@@ -652,6 +652,14 @@ impl Builder {
         let Some(t) = cur.peek().filter(|t| t.kind == TokenKind::Str) else {
             return Err(cur.unexpected("the mesh file's name in quotes"));
         };
+        if self.options.forbid_files {
+            return Err(cur.fail_help(
+                t.span.clone(),
+                "MESH reads a file, which a scene here may not do",
+                "a file is named here",
+                "render a scene with MESH with `kardia render`",
+            ));
+        }
         cur.pos += 1;
         let file = cur.src.text[t.inner()].to_string();
         let p = cur.point("the mesh's position")?;
@@ -813,6 +821,25 @@ fn unknown_keyword(cur: &Cursor, t: &Token, word: &str) -> SceneError {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_scene_that_may_read_no_file_refuses_mesh() {
+        let text = "CAMERA (6, 0, 0) (0, 0, 0) (0, 0, 1) 30\n\
+                    MESH \"no-such-file.stl\" (0, 0, 0) (1, 0, 0) (0, 1, 0) (0, 0, 1) (1, 0, 0)\n";
+        let forbidden = LoadOptions {
+            forbid_files: true,
+            ..LoadOptions::default()
+        };
+        let err = crate::scene::parse(text, "t.scene", &forbidden).expect_err("MESH refused");
+        let shown = format!("{err:?}");
+        assert!(shown.contains("MESH reads a file"), "{shown}");
+        // Allowed, the same text gets as far as opening the file.
+        let err = crate::scene::parse(text, "t.scene", &LoadOptions::default())
+            .expect_err("the file is missing");
+        let shown = format!("{err:?}");
+        assert!(!shown.contains("MESH reads a file"), "{shown}");
+        assert!(shown.contains("no-such-file.stl"), "{shown}");
+    }
 
     #[test]
     fn vertex_numbers_in_polygon_messages() {

@@ -15,7 +15,7 @@ pub mod read;
 use super::placed::{ObjectShape, Placed, Placement, PlacementNames};
 use super::{ShapeError, LANES};
 use crate::bvh::Bvh;
-use crate::geometry::{Aabb, DVec3, Ray};
+use crate::geometry::{Aabb, DVec3, Ray, RayLanes};
 use std::path::Path;
 
 /// Neighbouring triangles whose normals turn by more than this many degrees are not smoothed
@@ -369,17 +369,18 @@ impl ObjectShape for Triangles {
         let mut hit = [None; LANES];
         let idle = t_min.map(|t| t - 1.0);
         let start: [f64; LANES] = std::array::from_fn(|i| if live[i] { t_max[i] } else { idle[i] });
-        self.bvh.walk_lanes(local, t_min, start, |id, t_max| {
-            let corners = self.corners(id);
-            for i in 0..LANES {
-                if live[i] && t_max[i] > t_min[i] {
-                    if let Some(t) = shear[i].hit(corners, t_min[i], t_max[i]) {
-                        t_max[i] = t;
-                        hit[i] = Some(t);
+        self.bvh
+            .walk_lanes(&RayLanes::new(local), t_min, start, |id, t_max| {
+                let corners = self.corners(id);
+                for i in 0..LANES {
+                    if live[i] && t_max[i] > t_min[i] {
+                        if let Some(t) = shear[i].hit(corners, t_min[i], t_max[i]) {
+                            t_max[i] = t;
+                            hit[i] = Some(t);
+                        }
                     }
                 }
-            }
-        });
+            });
         hit
     }
 
