@@ -131,15 +131,7 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
     })
     .map_err(|e| e.to_string())?;
     bar.finish_and_clear();
-    let meta = MeshMetadata {
-        name: solids
-            .iter()
-            .map(|s| s.name.as_str())
-            .collect::<Vec<_>>()
-            .join(", "),
-        colour: solids[0].colour,
-        millimetres: args.size.is_some(),
-    };
+    let meta = MeshMetadata::of_solids(&solids, args.size.is_some());
     write_file(&printable.mesh, &meta, format, &args.output).map_err(|e| e.to_string())?;
     let v = printable.verified;
     outln!(

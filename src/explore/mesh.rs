@@ -52,15 +52,7 @@ pub fn mesh_scene(
         progress((i as f64 + done as f64 / total.max(1) as f64) / count as f64);
     })
     .map_err(|e| e.to_string())?;
-    let meta = MeshMetadata {
-        name: solids
-            .iter()
-            .map(|s| s.name.as_str())
-            .collect::<Vec<_>>()
-            .join(", "),
-        colour: solids[0].colour,
-        millimetres: false,
-    };
+    let meta = MeshMetadata::of_solids(&solids, false);
     let mut bytes = std::io::Cursor::new(Vec::new());
     match format {
         MeshFormat::ThreeMf => write_3mf(&printable.mesh, &meta, &mut bytes),

@@ -56,6 +56,22 @@ pub struct MeshMetadata {
     pub millimetres: bool,
 }
 
+impl MeshMetadata {
+    /// What a file of `solids` carries: their names joined by commas and the first one's
+    /// colour (black for none); `millimetres` as above.
+    pub fn of_solids(solids: &[super::NamedSolid], millimetres: bool) -> Self {
+        Self {
+            name: solids
+                .iter()
+                .map(|s| s.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            colour: solids.first().map_or([0; 3], |s| s.colour),
+            millimetres,
+        }
+    }
+}
+
 fn io(e: std::io::Error) -> OutputError {
     OutputError::Encode(e.to_string())
 }
