@@ -204,13 +204,28 @@ impl Aabb {
         t1: &mut [f64; LANES],
         alive: &mut [bool; LANES],
     ) {
+        let inverse = d.map(|d| d.map(|d| 1.0 / d));
+        self.clip_lanes_by(o, d, &inverse, t0, t1, alive);
+    }
+
+    /// [`Aabb::clip_lanes`] with the directions' reciprocals given (`inverse[axis][i]` is
+    /// `1.0 / d[axis][i]`, so the same bits), for rays tested against many boxes.
+    #[inline(always)]
+    pub fn clip_lanes_by(
+        &self,
+        o: &[[f64; LANES]; 3],
+        d: &[[f64; LANES]; 3],
+        inverse: &[[f64; LANES]; 3],
+        t0: &mut [f64; LANES],
+        t1: &mut [f64; LANES],
+        alive: &mut [bool; LANES],
+    ) {
         for axis in 0..3 {
             let (lo, hi) = (self.min[axis], self.max[axis]);
-            let (o, d) = (&o[axis], &d[axis]);
+            let (o, d, inv) = (&o[axis], &d[axis], &inverse[axis]);
             for i in 0..LANES {
                 let moving = d[i] != 0.0;
-                let inv = 1.0 / d[i];
-                let (a, b) = ((lo - o[i]) * inv, (hi - o[i]) * inv);
+                let (a, b) = ((lo - o[i]) * inv[i], (hi - o[i]) * inv[i]);
                 let (a, b) = if a > b { (b, a) } else { (a, b) };
                 let outside = (o[i] < lo) | (o[i] > hi);
                 t0[i] = if moving & (a > t0[i]) { a } else { t0[i] };
@@ -240,18 +255,40 @@ impl Aabb {
         alive: &mut std::arch::x86_64::__m256d,
     ) {
         use std::arch::x86_64::*;
+        let one = _mm256_set1_pd(1.0);
+        let inverse = d.map(|d| _mm256_div_pd(one, d));
+        self.clip_avx2_by(o, d, &inverse, t0, t1, alive);
+    }
+
+    /// [`Aabb::clip_avx2`] with the directions' reciprocals given (`1.0 / d`, so the same
+    /// bits), as [`Aabb::clip_lanes_by`] is to [`Aabb::clip_lanes`].
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) unsafe fn clip_avx2_by(
+        &self,
+        o: &[std::arch::x86_64::__m256d; 3],
+        d: &[std::arch::x86_64::__m256d; 3],
+        inverse: &[std::arch::x86_64::__m256d; 3],
+        t0: &mut std::arch::x86_64::__m256d,
+        t1: &mut std::arch::x86_64::__m256d,
+        alive: &mut std::arch::x86_64::__m256d,
+    ) {
+        use std::arch::x86_64::*;
         // `if c {a} else {b}`.
         let pick = |c: __m256d, a: __m256d, b: __m256d| _mm256_blendv_pd(b, a, c);
-        let (zero, one) = (_mm256_setzero_pd(), _mm256_set1_pd(1.0));
+        let zero = _mm256_setzero_pd();
         for axis in 0..3 {
             let (lo, hi) = (
                 _mm256_set1_pd(self.min[axis]),
                 _mm256_set1_pd(self.max[axis]),
             );
-            let (o, d) = (o[axis], d[axis]);
+            let (o, d, inv) = (o[axis], d[axis], inverse[axis]);
             // `d != 0.0` (true for a NaN).
             let moving = _mm256_cmp_pd::<_CMP_NEQ_UQ>(d, zero);
-            let inv = _mm256_div_pd(one, d);
             let a = _mm256_mul_pd(_mm256_sub_pd(lo, o), inv);
             let b = _mm256_mul_pd(_mm256_sub_pd(hi, o), inv);
             let swap = _mm256_cmp_pd::<_CMP_GT_OQ>(a, b);
@@ -332,26 +369,19 @@ impl RayLanes {
     fn meet_portable(&self, bounds: &Aabb, t_min: [f64; LANES], t_max: [f64; LANES]) -> u32 {
         let (mut t0, mut t1) = (t_min, t_max);
         let mut alive = [true; LANES];
-        for axis in 0..3 {
-            let (lo, hi) = (bounds.min[axis], bounds.max[axis]);
-            let (o, d, inv) = (&self.origin[axis], &self.dir[axis], &self.inverse[axis]);
-            for i in 0..LANES {
-                let moving = d[i] != 0.0;
-                let (a, b) = ((lo - o[i]) * inv[i], (hi - o[i]) * inv[i]);
-                let (a, b) = if a > b { (b, a) } else { (a, b) };
-                let outside = (o[i] < lo) | (o[i] > hi);
-                t0[i] = if moving & (a > t0[i]) { a } else { t0[i] };
-                t1[i] = if moving & (b < t1[i]) { b } else { t1[i] };
-                // `t0 > t1` is `clip`'s test for an empty interval (a NaN bound passes it).
-                let empty = t0[i] > t1[i];
-                alive[i] &= if moving { !empty } else { !outside };
-            }
-        }
+        bounds.clip_lanes_by(
+            &self.origin,
+            &self.dir,
+            &self.inverse,
+            &mut t0,
+            &mut t1,
+            &mut alive,
+        );
         (0..LANES).fold(0, |mask, i| mask | (alive[i] as u32) << i)
     }
 
     /// [`RayLanes::meet`] on AVX2 registers (lane `i` of each): the same operations as
-    /// [`RayLanes::meet_portable`] and [`Aabb::clip_avx2`], so the same answers.
+    /// [`RayLanes::meet_portable`] ([`Aabb::clip_avx2_by`]), so the same answers.
     ///
     /// # Safety
     /// The processor must have AVX2.
@@ -360,47 +390,27 @@ impl RayLanes {
     #[inline]
     unsafe fn meet_avx2(&self, bounds: &Aabb, t_min: [f64; LANES], t_max: [f64; LANES]) -> u32 {
         use std::arch::x86_64::*;
-        // `if c {a} else {b}`.
-        let pick = |c: __m256d, a: __m256d, b: __m256d| _mm256_blendv_pd(b, a, c);
-        let zero = _mm256_setzero_pd();
         // Each array holds the four `f64`s read.
         let load = |x: &[f64; LANES]| _mm256_loadu_pd(x.as_ptr());
         let mut t0 = load(&t_min);
         let mut t1 = load(&t_max);
         let mut alive = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-        for axis in 0..3 {
-            let (lo, hi) = (
-                _mm256_set1_pd(bounds.min[axis]),
-                _mm256_set1_pd(bounds.max[axis]),
-            );
-            let (o, d, inv) = (
-                load(&self.origin[axis]),
-                load(&self.dir[axis]),
-                load(&self.inverse[axis]),
-            );
-            // `d != 0.0` (true for a NaN).
-            let moving = _mm256_cmp_pd::<_CMP_NEQ_UQ>(d, zero);
-            let a = _mm256_mul_pd(_mm256_sub_pd(lo, o), inv);
-            let b = _mm256_mul_pd(_mm256_sub_pd(hi, o), inv);
-            let swap = _mm256_cmp_pd::<_CMP_GT_OQ>(a, b);
-            let (a, b) = (pick(swap, b, a), pick(swap, a, b));
-            let outside = _mm256_or_pd(
-                _mm256_cmp_pd::<_CMP_LT_OQ>(o, lo),
-                _mm256_cmp_pd::<_CMP_GT_OQ>(o, hi),
-            );
-            t0 = pick(
-                _mm256_and_pd(moving, _mm256_cmp_pd::<_CMP_GT_OQ>(a, t0)),
-                a,
-                t0,
-            );
-            t1 = pick(
-                _mm256_and_pd(moving, _mm256_cmp_pd::<_CMP_LT_OQ>(b, t1)),
-                b,
-                t1,
-            );
-            let empty = _mm256_cmp_pd::<_CMP_GT_OQ>(t0, t1);
-            alive = _mm256_andnot_pd(pick(moving, empty, outside), alive);
-        }
+        bounds.clip_avx2_by(
+            &[
+                load(&self.origin[0]),
+                load(&self.origin[1]),
+                load(&self.origin[2]),
+            ],
+            &[load(&self.dir[0]), load(&self.dir[1]), load(&self.dir[2])],
+            &[
+                load(&self.inverse[0]),
+                load(&self.inverse[1]),
+                load(&self.inverse[2]),
+            ],
+            &mut t0,
+            &mut t1,
+            &mut alive,
+        );
         _mm256_movemask_pd(alive) as u32
     }
 }
