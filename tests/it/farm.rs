@@ -13,19 +13,27 @@ fn recipe(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// Runs a recipe script with the test's kardia binary, in `dir`.
+/// Runs a recipe script with the test's kardia binary, in `dir`, two jobs at a time.
 fn run_recipe(dir: &Path, name: &str, args: &[&str]) {
+    run_recipe_with(dir, name, args, "-j 2");
+}
+
+/// Runs a recipe script of examples/farm/ with the test's kardia binary, in `dir`, with
+/// `parallel_opts` (GNU parallel's options, as `PARALLEL_OPTS`); fails the test with the
+/// recipe's output when it fails.
+pub(crate) fn run_recipe_with(dir: &Path, name: &str, args: &[&str], parallel_opts: &str) {
     let out = Command::new("bash")
         .arg(recipe(name))
         .args(args)
         .env("KARDIA", env!("CARGO_BIN_EXE_kardia"))
-        .env("PARALLEL_OPTS", "-j 2")
+        .env("PARALLEL_OPTS", parallel_opts)
         .current_dir(dir)
         .output()
         .expect("bash runs");
     assert!(
         out.status.success(),
-        "{name} {args:?} failed (GNU parallel must be installed: apt-get install parallel):\n{}{}",
+        "{name} {args:?} with {parallel_opts} failed (GNU parallel must be installed: \
+         apt-get install parallel):\n{}{}",
         String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );

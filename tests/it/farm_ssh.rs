@@ -11,6 +11,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use super::anim_cli::{ok, SCENE};
+use super::farm::run_recipe_with as run_recipe;
 
 const SSHD: &str = "/usr/sbin/sshd";
 
@@ -79,27 +80,6 @@ fn start_sshd(dir: &Path) -> Sshd {
         port,
         key: dir.join("user_key"),
     }
-}
-
-/// Runs a recipe of examples/farm/ in `dir` with `parallel_opts`.
-fn run_recipe(dir: &Path, name: &str, args: &[&str], parallel_opts: &str) {
-    let recipe = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("examples/farm")
-        .join(name);
-    let out = Command::new("bash")
-        .arg(recipe)
-        .args(args)
-        .env("KARDIA", env!("CARGO_BIN_EXE_kardia"))
-        .env("PARALLEL_OPTS", parallel_opts)
-        .current_dir(dir)
-        .output()
-        .expect("bash runs");
-    assert!(
-        out.status.success(),
-        "{name} {args:?} with {parallel_opts}:\n{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
 }
 
 #[test]
