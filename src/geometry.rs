@@ -339,7 +339,7 @@ impl RayLanes {
             std::array::from_fn(|axis| std::array::from_fn(|i| rays[i].dir[axis]));
         let inverse = dir.map(|d| d.map(|d| 1.0 / d));
         #[cfg(target_arch = "x86_64")]
-        let avx2 = std::arch::is_x86_feature_detected!("avx2");
+        let avx2 = crate::cpu::avx2();
         #[cfg(not(target_arch = "x86_64"))]
         let avx2 = false;
         Self {

@@ -8,6 +8,7 @@ pub mod animation;
 pub mod bvh;
 pub mod camera;
 pub mod cli;
+pub mod cpu;
 pub mod explore;
 pub mod film;
 pub mod formats;

@@ -23,7 +23,7 @@ mod render;
 mod roots;
 
 use crate::pipeline::CancelToken;
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 pub use render::INTERRUPTED;
 
@@ -53,11 +53,26 @@ enum Command {
     Mesh(mesh::MeshArgs),
 }
 
+/// The command line, parsed; `--version` also names the code path this process takes
+/// ([`crate::cpu::path_name`]), so a bug report says whether AVX2 ran.
+fn parse_command_line() -> Cli {
+    let long_version = format!(
+        "{} (code path: {}; {}=baseline selects the baseline)",
+        env!("CARGO_PKG_VERSION"),
+        crate::cpu::path_name(),
+        crate::cpu::ENV_VAR
+    );
+    // Made once per process; clap keeps `&'static` texts.
+    let long_version: &'static str = Box::leak(long_version.into_boxed_str());
+    let matches = Cli::command().long_version(long_version).get_matches();
+    Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+}
+
 /// Runs the command line and returns the process exit code. `interrupt` is the binary's
 /// Ctrl-C: once cancelled, a render in progress stops within a tile, writes nothing and the
 /// code is [`INTERRUPTED`] (the library installs no signal handler).
 pub fn main(interrupt: &CancelToken) -> i32 {
-    let cli = Cli::parse();
+    let cli = parse_command_line();
     match cli.command {
         None => render::run(render::RenderArgs::default(), interrupt),
         Some(Command::Render(a)) => render::run(a, interrupt),

@@ -31,7 +31,7 @@ pub(crate) fn srgb8_into(pixels: &[Vec3], out: &mut [u8]) {
     let out = &mut out[..channels.len()];
     let table = srgb8_table();
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if crate::cpu::avx2() {
         // SAFETY: the processor has AVX2, checked just above.
         return unsafe { table.channels_avx2(channels, out) };
     }

@@ -647,7 +647,7 @@ impl<'a> PixelSampler<'a> {
         cancelled: &(dyn Fn() -> bool + Sync),
     ) -> (u64, bool) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if crate::cpu::avx2() {
             // SAFETY: the processor has AVX2, checked just above.
             return unsafe { self.tile_avx2(shader, region, xs, ys, band, cancelled) };
         }

@@ -256,7 +256,7 @@ impl Scene {
         t_max: [f64; LANES],
     ) -> [bool; LANES] {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if crate::cpu::avx2() {
             // SAFETY: the processor has AVX2.
             return unsafe { self.occluded_lanes_by_index_avx2(built, rays, t_min, t_max) };
         }
@@ -423,7 +423,7 @@ impl Scene {
         t_max: f64,
     ) -> [Option<(usize, f64)>; LANES] {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if crate::cpu::avx2() {
             // SAFETY: the processor has AVX2.
             return unsafe { self.nearest_lanes_by_index_avx2(built, rays, t_min, t_max) };
         }

@@ -241,6 +241,100 @@ fn exr_files_are_the_same_bytes_whatever_the_threads() {
     }
 }
 
+/// A scene of many hearts (the object hierarchy's four-ray walks) for the code-path test.
+const HEART_GRID: &str = "\
+SIZE 96 96
+CAMERA (12, 0, 0) (0, 0, 0) (0, 0, 1) 30
+LIGHT (9, -4, 6) (0.9, 0.88, 0.85) 0.6 SAMPLES 2
+MATERIAL ruby (0.8, 0.1, 0.1) SPECULAR 0.4 40
+REPEAT i FROM 0 TO 7
+  REPEAT j FROM 0 TO 7
+    HEART (0, (j - 3.5) * 0.8, (i - 3.5) * 0.8) (0.3, 0, 0) (0, 0.3, 0) (0, 0, 0.3) ruby
+  END
+END
+";
+
+#[test]
+fn the_baseline_and_avx2_code_paths_write_the_same_bytes() {
+    // Every routine with an AVX2 or FMA copy promises its baseline copy's bits: a farm of
+    // mixed processors makes one picture. KARDIA_CPU=baseline forces the baseline copies.
+    let kardia = env!("CARGO_BIN_EXE_kardia");
+    let version = |baseline: bool| {
+        let mut c = Command::new(kardia);
+        c.arg("--version");
+        if baseline {
+            c.env("KARDIA_CPU", "baseline");
+        } else {
+            c.env_remove("KARDIA_CPU");
+        }
+        String::from_utf8(c.output().unwrap().stdout).unwrap()
+    };
+    assert!(
+        version(true).contains("code path: baseline"),
+        "{}",
+        version(true)
+    );
+    let detected = version(false);
+    if detected.contains("code path: baseline") {
+        eprintln!(
+            "WARNING: this processor has neither AVX2 nor FMA: both runs take the baseline, \
+             so this test compares the baseline with itself ({detected})"
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("grid.scene"), HEART_GRID).unwrap();
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let cases = [
+        (scenes.join("menagerie.scene"), "160"),
+        (scenes.join("glass_heart.scene"), "120"),
+        (scenes.join("implicit/barth_sextic.scene"), "120"),
+        (scenes.join("implicit/chmutov.scene"), "120"),
+        (scenes.join("implicit/sphere16.scene"), "100"),
+        (d.join("grid.scene"), "96"),
+    ];
+    for (scene, width) in &cases {
+        for format in ["png", "exr"] {
+            let render = |baseline: bool| {
+                let out = d.join(format!("out_{baseline}.{format}"));
+                let mut c = Command::new(kardia);
+                c.arg("render")
+                    .arg(scene)
+                    .args([
+                        "--width",
+                        width,
+                        "--spp",
+                        "2",
+                        "--threads",
+                        "2",
+                        "--quiet",
+                        "-o",
+                    ])
+                    .arg(&out)
+                    .current_dir(d);
+                if baseline {
+                    c.env("KARDIA_CPU", "baseline");
+                } else {
+                    c.env_remove("KARDIA_CPU");
+                }
+                let run = c.output().unwrap();
+                assert!(
+                    run.status.success(),
+                    "{}: {}",
+                    scene.display(),
+                    String::from_utf8_lossy(&run.stderr)
+                );
+                std::fs::read(out).unwrap()
+            };
+            assert!(
+                render(false) == render(true),
+                "{} as {format}: the baseline code path wrote other bytes than the detected one",
+                scene.display()
+            );
+        }
+    }
+}
+
 #[test]
 fn without_a_terminal_progress_is_a_plain_line_and_quiet_silences_it() {
     let dir = tempfile::tempdir().unwrap();

@@ -32,7 +32,7 @@ pub(super) fn chords(
     out: &mut [Chord; LANES],
 ) -> [bool; LANES] {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if crate::cpu::avx2() {
         // SAFETY: the processor has AVX2, checked just above.
         return unsafe { chords_avx2(at, local, t_min, t_max, out) };
     }

@@ -897,7 +897,7 @@ impl ImplicitShape {
             return LaneSpans::NONE;
         };
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if crate::cpu::avx2() {
             // SAFETY: the processor has AVX2, checked just above.
             return unsafe { self.spans_lanes_avx2(object_box, rays) };
         }
@@ -1785,7 +1785,7 @@ impl ObjectShape for ImplicitShape {
         match &self.kind {
             Kind::Generic(s) => {
                 #[cfg(target_arch = "x86_64")]
-                if std::arch::is_x86_feature_detected!("avx2") {
+                if crate::cpu::avx2() {
                     // SAFETY: the processor has AVX2, checked just above.
                     return unsafe { self.intersect_lanes_generic_avx2(s, local, t_min, t_max) };
                 }

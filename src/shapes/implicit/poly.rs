@@ -479,7 +479,7 @@ impl Gradient {
         pw: &PowersLanes,
     ) -> ([[f64; LANES]; 3], [[f64; LANES]; 3]) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if crate::cpu::avx2() {
             // SAFETY: the processor has AVX2, checked just above.
             return unsafe { self.eval_with_bound_lanes_avx2(pw) };
         }
@@ -752,7 +752,7 @@ impl Compiled {
     /// multiply-adds in hardware as well, chosen at run time (the same bits either way).
     pub fn eval_dd(&self, p: [f64; 3]) -> Dd {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("fma") {
+        if crate::cpu::fma() {
             // SAFETY: the processor has FMA, checked just above.
             return unsafe { self.eval_dd_fma(p) };
         }
@@ -813,7 +813,7 @@ impl Compiled {
         out: &mut [[f64; LANES]],
     ) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if crate::cpu::avx2() {
             // SAFETY: the processor has AVX2, checked just above.
             return unsafe { self.compose_lanes_avx2(o, e, out) };
         }
@@ -856,7 +856,7 @@ impl Compiled {
     /// multiply-adds in hardware as well, chosen at run time (the same bits either way).
     pub fn compose_dd(&self, o: [Dd; 3], e: [Dd; 3], out: &mut [Dd; MAX_DEGREE + 1]) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("fma") {
+        if crate::cpu::fma() {
             // SAFETY: the processor has FMA, checked just above.
             return unsafe { self.compose_dd_fma(o, e, out) };
         }
