@@ -266,6 +266,29 @@ impl FrameJob {
         }
     }
 
+    /// The render key of an animated file of `range` in `kind` at `fps` frames per second,
+    /// each frame cropped to `region`: the first frame's key ([`FrameJob::key`], which names
+    /// the scene text and every setting) with the range, format, rate and region.
+    pub fn animation_key(
+        &self,
+        range: FrameRange,
+        kind: animated::AnimatedFormat,
+        fps: f64,
+        region: Region,
+    ) -> Result<String, FrameError> {
+        let (scene, request) = self.frame(range.first)?;
+        Ok(format!(
+            "{} frames={}..={} format={kind:?} fps={fps} region={},{} {}x{}",
+            self.key(&scene, &request, range.first),
+            range.first,
+            range.last,
+            region.x,
+            region.y,
+            region.width,
+            region.height
+        ))
+    }
+
     /// True when `path` already holds `frame` as this job makes it: the file decodes to the
     /// end ([`is_complete`]) and carries this frame's render key (a whole image, under
     /// [`tiles::KEY_TAG`]) or this frame's [`PartInfo`] (a region, under

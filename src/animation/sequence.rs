@@ -73,7 +73,9 @@ pub fn render_frames_to_files(
 
 /// Renders every frame of `range` (each `region` of its frame) into one animated file at
 /// `output`, written atomically, at `fps` frames per second. With `resume`, an `output`
-/// that is already a complete animation is kept and every frame counted as skipped.
+/// that is already a complete animation of this job (its render key: the scene, the
+/// settings, the frames, the rate and the region) is kept and every frame counted as
+/// skipped; any other file there is rendered anew.
 #[allow(clippy::too_many_arguments)]
 pub fn render_animated_file(
     job: &FrameJob,
@@ -87,7 +89,11 @@ pub fn render_animated_file(
     resume: bool,
     on_frame: &dyn Fn(FrameEvent),
 ) -> Result<Done, FrameError> {
-    if resume && is_complete_animation(output) {
+    let key = job.animation_key(range, kind, fps, region)?;
+    if resume
+        && is_complete_animation(output)
+        && super::animated::read_key(output).as_deref() == Some(key.as_str())
+    {
         range
             .frames()
             .for_each(|f| on_frame(FrameEvent::Skipped(f)));
@@ -105,6 +111,7 @@ pub fn render_animated_file(
         range.len(),
         fps,
         job.request.alpha,
+        &key,
     )?;
     let mut last = None;
     for frame in range.frames() {

@@ -489,6 +489,61 @@ fn resume_keeps_only_files_of_this_render_key() {
 }
 
 #[test]
+fn animated_files_resume_only_with_their_own_render_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("a.scene"), SCENE).unwrap();
+    for name in ["a.gif", "a.apng"] {
+        let run = |extra: &[&str]| {
+            let mut a = vec![
+                "render",
+                "a.scene",
+                "--threads",
+                "1",
+                "--resume",
+                "-o",
+                name,
+            ];
+            a.extend_from_slice(extra);
+            let out = super::anim_cli::kardia(d, &a);
+            assert!(out.status.success(), "{out:?}");
+            String::from_utf8_lossy(&out.stderr).into_owned()
+        };
+        let read = || std::fs::read(d.join(name)).unwrap();
+        let err = run(&["--spp", "1"]);
+        assert!(!err.contains("skipped"), "{name}: {err}");
+        let spp1 = read();
+        let err = run(&["--spp", "1"]);
+        assert!(
+            err.contains("(4 already complete, skipped)"),
+            "{name}: {err}"
+        );
+        // Other settings, other frames, another rate: rendered anew each time.
+        for extra in [
+            &["--spp", "2"][..],
+            &["--spp", "1", "--frames", "0..2"][..],
+            &["--spp", "1", "--seed", "3"][..],
+            &["--spp", "1", "--width", "20"][..],
+        ] {
+            let err = run(extra);
+            assert!(!err.contains("skipped"), "{name} {extra:?}: {err}");
+        }
+        let err = run(&["--spp", "1"]);
+        assert!(!err.contains("skipped"), "{name}: {err}");
+        assert_eq!(
+            read(),
+            spp1,
+            "{name}: the same settings give the same bytes"
+        );
+        // Another scene text: not this animation.
+        std::fs::write(d.join("a.scene"), format!("{SCENE}# another scene\n")).unwrap();
+        let err = run(&["--spp", "1"]);
+        assert!(!err.contains("skipped"), "{name}: {err}");
+        std::fs::write(d.join("a.scene"), SCENE).unwrap();
+    }
+}
+
+#[test]
 fn the_slurm_join_names_the_missing_bands_and_how_to_rerun_them() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
