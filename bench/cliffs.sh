@@ -13,7 +13,10 @@
 #     BINARY  the kardia binary (default: target/release/kardia, built with cargo first)
 #
 # Set KEEP=DIR to keep the scenes and images in DIR; ONLY=REGEX renders only the surfaces
-# whose name matches.
+# whose name matches. COARSE=1 times the explorer's coarse frame instead: 1/8 of an 800×600
+# view (100×75, SIZE ignored), one shadow ray a light (the spherical light's SAMPLES dropped,
+# as the explorer's live passes take one), the whole command's wall time (start, scene load
+# with its surface's load-time work, render, PNG) as "median s" (target: under 0.1 s).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RUNS=${1:-3}
@@ -54,6 +57,15 @@ tube8|"(x^2+y^2-1)^8 - 1e-12"|1|2
 LIST
 }
 
+samples=" SAMPLES 4"
+width=$SIZE
+height=$SIZE
+if [ -n "${COARSE:-}" ]; then
+  samples=""
+  width=100
+  height=75
+fi
+
 scene() { # SURFACE SCALE BOUND
   local bound=""
   [ -n "$3" ] && bound=" BOUND $3"
@@ -61,7 +73,7 @@ scene() { # SURFACE SCALE BOUND
 CAMERA (6, 1.2, 0.9) (0, 0, 0.05) (0, 0, 1) 32
 BACKGROUND (0.03, 0.03, 0.05)
 AMBIENT (0.06, 0.06, 0.07)
-LIGHT (7, -4, 6) (0.9, 0.88, 0.85) 0.6 SAMPLES 4
+LIGHT (7, -4, 6) (0.9, 0.88, 0.85) 0.6$samples
 LIGHT (3, 6, 1) (0.25, 0.25, 0.3)
 IMPLICIT $1 (0, 0, 0) ($2, 0, 0) (0, $2, 0) (0, 0, $2) (0.7454, 0.0319, 0.0802) SPECULAR 0.4 60 INSIDE (0.8714, 0.6308, 0.117)$bound
 SCENE
@@ -76,13 +88,20 @@ while IFS='|' read -r name surface scale bound; do
   for _ in $(seq 1 "$RUNS"); do
     # The render's time from its summary line ("…, T s, R rays, X k rays/s → …"): R / X,
     # which has two or three significant digits where T (two decimals) may have none.
-    line=$("$BIN" render "$dir/$name.scene" -o "$dir/$name.png" --width "$SIZE" \
-      --height "$SIZE" --spp 1 --threads 1 2>&1 | grep ' spp, ' | tail -n 1)
+    if [ -n "${COARSE:-}" ]; then
+      start=$(date +%s.%N)
+      "$BIN" render "$dir/$name.scene" -o "$dir/$name.png" --width "$width" --height "$height" \
+        --spp 1 --threads 1 >/dev/null 2>&1
+      times+=("$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "%.6f", b - a }')")
+      continue
+    fi
+    line=$("$BIN" render "$dir/$name.scene" -o "$dir/$name.png" --width "$width" \
+      --height "$height" --spp 1 --threads 1 2>&1 | grep ' spp, ' | tail -n 1)
     times+=("$(sed -E 's/.*, ([0-9]+) rays, ([0-9.]+) ?([kM]?) rays\/s.*/\1 \2 \3/' <<<"$line" |
       awk '{ r = $2 * ($3 == "M" ? 1e6 : ($3 == "k" ? 1e3 : 1)); printf "%.6f", $1 / r }')")
   done
   median=$(printf '%s\n' "${times[@]}" | sort -g | awk '{ a[NR] = $1 } END { print a[int((NR + 1) / 2)] }')
-  pps=$(awk -v t="$median" -v n="$((SIZE * SIZE))" 'BEGIN { printf "%.0f", n / (t > 0 ? t : 0.001) }')
+  pps=$(awk -v t="$median" -v n="$((width * height))" 'BEGIN { printf "%.0f", n / (t > 0 ? t : 0.001) }')
   printf '%-14s %12s %14s\n' "$name" "$median" "$pps"
   results+=("$name $pps")
 done < <(corpus)

@@ -33,6 +33,7 @@ pub mod heart_form;
 pub mod poly;
 pub mod presets;
 pub mod torus_form;
+pub mod tree;
 
 use super::heart::HeartShape;
 use super::placed::{ObjectShape, Placed, Placement};
@@ -123,6 +124,49 @@ fn residual_is_rounding(v: f64, m: f64) -> bool {
     v.abs() <= MAX_ROOT_RESIDUAL * m
 }
 
+/// How many times the expansion's rounding must exceed the tree's, near the surface, for
+/// [`through_tree`]: the ordinary surfaces (presets, gallery) stay below 5 — their
+/// expansions cancel little — and the cliffs of issue 36 lie above 150 (see the test
+/// `only_cancelling_expansions_go_through_the_tree`).
+const TREE_ADVANTAGE: f64 = 50.0;
+
+/// Whether the equation's tree is to carry the surface's rays and normals: where the
+/// expansion `f` cancels by many more orders than the tree near the surface (`(x+y+z+1)^16
+/// = 1`: terms of `(|x|+|y|+|z|+1)^16` beside values near 1), by [`tree_advantage`].
+fn through_tree(f: &Compiled, tree: &tree::Tree, bound: f64) -> bool {
+    tree_advantage(f, tree, bound) >= TREE_ADVANTAGE
+}
+
+/// How many times the expansion's rounding `ε·Σ|terms|` exceeds the tree's error bound near
+/// the surface: the median over the quarter of the points of a 9×9×9 grid inside the clip
+/// ball of radius `bound` where `|f|` is smallest (0 where there are none).
+fn tree_advantage(f: &Compiled, tree: &tree::Tree, bound: f64) -> f64 {
+    const N: usize = 9;
+    let mut points = Vec::with_capacity(N * N * N);
+    for i in 0..N * N * N {
+        // Cell centres, nudged off the symmetry planes where many surfaces vanish exactly.
+        let at = |k: usize| ((2 * k + 1) as f64 / N as f64 - 1.0 + 0.0123) * bound;
+        let p = [at(i % N), at(i / N % N), at(i / (N * N))];
+        if p.iter().map(|c| c * c).sum::<f64>() > bound * bound {
+            continue;
+        }
+        let rounding = f64::EPSILON * f.eval_with_bound(p).1;
+        let tree_value = tree.value(p);
+        let ratio = rounding / tree_value.error.max(f64::MIN_POSITIVE);
+        points.push((tree_value.value.abs(), ratio));
+    }
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut near: Vec<f64> = points[..points.len().div_ceil(4)]
+        .iter()
+        .map(|&(_, ratio)| ratio)
+        .collect();
+    if near.is_empty() {
+        return 0.0;
+    }
+    near.sort_by(f64::total_cmp);
+    near[near.len() / 2]
+}
+
 /// The largest share of its box's volume the surface's cells may fill to be used for
 /// culling (Chmutov's octic and the degree-16 sphere fill all of it; the torus about half,
 /// Barth's sextic a fifth).
@@ -138,6 +182,12 @@ struct Surface {
     /// The closed form of the ray polynomial when the surface is a torus about the z axis
     /// ([`torus_form`]); the general composition otherwise.
     torus: Option<torus_form::TorusForm>,
+    /// The equation's own tree, when the expansion's rounding is far above the tree's
+    /// ([`through_tree`]): rays are then composed through it with a bound on every
+    /// coefficient's error, ill-conditioned roots recentred through it before double-double,
+    /// and normals whose `f64` gradient is lost to the expansion's cancellation taken from
+    /// it. `None` for every other surface, which the tree leaves untouched.
+    tree: Option<tree::Tree>,
     /// Object-space box holding the surface's part inside the clip sphere
     /// ([`extent::zero_set`]); `None` when there is none.
     object_box: Option<Aabb>,
@@ -153,9 +203,10 @@ impl Surface {
     /// general composition.
     #[inline]
     fn compose(&self, mid: [f64; 3], e: [f64; 3], out: &mut Uni) {
-        match &self.torus {
-            Some(t) => t.compose(mid, e, out),
-            None => self.f.compose_into(mid, e, out),
+        match (&self.torus, &self.tree) {
+            (Some(t), _) => t.compose(mid, e, out),
+            (None, Some(tree)) => tree.compose(mid, e, out, &mut [0.0; MAX_DEGREE + 1]),
+            (None, None) => self.f.compose_into(mid, e, out),
         }
     }
 
@@ -243,6 +294,14 @@ impl Surface {
         if g.abs().max_element() > GRADIENT_MARGIN * noise {
             return g;
         }
+        if self
+            .tree
+            .as_ref()
+            .is_some_and(|tree| tree_says_smooth(tree, q, h))
+        {
+            // The double-double gradient at `q` alone, as `smooth_gradient` answers.
+            return self.gradient_dd(q);
+        }
         if let Some(n) = self.smooth_gradient(q, h, g, noise) {
             return n;
         }
@@ -279,6 +338,50 @@ const PROBE_MARGIN: f64 = 10.0 / FLAT_ANGLE;
 /// for the surface to be flat across it (a tilt of about this many radians per unit
 /// curvature).
 const SIGN_SPHERE: f64 = 1e-5;
+
+/// The corners of a regular tetrahedron on the unit cube's diagonals (times `1/√3` on the
+/// unit sphere): the probes of [`Surface::smooth_gradient`] and [`tree_smooth_gradient`].
+const TETRAHEDRON: [[f64; 3]; 4] = [
+    [1.0, 1.0, 1.0],
+    [1.0, -1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+];
+
+/// [`Surface::smooth_gradient`]'s test read from the equation's tree
+/// ([`tree::Tree::gradient`], with its error bounds for the rounding): true when, at `q` and
+/// at the four probes on the sphere of radius `h` about it, `∇f` is [`GRADIENT_MARGIN`]
+/// times above its bound (the largest of its components') and its directions agree within
+/// [`FLAT_ANGLE`]; the surface is then flat across the sphere, and `∇f` at `q` (taken in
+/// double-double, the normal `smooth_gradient` gives) is its normal. Where the expansion
+/// cancels and the tree does not (`(x+y+z+1)^16 = 1`), the probes cost a few `f64`
+/// operations each instead of a double-double evaluation of the expansion. False near a
+/// curve where `∇f` vanishes, or where the tree's own bound is not clear.
+fn tree_says_smooth(tree: &tree::Tree, q: DVec3, h: f64) -> bool {
+    tree_smooth_direction(tree, q, h).is_some()
+}
+
+/// [`tree_says_smooth`]'s test, with the tree's gradient at `q` where it passes.
+fn tree_smooth_direction(tree: &tree::Tree, q: DVec3, h: f64) -> Option<DVec3> {
+    let clear = |p: DVec3| {
+        let g = tree.gradient(p.to_array());
+        let v = DVec3::from_array(g.map(|c| c.value));
+        let bound = g.iter().fold(0.0f64, |m, c| m.max(c.error));
+        // False for a NaN or an infinite bound too.
+        (v.abs().max_element() > GRADIENT_MARGIN * bound && bound.is_finite()).then_some(v)
+    };
+    let g0 = clear(q)?;
+    let dir0 = g0 / g0.length();
+    for s in TETRAHEDRON {
+        let gk = clear(q + h / 3f64.sqrt() * DVec3::from_array(s))?;
+        // False for a NaN too.
+        let flat = (gk / gk.length() - dir0).length() <= FLAT_ANGLE;
+        if !flat {
+            return None;
+        }
+    }
+    Some(g0)
+}
 
 impl Surface {
     /// `∇f` at `p` in double-double arithmetic, rounded to `f64`.
@@ -317,13 +420,7 @@ impl Surface {
         // terms at the probes are those at `q` to within `(1 + h/|q|)^degree`: twice
         // covers it).
         let in_f64 = g.abs().max_element() > PROBE_MARGIN * noise;
-        let sign = [
-            [1.0, 1.0, 1.0],
-            [1.0, -1.0, -1.0],
-            [-1.0, 1.0, -1.0],
-            [-1.0, -1.0, 1.0],
-        ];
-        for s in sign {
+        for s in TETRAHEDRON {
             let p = q + h / 3f64.sqrt() * DVec3::from_array(s);
             let (gk, clear) = if in_f64 {
                 let (values, magnitudes) = self.gradient_with_bound(p.to_array());
@@ -532,6 +629,14 @@ pub fn expand(equation: &str) -> Result<Poly, EquationError> {
 
 /// As [`expand`], with named constants besides x, y and z (see [`equation::parse_with`]).
 pub fn expand_with(equation: &str, constants: equation::Constants) -> Result<Poly, EquationError> {
+    parse_and_expand(equation, constants).map(|(_, poly)| poly)
+}
+
+/// [`expand_with`]'s syntax tree and expansion.
+fn parse_and_expand(
+    equation: &str,
+    constants: equation::Constants,
+) -> Result<(equation::Expr, Poly), EquationError> {
     let expr = equation::parse_with(equation, constants)?;
     let poly = Poly::expand(&expr)?;
     let whole = equation::Span {
@@ -553,7 +658,7 @@ pub fn expand_with(equation: &str, constants: equation::Constants) -> Result<Pol
             whole.error("the equation does not involve x, y or z, so it describes no surface")
         );
     }
-    Ok(poly)
+    Ok((expr, poly))
 }
 
 /// `BOUND r`'s rule: a finite number greater than 0 (the error spans `whole`, the equation).
@@ -591,7 +696,7 @@ impl Implicit {
         if let Some(b) = bound {
             check_bound(b, whole)?;
         }
-        let poly = expand_with(equation, constants)?;
+        let (expr, poly) = parse_and_expand(equation, constants)?;
         let f = Compiled::new(&poly);
         let bound = match bound.or_else(|| presets::recognise(equation).map(|p| p.bound)) {
             Some(b) => b,
@@ -617,7 +722,7 @@ impl Implicit {
                 },
             ));
         }
-        Self::generic(poly, f, frame, bound)
+        Self::generic(&expr, poly, f, frame, bound)
     }
 
     /// As [`Implicit::new`] with the bound given, always through the generic path, even for an
@@ -630,16 +735,27 @@ impl Implicit {
                 end: equation.len(),
             },
         )?;
-        let poly = expand(equation)?;
+        let (expr, poly) = parse_and_expand(equation, &|_| None)?;
         let f = Compiled::new(&poly);
-        Self::generic(poly, f, frame, bound)
+        Self::generic(&expr, poly, f, frame, bound)
     }
 
-    /// The generic path's shape of the expanded `poly` (compiled to `f`), clipped to `bound`
-    /// (already checked).
-    fn generic(poly: Poly, f: Compiled, frame: Frame, bound: f64) -> Result<Self, EquationError> {
+    /// The generic path's shape of the expanded `poly` (compiled to `f`) of the syntax tree
+    /// `expr`, clipped to `bound` (already checked).
+    fn generic(
+        expr: &equation::Expr,
+        poly: Poly,
+        f: Compiled,
+        frame: Frame,
+        bound: f64,
+    ) -> Result<Self, EquationError> {
         let grad = [0, 1, 2].map(|v| Compiled::new(&poly.derivative(v)));
         let torus = torus_form::recognise(&poly);
+        let tree = if torus.is_none() {
+            tree::Tree::new(expr, f.degree).filter(|t| through_tree(&f, t, bound))
+        } else {
+            None
+        };
         let zero_set = extent::zero_set(&f, bound);
         let to_box = |(lo, hi): ([f64; 3], [f64; 3])| {
             Aabb::new(DVec3::from_array(lo), DVec3::from_array(hi))
@@ -661,6 +777,7 @@ impl Implicit {
                 polynomial: std::sync::Arc::new(poly),
                 kind: Kind::Generic(Box::new(Surface {
                     torus,
+                    tree,
                     f,
                     gradient: Gradient::new(&grad),
                     grad,
@@ -1150,7 +1267,8 @@ impl ImplicitShape {
         if alive == 0 {
             return [None; LANES];
         }
-        if alive >= 2 {
+        // A surface composed through its tree goes one ray at a time.
+        if alive >= 2 && s.tree.is_none() {
             macro_rules! by_length {
                 ($($d:literal)*) => {
                     match s.f.degree + 1 {
@@ -1161,13 +1279,10 @@ impl ImplicitShape {
             }
             by_length!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17);
         }
-        // One lane (or a constant): each alone.
+        // One lane (or a constant, or a surface composed through its tree): each alone.
         std::array::from_fn(|i| {
             let span = spans.get(i)?;
-            let mut c: Uni = [0.0; MAX_DEGREE + 1];
-            s.compose(span.mid, span.e, &mut c);
-            let q = span.query(s, &mut c)?;
-            self.solve(s, &span, &c, q, t_max[i], &mut first_root, &mut false)
+            self.solve_span(s, &span, t_max[i], &mut first_root, &mut false)
         })
     }
 
@@ -1190,7 +1305,7 @@ impl ImplicitShape {
                 let span = spans.get(i)?;
                 let mut c = lane_polynomial(&cs, i);
                 let q = span.query(s, &mut c)?;
-                self.solve(s, &span, &c, q, t_max[i], &mut first_root, &mut false)
+                self.solve(s, &span, &c, None, q, t_max[i], &mut first_root, &mut false)
             });
         };
         let settled = queries.first_hits(s, solver, spans, &cs, t_max);
@@ -1233,6 +1348,7 @@ impl ImplicitShape {
             s,
             &span,
             &c,
+            None,
             q,
             t_max,
             &mut |c: &[f64], lo: f64, hi: f64| match answer.take() {
@@ -1256,12 +1372,38 @@ impl ImplicitShape {
         first_root: &mut impl FnMut(&[f64], f64, f64) -> Option<f64>,
         recentred: &mut bool,
     ) -> Option<f64> {
-        let (span, c, q) = self.first_query(s, ray, t_min, t_max)?;
-        self.solve(s, &span, &c, q, t_max, first_root, recentred)
+        let span = self.span(s, ray, t_min, t_max)?;
+        self.solve_span(s, &span, t_max, first_root, recentred)
+    }
+
+    /// [`ImplicitShape::intersect_generic`] from the ray's span on: the ray polynomial
+    /// composed (through the tree, with its error bounds, for a surface that has one), then
+    /// solved.
+    #[inline(always)]
+    fn solve_span(
+        &self,
+        s: &Surface,
+        span: &Span,
+        t_max: f64,
+        first_root: &mut impl FnMut(&[f64], f64, f64) -> Option<f64>,
+        recentred: &mut bool,
+    ) -> Option<f64> {
+        let mut c: Uni = [0.0; MAX_DEGREE + 1];
+        if let Some(tree) = &s.tree {
+            let mut error: Uni = [0.0; MAX_DEGREE + 1];
+            tree.compose(span.mid, span.e, &mut c, &mut error);
+            let q = span.query(s, &mut c)?;
+            return self.solve(s, span, &c, Some(&error), q, t_max, first_root, recentred);
+        }
+        s.compose(span.mid, span.e, &mut c);
+        let q = span.query(s, &mut c)?;
+        self.solve(s, span, &c, None, q, t_max, first_root, recentred)
     }
 
     /// The root-finding part of [`ImplicitShape::intersect_generic`], from its first query
-    /// `q` for the ray polynomial `c` (normalised by [`Span::query`]) on the chord `span`.
+    /// `q` for the ray polynomial `c` (normalised by [`Span::query`]) on the chord `span`;
+    /// `composed_error` bounds the error of each of `c`'s coefficients (before
+    /// normalising) where it was composed through the surface's tree.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn solve(
@@ -1269,6 +1411,7 @@ impl ImplicitShape {
         s: &Surface,
         span: &Span,
         c: &Uni,
+        composed_error: Option<&Uni>,
         q: Query,
         t_max: f64,
         first_root: &mut impl FnMut(&[f64], f64, f64) -> Option<f64>,
@@ -1290,7 +1433,7 @@ impl ImplicitShape {
         } = q;
         for _ in 0..8 {
             let root = first_root(&c[..=deg], s_lo, s_hi)?;
-            let radius = ill_conditioned(s, &c[..=deg], inv, mid, e, root);
+            let radius = ill_conditioned(s, &c[..=deg], composed_error, inv, mid, e, root);
             if radius == 0.0 {
                 let t = t_mid + root * t_half;
                 if t > guard && t < t_max && is_root(&c[..=deg], root) {
@@ -1303,10 +1446,29 @@ impl ImplicitShape {
                 continue;
             }
             // f64 cannot tell the roots near `root` apart: solve again there with the
-            // polynomial recentred and recomputed in double-double arithmetic.
+            // polynomial recentred, composed through the tree where that resolves it, else
+            // recomputed in double-double arithmetic.
             *recentred = true;
             let (w_lo, w_hi) = (root - radius, root + radius);
-            if let Some(r) = local_root(
+            let through_tree = s.tree.as_ref().and_then(|tree| {
+                tree_local_root(
+                    tree,
+                    s.f.degree,
+                    first_root,
+                    mid,
+                    e,
+                    root,
+                    radius,
+                    s_lo.max(w_lo),
+                    s_hi.min(w_hi),
+                )
+            });
+            if let Some(found) = through_tree {
+                if let Some(r) = found {
+                    let t = t_mid + r * t_half;
+                    return (t > guard && t < t_max).then_some(t);
+                }
+            } else if let Some(r) = local_root(
                 s,
                 first_root,
                 mid,
@@ -1665,27 +1827,46 @@ fn resolved(len: usize, inv: f64, magnitude: f64, dp: f64) -> bool {
 }
 
 /// Zero when `root` of the normalised ray polynomial `c` (scaled by `inv` from the
-/// composition of `s.f` with `mid + s·e`) is resolved by `f64` to [`SIMPLE_ROOT_RADIUS`];
-/// otherwise the half-width (a power of two, at most 2) of the interval around it within
-/// which the rounding of `p` can hide other roots or move this one.
+/// composition of `s.f` with `mid + s·e`, or of the surface's tree, whose bounds on the
+/// coefficients' errors before scaling are `composed_error`) is resolved by `f64` to
+/// [`SIMPLE_ROOT_RADIUS`]; otherwise the half-width (a power of two, at most 2) of the
+/// interval around it within which the rounding of `p` can hide other roots or move this
+/// one.
 #[inline]
-fn ill_conditioned(s: &Surface, c: &[f64], inv: f64, mid: [f64; 3], e: [f64; 3], root: f64) -> f64 {
+fn ill_conditioned(
+    s: &Surface,
+    c: &[f64],
+    composed_error: Option<&Uni>,
+    inv: f64,
+    mid: [f64; 3],
+    e: [f64; 3],
+    root: f64,
+) -> f64 {
     // p and p′ at the root.
     let (mut p, mut dp) = (0.0f64, 0.0f64);
     for &k in c.iter().rev() {
         dp = dp * root + p;
         p = p * root + k;
     }
-    let point = [0, 1, 2].map(|i| mid[i] + root * e[i]);
-    // The noise below grows with the magnitude sum; its cheap upper bound settles most roots
-    // (with the same answer: rounding keeps the order of the products).
-    if resolved(c.len(), inv, s.f.magnitude_bound(point), dp) {
-        return 0.0;
-    }
-    let noise = rounding_noise(c.len(), inv, s.f.eval_with_bound(point).1);
-    if noise <= SIMPLE_ROOT_RADIUS * dp.abs() {
-        return 0.0;
-    }
+    let noise = if let Some(error) = composed_error {
+        let noise = tree_noise(c, error, inv, root);
+        if noise <= SIMPLE_ROOT_RADIUS * dp.abs() {
+            return 0.0;
+        }
+        noise
+    } else {
+        let point = [0, 1, 2].map(|i| mid[i] + root * e[i]);
+        // The noise below grows with the magnitude sum; its cheap upper bound settles most
+        // roots (with the same answer: rounding keeps the order of the products).
+        if resolved(c.len(), inv, s.f.magnitude_bound(point), dp) {
+            return 0.0;
+        }
+        let noise = rounding_noise(c.len(), inv, s.f.eval_with_bound(point).1);
+        if noise <= SIMPLE_ROOT_RADIUS * dp.abs() {
+            return 0.0;
+        }
+        noise
+    };
     // The radius within which |p − p(root)| may stay below the noise: the smallest
     // (noise / |p⁽ᵐ⁾(root)/m!|)^(1/m) over m ≥ 1 (Taylor coefficients by synthetic division).
     let n = c.len() - 1;
@@ -1735,6 +1916,97 @@ fn local_root(
     let u_hi = ((hi - root) / radius).min(1.0);
     let u = first_root(&c[..=deg], u_lo, u_hi)?;
     Some((root + u * radius).clamp(lo, hi))
+}
+
+/// The noise of the normalised ray polynomial `c` at `u`, composed through a tree whose
+/// coefficients' errors (before the scaling by `inv`) are bounded by `error`: that error at
+/// `u`, `inv·Σ error_k·|u|ᵏ`, and the rounding of `c`'s evaluation there.
+#[inline]
+fn tree_noise(c: &[f64], error: &Uni, inv: f64, u: f64) -> f64 {
+    let a = u.abs();
+    let (mut composed, mut magnitude) = (0.0f64, 0.0f64);
+    for k in (0..c.len()).rev() {
+        composed = composed * a + error[k];
+        magnitude = magnitude * a + c[k].abs();
+    }
+    inv * composed * (1.0 + 1e-9) + ROUNDING * c.len() as f64 * magnitude
+}
+
+/// [`local_root`] through the equation's tree in `f64`: the first root in `[lo, hi]` (within
+/// `radius` of `root`) of `q(u) = f(P + u·E)` composed through `tree` (`P = mid + root·e`,
+/// `E = radius·e`, a polynomial of the surface's `degree`), with its coefficients' error
+/// bounds. `Some(Some(s))` when the root it finds is resolved by those bounds to
+/// [`SIMPLE_ROOT_RADIUS`] (as [`ill_conditioned`] asks of any root); `Some(None)` when there
+/// is none: the solver finds none in `q` even with its constant term moved towards zero by
+/// the largest error `q` may have on the window, so no polynomial within the bounds has one;
+/// `None` when the bounds cannot tell (the caller asks double-double).
+#[allow(clippy::too_many_arguments)]
+fn tree_local_root(
+    tree: &tree::Tree,
+    degree: usize,
+    first_root: &mut impl FnMut(&[f64], f64, f64) -> Option<f64>,
+    mid: [f64; 3],
+    e: [f64; 3],
+    root: f64,
+    radius: f64,
+    lo: f64,
+    hi: f64,
+) -> Option<Option<f64>> {
+    if lo >= hi || lo.is_nan() || hi.is_nan() {
+        return Some(None);
+    }
+    let p = [0, 1, 2].map(|i| mid[i] + root * e[i]);
+    // radius is a power of two: E is exact.
+    let big_e = [0, 1, 2].map(|i| e[i] * radius);
+    let (mut c, mut error): (Uni, Uni) = ([0.0; MAX_DEGREE + 1], [0.0; MAX_DEGREE + 1]);
+    tree.compose(p, big_e, &mut c, &mut error);
+    let (deg, inv) = normalise(&mut c, degree)?;
+    // The leading coefficients `normalise` dropped (left unscaled) count as error on
+    // `|u| ≤ 1`.
+    let dropped = inv
+        * (deg + 1..=degree)
+            .map(|k| c[k].abs() + error[k])
+            .sum::<f64>();
+    let u_lo = ((lo - root) / radius).max(-1.0);
+    let u_hi = ((hi - root) / radius).min(1.0);
+    let c = &c[..=deg];
+    if let Some(u) = first_root(c, u_lo, u_hi) {
+        let (mut v, mut dv) = (0.0f64, 0.0f64);
+        for &k in c.iter().rev() {
+            dv = dv * u + v;
+            v = v * u + k;
+        }
+        let noise = tree_noise(c, &error, inv, u) + dropped;
+        return (radius * noise <= SIMPLE_ROOT_RADIUS * dv.abs())
+            .then(|| Some((root + u * radius).clamp(lo, hi)));
+    }
+    // No root in `q`: none in any polynomial within the bounds when `q` stays farther from
+    // zero than they reach on the window, i.e. when `q` moved towards zero by that much
+    // still has none and keeps its sign.
+    let reach = u_lo.abs().max(u_hi.abs());
+    let (mut composed, mut at_mid, mut magnitude) = (0.0f64, 0.0f64, 0.0f64);
+    let middle = 0.5 * (u_lo + u_hi);
+    for k in (0..=deg).rev() {
+        composed = composed * reach + error[k];
+        at_mid = at_mid * middle + c[k];
+        magnitude = magnitude * middle.abs() + c[k].abs();
+    }
+    let shift = inv * composed * (1.0 + 1e-9) + dropped;
+    let sign = if at_mid > ROUNDING * (deg + 1) as f64 * magnitude + shift {
+        1.0
+    } else if at_mid < -(ROUNDING * (deg + 1) as f64 * magnitude + shift) {
+        -1.0
+    } else {
+        return None;
+    };
+    let mut moved: Uni = [0.0; MAX_DEGREE + 1];
+    moved[..=deg].copy_from_slice(c);
+    // Moved by at least `shift`, whatever the rounding of the subtraction.
+    moved[0] -= sign * (shift + 2.0 * f64::EPSILON * c[0].abs());
+    match first_root(&moved[..=deg], u_lo, u_hi) {
+        None => Some(None),
+        Some(_) => None,
+    }
 }
 
 impl ObjectShape for ImplicitShape {
@@ -2299,5 +2571,75 @@ mod tests {
             }
             assert!(hits > 2000, "{name}: {hits}");
         }
+    }
+}
+
+#[cfg(test)]
+mod tree_choice_tests {
+    use super::*;
+
+    /// Which surfaces go through their tree: the cliffs of issue 36, whose expansions cancel
+    /// by many orders; none of the presets, gallery surfaces or shipped scenes' equations.
+    #[test]
+    fn only_cancelling_expansions_go_through_the_tree() {
+        let ordinary = [
+            ("kummer 1.140175425", 1.0),
+            ("barth_sextic", 1.0),
+            ("clebsch", 1.0),
+            ("chmutov 6", 1.0),
+            ("chmutov 12", 1.0),
+            ("chmutov 16", 1.0),
+            ("(x^2+y^2+z^2)^8 = 1", 1.5),
+            ("4*(x^2 + y^2 + z^2) + 16*x*y*z - 1", 1.6),
+            ("x^2*y^2 + y^2*z^2 + z^2*x^2 - x*y*z", 1.0),
+            ("x^2 + y^2 + z^3 - z^2", 1.6),
+            ("x^2 + y^2 + z^2 - 1", 2.0),
+        ];
+        // `(x+y+z+1)^4 − 1` cancels little (17 times) and keeps its expansion.
+        let cliffs = [
+            "(x+y+z+1)^8 - 1",
+            "(x+y+z+1)^16 - 1",
+            "(x+y+z)^16 - 1",
+            "(x^2+y^2+z^2-1)^8 - 1e-5",
+            "(x^2+y^2-1)^8 - 1e-12",
+            "((x-0.5)^2+(y+0.3)^2+(z-0.2)^2)^8 = 1",
+        ];
+        let advantage = |text: &str, bound: f64| {
+            let (expr, poly) = parse_and_expand(text, &|_| None).unwrap();
+            let f = Compiled::new(&poly);
+            let tree = tree::Tree::new(&expr, f.degree).unwrap();
+            tree_advantage(&f, &tree, bound)
+        };
+        let mut failed = Vec::new();
+        for (name, bound) in ordinary {
+            let mut words = name.split(' ');
+            let head = words.next().unwrap();
+            let text = if PRESETS.iter().any(|(p, _)| *p == head) {
+                let params: Vec<f64> = words.map(|w| w.parse().unwrap()).collect();
+                preset_equation(head, &params).unwrap()
+            } else {
+                name.to_string()
+            };
+            let a = advantage(&text, bound);
+            eprintln!("{name}: {a:e}");
+            if a >= TREE_ADVANTAGE / 5.0 {
+                failed.push(format!("{name}: {a:e}"));
+            }
+        }
+        for text in cliffs {
+            let a = advantage(text, 2.0);
+            eprintln!("{text}: {a:e}");
+            if a < TREE_ADVANTAGE {
+                failed.push(format!("{text}: {a:e}"));
+            }
+        }
+        assert!(failed.is_empty(), "{failed:?}");
+        // The shipped scene's equation that is not a preset is a torus (its closed form).
+        let menagerie = "(x^2 + y^2 + z^2 + 0.91)^2 - 4*(x^2 + y^2) = 0";
+        let shape = Implicit::new(menagerie, Frame::identity(), Some(2.0)).unwrap();
+        let Kind::Generic(s) = &shape.object().kind else {
+            panic!("the generic path")
+        };
+        assert!(s.torus.is_some() && s.tree.is_none());
     }
 }
