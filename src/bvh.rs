@@ -541,6 +541,49 @@ mod tests {
     }
 
     #[test]
+    fn nearest_by_lane_walk_equals_nearest_by_list() {
+        // Four rays at once, each lane's range shrinking as its hits are found (the walk
+        // keeps far children and tests them again only after a visit).
+        let mut rng = Uniform::new(13);
+        let items = boxes(&mut rng, 300);
+        let bvh = Bvh::new(&items);
+        let mut visited = 0;
+        for _ in 0..1000 {
+            let rays: [Ray; LANES] = std::array::from_fn(|_| random_ray(&mut rng));
+            let mut by_walk: [Option<f64>; LANES] = [None; LANES];
+            bvh.walk_lanes(
+                &RayLanes::new(&rays),
+                [0.0; LANES],
+                [100.0; LANES],
+                |id, t_max| {
+                    visited += 1;
+                    let b = items[id as usize].1;
+                    if is_empty(&b) {
+                        return;
+                    }
+                    for lane in 0..LANES {
+                        if let Some((t, _)) = b.clip(&rays[lane], 0.0, t_max[lane]) {
+                            if by_walk[lane].is_none_or(|best| t < best) {
+                                by_walk[lane] = Some(t);
+                                t_max[lane] = t;
+                            }
+                        }
+                    }
+                },
+            );
+            for lane in 0..LANES {
+                let by_list = items
+                    .iter()
+                    .filter(|(_, b)| !is_empty(b))
+                    .filter_map(|(_, b)| Some(b.clip(&rays[lane], 0.0, 100.0)?.0))
+                    .min_by(f64::total_cmp);
+                assert_eq!(by_walk[lane], by_list, "lane {lane} of {rays:?}");
+            }
+        }
+        assert!(visited < 1000 * 300 / 2, "{visited} visits");
+    }
+
+    #[test]
     fn lowering_t_max_below_t_min_ends_the_walk() {
         let mut rng = Uniform::new(5);
         let items = boxes(&mut rng, 200);
