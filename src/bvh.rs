@@ -227,7 +227,8 @@ impl Bvh {
             return;
         }
         let inv = DVec3::ONE / ray.dir;
-        let mut stack = [0u32; MAX_DEPTH];
+        // Never read beyond `top`: left uninitialised (zeroing it cost more than a short walk).
+        let mut stack = [std::mem::MaybeUninit::<u32>::uninit(); MAX_DEPTH];
         let mut top = 0;
         let mut node = 0usize;
         loop {
@@ -248,7 +249,7 @@ impl Bvh {
                     } else {
                         (n.offset as usize, node + 1)
                     };
-                    stack[top] = far as u32;
+                    stack[top].write(far as u32);
                     top += 1;
                     node = near;
                     continue;
@@ -258,7 +259,8 @@ impl Bvh {
                 return;
             }
             top -= 1;
-            node = stack[top] as usize;
+            // SAFETY: entries below `top` were written before `top` passed them.
+            node = unsafe { stack[top].assume_init() } as usize;
         }
     }
 
@@ -268,9 +270,12 @@ impl Bvh {
     /// first along the first active lane's direction. `visit` asks the item for the lanes it
     /// chooses and may lower any lane's `t_max`; the walk ends once every lane is idle. Every
     /// item whose box meets some lane's ray on its range as it stands when the item's leaf is
-    /// reached is visited. Each node is tested against the four lanes at once
-    /// ([`RayLanes::meet`]); inlined into its caller, so that it is compiled for the
-    /// caller's instruction set.
+    /// reached is visited (and maybe an item of a leaf that only a lane parallel to one of
+    /// its slabs, outside it, could meet with an infinite range: [`RayLanes::may_meet`]).
+    /// Both children of a node the lanes meet are tested together (two independent chains of
+    /// vector operations), the walk goes on into the nearer one met and keeps the other for
+    /// later, tested again only where a visit since may have shortened the ranges. Inlined
+    /// into its caller, so that it is compiled for the caller's instruction set.
     #[inline(always)]
     pub fn walk_lanes(
         &self,
@@ -279,48 +284,76 @@ impl Bvh {
         mut t_max: [f64; LANES],
         mut visit: impl FnMut(u32, &mut [f64; LANES]),
     ) {
-        if self.nodes.is_empty() {
+        let Some(root) = self.nodes.first() else {
             return;
-        }
+        };
         // The lanes that are not idle, as a mask (bit `i` for lane `i`).
         let active = |t_max: &[f64; LANES]| {
             (0..LANES).fold(0u32, |mask, i| mask | ((t_max[i] >= t_min[i]) as u32) << i)
         };
         let mut awake = active(&t_max);
-        let mut stack = [0u32; MAX_DEPTH];
+        if rays.may_meet(&root.bounds, t_min, t_max) & awake == 0 {
+            return;
+        }
+        // Nodes kept for later, each with the number of leaves visited when it was kept: the
+        // ranges are as they were then while no leaf has been visited since. Never read
+        // beyond `top`, and never deeper than the tree.
+        let mut stack = [std::mem::MaybeUninit::<(u32, u32)>::uninit(); MAX_DEPTH];
         let mut top = 0;
+        let mut visits = 0u32;
         let mut node = 0usize;
         loop {
+            // `node`'s box meets an awake lane.
             let n = &self.nodes[node];
-            let met = rays.meet(&n.bounds, t_min, t_max) & awake;
-            if met != 0 {
-                if n.count > 0 {
-                    let first = n.offset as usize;
-                    for &id in &self.items[first..first + n.count as usize] {
-                        visit(id, &mut t_max);
-                    }
-                    awake = active(&t_max);
-                    if awake == 0 {
-                        return;
-                    }
-                } else {
-                    let lead = met.trailing_zeros() as usize;
+            if n.count > 0 {
+                let first = n.offset as usize;
+                for &id in &self.items[first..first + n.count as usize] {
+                    visit(id, &mut t_max);
+                }
+                visits = visits.wrapping_add(1);
+                awake = active(&t_max);
+                if awake == 0 {
+                    return;
+                }
+            } else {
+                let (low, high) = (node + 1, n.offset as usize);
+                let low_met = rays.may_meet(&self.nodes[low].bounds, t_min, t_max) & awake;
+                let high_met = rays.may_meet(&self.nodes[high].bounds, t_min, t_max) & awake;
+                if low_met != 0 && high_met != 0 {
+                    // Nearest child first: the first child is lower along the axis.
+                    let lead = (low_met | high_met).trailing_zeros() as usize;
                     let (near, far) = if rays.dir[n.axis as usize][lead] >= 0.0 {
-                        (node + 1, n.offset as usize)
+                        (low, high)
                     } else {
-                        (n.offset as usize, node + 1)
+                        (high, low)
                     };
-                    stack[top] = far as u32;
+                    stack[top].write((far as u32, visits));
                     top += 1;
                     node = near;
                     continue;
+                } else if low_met != 0 {
+                    node = low;
+                    continue;
+                } else if high_met != 0 {
+                    node = high;
+                    continue;
                 }
             }
-            if top == 0 {
-                return;
+            // The latest node kept whose box still meets an awake lane.
+            loop {
+                if top == 0 {
+                    return;
+                }
+                top -= 1;
+                // SAFETY: entries below `top` were written before `top` passed them.
+                let (kept, then) = unsafe { stack[top].assume_init() };
+                node = kept as usize;
+                if then == visits
+                    || rays.may_meet(&self.nodes[node].bounds, t_min, t_max) & awake != 0
+                {
+                    break;
+                }
             }
-            top -= 1;
-            node = stack[top] as usize;
         }
     }
 }
@@ -505,6 +538,49 @@ mod tests {
         }
         // The walk asks far fewer than every item of every ray.
         assert!(visited < 2000 * 300 / 10, "{visited} visits");
+    }
+
+    #[test]
+    fn nearest_by_lane_walk_equals_nearest_by_list() {
+        // Four rays at once, each lane's range shrinking as its hits are found (the walk
+        // keeps far children and tests them again only after a visit).
+        let mut rng = Uniform::new(13);
+        let items = boxes(&mut rng, 300);
+        let bvh = Bvh::new(&items);
+        let mut visited = 0;
+        for _ in 0..1000 {
+            let rays: [Ray; LANES] = std::array::from_fn(|_| random_ray(&mut rng));
+            let mut by_walk: [Option<f64>; LANES] = [None; LANES];
+            bvh.walk_lanes(
+                &RayLanes::new(&rays),
+                [0.0; LANES],
+                [100.0; LANES],
+                |id, t_max| {
+                    visited += 1;
+                    let b = items[id as usize].1;
+                    if is_empty(&b) {
+                        return;
+                    }
+                    for lane in 0..LANES {
+                        if let Some((t, _)) = b.clip(&rays[lane], 0.0, t_max[lane]) {
+                            if by_walk[lane].is_none_or(|best| t < best) {
+                                by_walk[lane] = Some(t);
+                                t_max[lane] = t;
+                            }
+                        }
+                    }
+                },
+            );
+            for lane in 0..LANES {
+                let by_list = items
+                    .iter()
+                    .filter(|(_, b)| !is_empty(b))
+                    .filter_map(|(_, b)| Some(b.clip(&rays[lane], 0.0, 100.0)?.0))
+                    .min_by(f64::total_cmp);
+                assert_eq!(by_walk[lane], by_list, "lane {lane} of {rays:?}");
+            }
+        }
+        assert!(visited < 1000 * 300 / 2, "{visited} visits");
     }
 
     #[test]

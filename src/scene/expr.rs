@@ -200,7 +200,8 @@ pub(super) struct Line<'a> {
 fn pieces(line: &Line) -> Vec<Piece> {
     let text = line.text;
     let is_space = |c: Option<char>| c.is_none_or(char::is_whitespace);
-    let mut out = Vec::new();
+    // Room for a usual number's pieces at once.
+    let mut out = Vec::with_capacity(16);
     let mut depth = 0usize;
     for (index, t) in line.tokens.iter().enumerate().skip(line.pos) {
         let mut push = |tk, span: Span, last| {
@@ -238,20 +239,43 @@ fn pieces(line: &Line) -> Vec<Piece> {
     out
 }
 
-/// A word split into numbers, names and operators (a bad character ends it).
-fn split_word(text: &str, word: Span) -> Vec<(Tk, Span)> {
-    let b = text.as_bytes();
-    let digits = |mut i: usize| {
-        while i < word.end && b[i].is_ascii_digit() {
-            i += 1;
+/// A word split into numbers, names and operators (a bad character ends it), piece by
+/// piece: nothing is allocated, so that reading a number costs only its own characters.
+fn split_word(text: &str, word: Span) -> WordPieces<'_> {
+    WordPieces {
+        bytes: text.as_bytes(),
+        at: word.start,
+        end: word.end,
+    }
+}
+
+/// The pieces of one word ([`split_word`]).
+struct WordPieces<'a> {
+    /// The whole text's bytes.
+    bytes: &'a [u8],
+    /// Where the next piece starts.
+    at: usize,
+    /// Where the word ends.
+    end: usize,
+}
+
+impl Iterator for WordPieces<'_> {
+    type Item = (Tk, Span);
+
+    fn next(&mut self) -> Option<(Tk, Span)> {
+        let (b, end) = (self.bytes, self.end);
+        let digits = |mut i: usize| {
+            while i < end && b[i].is_ascii_digit() {
+                i += 1;
+            }
+            i
+        };
+        let start = self.at;
+        if start >= end {
+            return None;
         }
-        i
-    };
-    let mut out = Vec::new();
-    let mut i = word.start;
-    while i < word.end {
-        let c = b[i];
-        let start = i;
+        let c = b[start];
+        let mut i = start;
         let op = match c {
             b'+' => Some(Tk::Plus),
             b'-' => Some(Tk::Minus),
@@ -261,17 +285,17 @@ fn split_word(text: &str, word: Span) -> Vec<(Tk, Span)> {
             b'=' => Some(Tk::Equals),
             _ => None,
         };
-        if let Some(tk) = op {
+        let tk = if let Some(tk) = op {
             i += 1;
-            out.push((tk, start..i));
+            tk
         } else if c.is_ascii_digit() || c == b'.' {
             i = digits(i);
-            if i < word.end && b[i] == b'.' {
+            if i < end && b[i] == b'.' {
                 i = digits(i + 1);
             }
-            if i < word.end && (b[i] == b'e' || b[i] == b'E') {
+            if i < end && (b[i] == b'e' || b[i] == b'E') {
                 let mut j = i + 1;
-                if j < word.end && (b[j] == b'+' || b[j] == b'-') {
+                if j < end && (b[j] == b'+' || b[j] == b'-') {
                     j += 1;
                 }
                 let k = digits(j);
@@ -279,18 +303,19 @@ fn split_word(text: &str, word: Span) -> Vec<(Tk, Span)> {
                     i = k;
                 }
             }
-            out.push((Tk::Num, start..i));
+            Tk::Num
         } else if c.is_ascii_alphabetic() || c == b'_' {
-            while i < word.end && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
+            while i < end && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
                 i += 1;
             }
-            out.push((Tk::Name, start..i));
+            Tk::Name
         } else {
-            out.push((Tk::Bad, start..word.end));
-            break;
-        }
+            i = end;
+            Tk::Bad
+        };
+        self.at = i;
+        Some((tk, start..i))
     }
-    out
 }
 
 /// Why an expression could not be read.
@@ -333,7 +358,7 @@ struct Reader<'r> {
 
 type Value = (f64, Span);
 
-impl Reader<'_> {
+impl<'r> Reader<'r> {
     fn peek(&self) -> Option<&Piece> {
         self.pieces.get(self.at)
     }
@@ -470,7 +495,8 @@ impl Reader<'_> {
                 "expected a value",
             ));
         };
-        let text = self.piece_text(&p).to_string();
+        let source: &'r str = self.text;
+        let text = &source[p.span.clone()];
         match p.tk {
             Tk::Num => {
                 self.at += 1;
@@ -480,12 +506,12 @@ impl Reader<'_> {
                         span: p.span,
                         message: format!(
                             "`{}` is too large: it overflows a 64-bit float to infinity",
-                            shorten(&text, 30)
+                            shorten(text, 30)
                         ),
                     }),
                     Err(_) => Err(syntax(
                         p.span,
-                        format!("`{}` is not a number", shorten(&text, 30)),
+                        format!("`{}` is not a number", shorten(text, 30)),
                         "not a number",
                     )),
                 }
@@ -495,12 +521,12 @@ impl Reader<'_> {
                 if let Some(&(name, lo, hi)) = FUNCTIONS.iter().find(|f| f.0 == text) {
                     return self.call(name, lo, hi, p.span);
                 }
-                match self.names.value(&text) {
+                match self.names.value(text) {
                     Some((x, uses_time)) => {
                         self.uses_time |= uses_time;
                         Ok((x, p.span))
                     }
-                    None => Err(self.unknown_name(&text, p.span)),
+                    None => Err(self.unknown_name(text, p.span)),
                 }
             }
             Tk::Open => {
@@ -531,7 +557,7 @@ impl Reader<'_> {
                 p.span,
                 format!(
                     "expected a number, a name or `(`, found `{}`",
-                    shorten(&text, 30)
+                    shorten(text, 30)
                 ),
                 "expected a value",
             )),
@@ -648,7 +674,7 @@ pub(super) fn continues(line: &Line) -> bool {
         return false;
     };
     let text = line.text;
-    let Some((tk, span)) = split_word(text, next.span.clone()).into_iter().next() else {
+    let Some((tk, span)) = split_word(text, next.span.clone()).next() else {
         return false;
     };
     match tk {
@@ -710,15 +736,16 @@ fn looks_like_expression(reader: &Reader) -> bool {
     let Some(first) = reader.pieces.first() else {
         return false;
     };
-    let word: Vec<&Piece> = reader
+    // The pieces of the first word: a prefix of `pieces`, nothing allocated.
+    let word = &reader.pieces[..reader
         .pieces
         .iter()
         .take_while(|p| p.token == first.token)
-        .collect();
+        .count()];
     let operand = |p: &Piece| matches!(p.tk, Tk::Num | Tk::Name);
     let has_operator = word.iter().any(|p| !operand(p));
     if word.iter().any(|p| p.tk == Tk::Bad)
-        || (!has_operator && word.windows(2).any(|w| operand(w[0]) && operand(w[1])))
+        || (!has_operator && word.windows(2).any(|w| operand(&w[0]) && operand(&w[1])))
     {
         return false;
     }
