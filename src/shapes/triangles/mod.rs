@@ -76,7 +76,7 @@ impl MeshShape {
             .map_err(|e| ShapeError(format!("cannot read the mesh file {e}")))?;
         let mut triangles = Triangles::new(data.vertices, data.triangles, normals)?;
         triangles.source_digest = Some(digest);
-        Self::placed(triangles, [position, u, v, w])
+        Self::in_world(triangles, [position, u, v, w])
     }
 
     /// The mesh of `triangles` (indices into `vertices`, finite points) placed at `position`
@@ -88,14 +88,14 @@ impl MeshShape {
         [position, u, v, w]: [DVec3; 4],
         normals: MeshNormals,
     ) -> Result<Self, ShapeError> {
-        Self::placed(
+        Self::in_world(
             Triangles::new(vertices, triangles, normals)?,
             [position, u, v, w],
         )
     }
 
     /// `triangles` placed at `position` with basis `u`, `v`, `w`.
-    fn placed(triangles: Triangles, [position, u, v, w]: [DVec3; 4]) -> Result<Self, ShapeError> {
+    fn in_world(triangles: Triangles, [position, u, v, w]: [DVec3; 4]) -> Result<Self, ShapeError> {
         let names = PlacementNames {
             shape: "mesh",
             position: "position",
