@@ -392,3 +392,63 @@ fn printing_to_a_closed_pipe_does_not_panic() {
     }
     assert!(out.metadata().unwrap().len() > 1000);
 }
+
+#[test]
+fn measure_reads_another_mesh_and_finds_its_distance_from_the_surface() {
+    // `kardia mesh --measure FILE`: kardia's own sphere is within its tolerance of the
+    // surface; a sphere of radius 1.1 measured against the unit sphere is 0.1 away.
+    let dir = tempfile::tempdir().unwrap();
+    let kardia = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_kardia"))
+            .arg("mesh")
+            .args(args)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&o.stdout).to_string();
+        assert!(
+            o.status.success(),
+            "{stdout}{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        stdout
+    };
+    let distance = |stdout: &str| -> f64 {
+        let rest = stdout.split("Hausdorff estimate ").nth(1).unwrap();
+        rest.split_whitespace().next().unwrap().parse().unwrap()
+    };
+    let unit = dir.path().join("unit.stl");
+    let large = dir.path().join("large.stl");
+    let tolerance = ["--bound", "1.5", "--tolerance", "0.05", "--quiet", "-o"];
+    kardia(
+        &[
+            &["--equation", "x^2 + y^2 + z^2 = 1"],
+            &tolerance[..],
+            &[unit.to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    kardia(
+        &[
+            &["--equation", "x^2 + y^2 + z^2 = 1.21"],
+            &tolerance[..],
+            &[large.to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    let measure = |file: &Path| {
+        distance(&kardia(&[
+            "--equation",
+            "x^2 + y^2 + z^2 = 1",
+            "--bound",
+            "1.5",
+            "--tolerance",
+            "0.05",
+            "--measure",
+            file.to_str().unwrap(),
+        ]))
+    };
+    let own = measure(&unit);
+    assert!(own < 0.05, "{own}");
+    let off = measure(&large);
+    assert!((0.09..0.11).contains(&off), "{off}");
+}
