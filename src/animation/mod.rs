@@ -251,6 +251,12 @@ impl FrameJob {
         if request.alpha {
             settings.push_str(" alpha");
         }
+        // The files the scene read (MESH), by their bytes; nothing for a scene without one,
+        // so its key is as before.
+        for digest in scene.objects.iter().filter_map(|o| o.shape.source_digest()) {
+            settings.push_str(" file=");
+            settings.push_str(&digest);
+        }
         tiles::render_key(&self.source.text, &settings)
     }
 

@@ -18,8 +18,8 @@ pub struct MeshArgs {
     /// Scene file whose HEART and IMPLICIT objects are meshed (or use --equation / --preset).
     pub scene: Option<PathBuf>,
     /// Output file: .stl (binary), .3mf, .obj or .ply (binary).
-    #[arg(short, long, value_name = "FILE")]
-    pub output: PathBuf,
+    #[arg(short, long, value_name = "FILE", required_unless_present = "measure")]
+    pub output: Option<PathBuf>,
     /// An equation in x, y, z to mesh instead of a scene, e.g. "x^4 + y^4 + z^4 = 1".
     #[arg(long, conflicts_with_all = ["scene", "preset"])]
     pub equation: Option<String>,
@@ -52,6 +52,11 @@ pub struct MeshArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Instead of meshing, measure the mesh in FILE (STL, OBJ or PLY, scene units) against the
+    /// exact surface of --equation or --preset as kardia measures its own meshes (the
+    /// Hausdorff estimate at the grid step of --tolerance); -o is then not written.
+    #[arg(long, value_name = "FILE", conflicts_with = "scene")]
+    pub measure: Option<PathBuf>,
 }
 
 /// The default colour of an equation or preset (a warm orange), as sRGB bytes.
@@ -107,13 +112,17 @@ pub fn run(args: MeshArgs) -> i32 {
 
 fn mesh(args: &MeshArgs) -> Result<(), String> {
     let started = Instant::now();
-    let format = MeshFormat::from_path(&args.output)?;
-    let solids = solids(args)?;
     let kind = match (args.outside, args.shell) {
         (_, Some(thickness)) => SolidKind::Shell { thickness },
         (true, None) => SolidKind::Outside,
         (false, None) => SolidKind::Inside,
     };
+    if let Some(file) = &args.measure {
+        return measure(args, file, kind, started);
+    }
+    let output = args.output.as_ref().ok_or("give the output file with -o")?;
+    let format = MeshFormat::from_path(output)?;
+    let solids = solids(args)?;
     let request = MeshRequest {
         kind,
         tolerance: args.tolerance,
@@ -132,11 +141,11 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
     .map_err(|e| e.to_string())?;
     bar.finish_and_clear();
     let meta = MeshMetadata::of_solids(&solids, args.size.is_some());
-    write_file(&printable.mesh, &meta, format, &args.output).map_err(|e| e.to_string())?;
+    write_file(&printable.mesh, &meta, format, output).map_err(|e| e.to_string())?;
     let v = printable.verified;
     outln!(
         "kardia mesh: wrote {} ({} triangles, {} vertices, {} component{}, volume {:.6}{})",
-        args.output.display(),
+        output.display(),
         v.triangles,
         v.vertices,
         v.components,
@@ -159,6 +168,14 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
             part.grid.cells,
             part.grid.step()
         );
+        if part.kinds.contains(&crate::mesh::VertexKind::Cap) {
+            outln!(
+                "    crease: {} vertices on both the surface and the clip sphere; {} triangles \
+                 join a surface vertex to a cap vertex",
+                part.crease_vertices(),
+                part.mixed_triangles()
+            );
+        }
         if d.measured {
             outln!(
                 "    deviation (scene units, by the root finder): surface vertices ≤ {:.2e} \
@@ -194,5 +211,41 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
         );
     }
     outln!("  time {:.2} s", started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+/// `kardia mesh --measure FILE`: the deviation of another mesh from the exact surface.
+fn measure(
+    args: &MeshArgs,
+    file: &std::path::Path,
+    kind: SolidKind,
+    started: Instant,
+) -> Result<(), String> {
+    let solids = solids(args)?;
+    let [solid] = &solids[..] else {
+        return Err("--measure needs one surface: --equation or --preset".into());
+    };
+    let tolerance = args
+        .tolerance
+        .unwrap_or(0.01 * solid.solid.clip_radius * crate::mesh::stretch(&solid.solid.frame.m));
+    let d = crate::mesh::measure_file(&solid.solid, kind, tolerance, file)
+        .map_err(|e| e.to_string())?;
+    outln!(
+        "kardia mesh: measured {} against {} at tolerance {:.3e}: Hausdorff estimate {:.2e} \
+         (mesh→surface {:.2e}, surface→mesh {:.2e} from {} surface samples, {} samples beyond \
+         reach); vertices ≤ {:.2e} ({} measured, {} beyond the tolerance); time {:.2} s",
+        file.display(),
+        solid.name,
+        tolerance,
+        d.hausdorff(),
+        d.mesh_to_surface,
+        d.surface_to_mesh,
+        d.surface_samples,
+        d.beyond_reach,
+        d.vertex,
+        d.vertices,
+        d.vertices_beyond,
+        started.elapsed().as_secs_f64()
+    );
     Ok(())
 }

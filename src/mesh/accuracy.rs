@@ -1,10 +1,10 @@
 //! How far the mesh is from the exact surface, measured with the project's root finder.
 //!
-//! - Vertices: each surface vertex's distance to the surface: the nearest root of `φ` on the
+//! - Vertices: each surface or crease vertex's distance to the surface: the nearest root of `φ` on the
 //!   line along `∇φ` or along any of the grid's seven edge directions (the least of these
 //!   bounds the distance from above).
 //! - Mesh to surface: from the centroid of every triangle whose corners are all on the
-//!   surface, the nearest root of `φ` along the triangle's normal (or along `∇φ` if nearer).
+//!   surface (or the crease), the nearest root of `φ` along the triangle's normal (or along `∇φ` if nearer).
 //! - Surface to mesh: points of the exact surface (every root of `φ` on lines parallel to
 //!   the axes, half a grid step off the grid's own lines, inside the clip ball), each one's
 //!   distance to the nearest triangle.
@@ -90,20 +90,11 @@ pub fn measure(
     let reach = 2.0 * step;
     let h = 1e-7 * field.radius();
     let surface_vertices: Vec<usize> = (0..mesh.vertices.len())
-        .filter(|&v| kinds[v] == VertexKind::Surface)
+        .filter(|&v| kinds[v].on_surface())
         .collect();
     let vertex_distances: Vec<Option<f64>> = surface_vertices
         .par_iter()
-        .map(|&v| {
-            let p = mesh.vertices[v];
-            // Along ∇φ, and along the grid's edge directions (a vertex was found on one of
-            // them; at a node, where ∇φ vanishes, that is the line that sees the root). Each
-            // line's distance bounds the true distance from above.
-            std::iter::once(field.gradient(p, h))
-                .chain(EDGE_DIRECTIONS)
-                .filter_map(|d| field.distance_along(p, d, tolerance))
-                .reduce(f64::min)
-        })
+        .map(|&v| vertex_distance(field, mesh.vertices[v], tolerance))
         .collect();
     let vertex = vertex_distances
         .iter()
@@ -127,7 +118,7 @@ pub fn measure(
         .filter(|&t| {
             mesh.triangles[t]
                 .iter()
-                .all(|&v| kinds[v as usize] == VertexKind::Surface)
+                .all(|&v| kinds[v as usize].on_surface())
         })
         .map(|t| {
             let [a, b, c] = mesh.corners(t);
@@ -171,6 +162,18 @@ pub fn measure(
         beyond_reach,
         measured: true,
     }
+}
+
+/// An upper bound on the distance from the object-space point `p` to `φ = 0`: the nearest
+/// root of `φ` on the line through `p` along `∇φ` or along any of the grid's seven edge
+/// directions (a vertex was found on one of them; at a node, where `∇φ` vanishes, that is
+/// the line that sees the root), by the root finder; `None` if there is none within `reach`.
+pub fn vertex_distance(field: &Field, p: DVec3, reach: f64) -> Option<f64> {
+    let h = 1e-7 * field.radius();
+    std::iter::once(field.gradient(p, h))
+        .chain(EDGE_DIRECTIONS)
+        .filter_map(|d| field.distance_along(p, d, reach))
+        .reduce(f64::min)
 }
 
 /// Points of `φ = 0` inside the clip ball: every root on the lines parallel to each axis

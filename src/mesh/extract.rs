@@ -16,6 +16,7 @@ use super::field::{Field, VertexKind};
 use super::TriangleMesh;
 use crate::geometry::DVec3;
 use rayon::prelude::*;
+use std::collections::HashMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// The six tetrahedra of the unit cube (corner offsets as bits x = 1, y = 2, z = 4),
@@ -54,50 +55,44 @@ fn orientation(t: &[DVec3; 4]) -> f64 {
     (t[1] - t[0]).cross(t[2] - t[0]).dot(t[3] - t[0])
 }
 
-/// A triangle of the marching table: three edges of the tetrahedron, each a pair of local
-/// corner numbers (the inside corner first).
-type TableTriangle = [[u8; 2]; 3];
+/// A polygon of the marching table: three or four edges of the tetrahedron in order around
+/// the polygon, each a pair of local corner numbers (the inside corner first).
+type TablePolygon = Vec<[u8; 2]>;
 
 /// For each of the 16 labellings of a positively oriented tetrahedron (bit `i` set when
-/// corner `i` is inside), the triangles of its boundary piece, wound so their normals face
-/// the outside corners. The winding is fixed on a reference tetrahedron with the vertices at
-/// edge midpoints; it holds wherever the vertices are on the open edges, as no triangle of
-/// the table can flatten or turn over while its vertices move along their edges.
-fn marching_table() -> Vec<Vec<TableTriangle>> {
+/// corner `i` is inside), the polygon of its boundary piece (a triangle when one corner is
+/// apart, a quadrilateral when two and two), wound so its normal faces the outside corners.
+/// Consecutive edges of a polygon lie in one face of the tetrahedron, and each face holds at
+/// most one of the polygon's sides. The winding is fixed on a reference tetrahedron with the
+/// vertices at edge midpoints; it holds wherever the vertices are on the open edges, as no
+/// triangle of the polygon's fan can flatten or turn over while its vertices move along their
+/// edges.
+fn marching_table() -> Vec<Option<TablePolygon>> {
     let reference = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
     (0..16u8)
         .map(|case| {
             let inside: Vec<u8> = (0..4).filter(|i| case >> i & 1 == 1).collect();
             let outside: Vec<u8> = (0..4).filter(|i| case >> i & 1 == 0).collect();
-            let mut tris: Vec<TableTriangle> = match (inside.len(), outside.len()) {
-                (1, 3) => vec![outside
-                    .iter()
-                    .map(|&o| [inside[0], o])
-                    .collect::<Vec<_>>()
-                    .try_into()
-                    .unwrap()],
-                (3, 1) => vec![inside
-                    .iter()
-                    .map(|&i| [i, outside[0]])
-                    .collect::<Vec<_>>()
-                    .try_into()
-                    .unwrap()],
+            let mut polygon: TablePolygon = match (inside.len(), outside.len()) {
+                (1, 3) => outside.iter().map(|&o| [inside[0], o]).collect(),
+                (3, 1) => inside.iter().map(|&i| [i, outside[0]]).collect(),
                 (2, 2) => {
                     let (a, b, c, d) = (inside[0], inside[1], outside[0], outside[1]);
-                    vec![[[a, c], [a, d], [b, d]], [[a, c], [b, d], [b, c]]]
+                    vec![[a, c], [a, d], [b, d], [b, c]]
                 }
-                _ => Vec::new(),
+                _ => return None,
             };
             let centroid =
                 |s: &[u8]| s.iter().map(|&k| reference[k as usize]).sum::<DVec3>() / s.len() as f64;
-            for t in &mut tris {
-                let m = t.map(|[i, j]| 0.5 * (reference[i as usize] + reference[j as usize]));
-                let n = (m[1] - m[0]).cross(m[2] - m[0]);
-                if n.dot(centroid(&outside) - centroid(&inside)) < 0.0 {
-                    t.swap(1, 2);
-                }
+            let m: Vec<DVec3> = polygon
+                .iter()
+                .map(|[i, j]| 0.5 * (reference[*i as usize] + reference[*j as usize]))
+                .collect();
+            let n = (m[1] - m[0]).cross(m[2] - m[0]);
+            if n.dot(centroid(&outside) - centroid(&inside)) < 0.0 {
+                polygon[1..].reverse();
             }
-            tris
+            Some(polygon)
         })
         .collect()
 }
@@ -170,12 +165,13 @@ pub fn march(
             tick();
         });
 
-    // 2. Triangles as triples of edge keys (the lower vertex's index × 8 + the offset bits
-    // to the upper one), one z layer of cubes per task, joined in order.
+    // 2. Polygons as cycles of edge keys (the lower vertex's index × 8 + the offset bits
+    // to the upper one; a triangle's fourth key is NO_KEY), one z layer of cubes per task,
+    // joined in order.
     let tetrahedra = cube_tetrahedra();
     let table = marching_table();
     let key = |v: usize, bits: u8| (v as u64) << 3 | u64::from(bits);
-    let by_layer: Vec<Vec<[u64; 3]>> = (0..grid.cells)
+    let by_layer: Vec<Vec<[u64; 4]>> = (0..grid.cells)
         .into_par_iter()
         .map(|z| {
             let mut out = Vec::new();
@@ -197,14 +193,17 @@ pub fn march(
                     for t in &tetrahedra {
                         let case =
                             (0..4).fold(0usize, |c, i| c | usize::from(mask >> t[i] & 1) << i);
-                        for tri in &table[case] {
-                            out.push(tri.map(|[i, j]| {
-                                let (bi, bj) = (t[i as usize], t[j as usize]);
-                                // Freudenthal edges join a corner to one whose bits hold its own.
-                                let (lo, hi) = if bi & bj == bi { (bi, bj) } else { (bj, bi) };
-                                key(at(lo), hi & !lo)
-                            }));
+                        let Some(polygon) = &table[case] else {
+                            continue;
+                        };
+                        let mut keys = [NO_KEY; 4];
+                        for (slot, [i, j]) in keys.iter_mut().zip(polygon) {
+                            let (bi, bj) = (t[*i as usize], t[*j as usize]);
+                            // Freudenthal edges join a corner to one whose bits hold its own.
+                            let (lo, hi) = if bi & bj == bi { (bi, bj) } else { (bj, bi) };
+                            *slot = key(at(lo), hi & !lo);
                         }
+                        out.push(keys);
                     }
                 }
             }
@@ -212,35 +211,126 @@ pub fn march(
             out
         })
         .collect();
-    let keyed: Vec<[u64; 3]> = by_layer.into_iter().flatten().collect();
+    let polygons: Vec<[u64; 4]> = by_layer.into_iter().flatten().collect();
 
     // 3. One vertex per crossed edge, placed on the exact boundary.
-    let mut keys: Vec<u64> = keyed.iter().flatten().copied().collect();
+    let mut keys: Vec<u64> = polygons
+        .iter()
+        .flatten()
+        .copied()
+        .filter(|&k| k != NO_KEY)
+        .collect();
     keys.par_sort_unstable();
     keys.dedup();
+    let ends = |k: u64| {
+        let lower = (k >> 3) as usize;
+        let bits = (k & 7) as u8;
+        let (x, y, z) = grid.coords(lower);
+        let upper = grid.index(
+            x + (bits & 1) as usize,
+            y + (bits >> 1 & 1) as usize,
+            z + (bits >> 2 & 1) as usize,
+        );
+        (lower, upper)
+    };
+    let position = |v: usize| {
+        let (x, y, z) = grid.coords(v);
+        grid.point(x, y, z)
+    };
     let placed: Vec<(DVec3, VertexKind)> = keys
         .par_iter()
         .map(|&k| {
-            let lower = (k >> 3) as usize;
-            let bits = (k & 7) as u8;
-            let (x, y, z) = grid.coords(lower);
-            let p = grid.point(x, y, z);
-            let q = grid.point(
-                x + (bits & 1) as usize,
-                y + (bits >> 1 & 1) as usize,
-                z + (bits >> 2 & 1) as usize,
-            );
+            let (lower, upper) = ends(k);
+            let (p, q) = (position(lower), position(upper));
             let (a, b) = if labels[lower] { (p, q) } else { (q, p) };
             let (s, kind) = field.crossing(a, b);
             (a + s * (b - a), kind)
         })
         .collect();
     tick();
-    let triangles = keyed
+    let (mut vertices, mut kinds): (Vec<DVec3>, Vec<VertexKind>) = placed.into_iter().unzip();
+    let indexed: Vec<([u32; 4], usize)> = polygons
         .par_iter()
-        .map(|t| t.map(|k| keys.binary_search(&k).expect("every key was placed") as u32))
+        .map(|p| {
+            let n = if p[3] == NO_KEY { 3 } else { 4 };
+            let mut out = [u32::MAX; 4];
+            for (o, k) in out.iter_mut().zip(&p[..n]) {
+                *o = keys.binary_search(k).expect("every key was placed") as u32;
+            }
+            (out, n)
+        })
         .collect();
-    let (vertices, kinds) = placed.into_iter().unzip();
+
+    // 4. Where a polygon's side joins a surface vertex to a cap vertex, a vertex on the
+    // crease, in the face of the tetrahedron that holds the side (shared by the two
+    // tetrahedra of that face).
+    let mixed = |a: u32, b: u32| {
+        let (ka, kb) = (kinds[a as usize], kinds[b as usize]);
+        (ka == VertexKind::Surface && kb == VertexKind::Cap)
+            || (ka == VertexKind::Cap && kb == VertexKind::Surface)
+    };
+    let mut sides: Vec<(u32, u32)> = indexed
+        .iter()
+        .flat_map(|&(p, n)| (0..n).map(move |i| (p[i], p[(i + 1) % n])))
+        .filter(|&(a, b)| mixed(a, b))
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
+    sides.sort_unstable();
+    sides.dedup();
+    let creases: Vec<Option<DVec3>> = sides
+        .par_iter()
+        .map(|&(a, b)| {
+            let (cap, other) = if kinds[a as usize] == VertexKind::Cap {
+                (a, b)
+            } else {
+                (b, a)
+            };
+            let (c0, c1) = ends(keys[cap as usize]);
+            let (o0, o1) = ends(keys[other as usize]);
+            // The corner both edges share, and each edge's other end.
+            let (corner, r, q) = if c0 == o0 || c0 == o1 {
+                (c0, c1, if c0 == o0 { o1 } else { o0 })
+            } else {
+                (c1, c0, if c1 == o0 { o1 } else { o0 })
+            };
+            let face = [position(corner), position(q), position(r)];
+            field.crease(face, vertices[cap as usize])
+        })
+        .collect();
+    let mut crease_vertex: HashMap<(u32, u32), u32> = HashMap::new();
+    for (&side, point) in sides.iter().zip(creases) {
+        if let Some(point) = point {
+            crease_vertex.insert(side, vertices.len() as u32);
+            vertices.push(point);
+            kinds.push(VertexKind::Crease);
+        }
+    }
+
+    // 5. Triangles: each polygon as a fan from its first vertex; a polygon with crease
+    // vertices on its sides as a fan from its first crease vertex (see the module doc).
+    let mut triangles = Vec::with_capacity(indexed.len() * 2);
+    let mut cycle = Vec::with_capacity(8);
+    for &(p, n) in &indexed {
+        cycle.clear();
+        let mut apex = None;
+        for i in 0..n {
+            cycle.push(p[i]);
+            let (a, b) = (p[i], p[(i + 1) % n]);
+            if let Some(&x) = crease_vertex.get(&(a.min(b), a.max(b))) {
+                apex.get_or_insert(cycle.len());
+                cycle.push(x);
+            }
+        }
+        let apex = apex.unwrap_or(0);
+        let m = cycle.len();
+        for k in 1..m - 1 {
+            triangles.push([
+                cycle[apex],
+                cycle[(apex + k) % m],
+                cycle[(apex + k + 1) % m],
+            ]);
+        }
+    }
     (
         TriangleMesh {
             vertices,
@@ -249,6 +339,9 @@ pub fn march(
         kinds,
     )
 }
+
+/// The fourth key of a triangle's polygon (no vertex).
+const NO_KEY: u64 = u64::MAX;
 
 #[cfg(test)]
 mod tests {
@@ -268,21 +361,20 @@ mod tests {
     }
 
     #[test]
-    fn the_table_cuts_one_corner_with_one_triangle_and_two_with_two() {
+    fn the_table_cuts_one_corner_with_a_triangle_and_two_with_a_quadrilateral() {
         let table = marching_table();
-        assert!(table[0].is_empty() && table[15].is_empty());
-        for (case, tris) in table.iter().enumerate() {
+        assert!(table[0].is_none() && table[15].is_none());
+        for (case, polygon) in table.iter().enumerate().skip(1).take(14) {
+            let polygon = polygon.as_ref().unwrap();
             let n = (case as u32).count_ones();
-            let want = match n {
-                1 | 3 => 1,
-                2 => 2,
-                _ => 0,
-            };
-            assert_eq!(tris.len(), want, "case {case}");
-            for t in tris {
-                for [i, j] in t {
-                    assert!(case >> i & 1 == 1 && case >> j & 1 == 0, "inside first");
-                }
+            assert_eq!(polygon.len(), if n == 2 { 4 } else { 3 }, "case {case}");
+            for [i, j] in polygon {
+                assert!(case >> i & 1 == 1 && case >> j & 1 == 0, "inside first");
+            }
+            // Consecutive sides share a corner (they lie in one face of the tetrahedron).
+            for k in 0..polygon.len() {
+                let (a, b) = (polygon[k], polygon[(k + 1) % polygon.len()]);
+                assert!(a[0] == b[0] || a[1] == b[1], "case {case}");
             }
         }
     }

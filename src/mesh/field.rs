@@ -33,6 +33,20 @@ pub enum VertexKind {
     Surface,
     /// On the clip sphere.
     Cap,
+    /// On the crease where `φ = 0` meets the clip sphere: on both (see [`Field::crease`]).
+    Crease,
+}
+
+impl VertexKind {
+    /// Whether the vertex lies on `φ = 0` (a surface or crease vertex).
+    pub fn on_surface(self) -> bool {
+        matches!(self, VertexKind::Surface | VertexKind::Crease)
+    }
+
+    /// Whether the vertex lies on the clip sphere (a cap or crease vertex).
+    pub fn on_sphere(self) -> bool {
+        matches!(self, VertexKind::Cap | VertexKind::Crease)
+    }
 }
 
 /// Fraction of an edge's length that keeps a crossing vertex away from each end of the edge,
@@ -274,11 +288,136 @@ impl Field {
             .reduce(f64::min)
     }
 
+    /// The crease point for the mesh edge from a surface vertex to a cap vertex: the first
+    /// point where `φ` turns from negative to zero along the circle in which the plane of the
+    /// triangle `face = [p, q, r]` (a face of a grid tetrahedron) cuts the clip sphere,
+    /// starting at `cap` (the cap vertex, on the edge `p r`) and turning into the face, by
+    /// the project's root finder on `φ` along the circle (in the rational parameter
+    /// `t = tan(θ/2)`, a polynomial of twice `φ`'s degree; past degree 16, bisection of the
+    /// sign on sampled arcs). So the point is on the clip sphere (to rounding) and on
+    /// `φ = 0` (to the root finder's accuracy). `None` when there is no such point within
+    /// 172° of the circle, or it is not inside the face by at least [`END_GAP`] in each
+    /// barycentric coordinate (the caller then keeps the mesh edge as it is).
+    pub fn crease(&self, face: [DVec3; 3], cap: DVec3) -> Option<DVec3> {
+        let [p, q, r] = face;
+        let normal = (q - p).cross(r - p);
+        let twice_area = normal.length();
+        if twice_area.is_nan() || twice_area <= 0.0 {
+            return None;
+        }
+        let n = normal / twice_area;
+        let centre = n * n.dot(p);
+        let rho_sq = self.radius * self.radius - centre.length_squared();
+        if rho_sq.is_nan() || rho_sq <= 0.0 {
+            return None;
+        }
+        let rho = rho_sq.sqrt();
+        let out = cap - centre;
+        let u = (out - n * n.dot(out)).try_normalize()?;
+        let mut tangent = n.cross(u);
+        // Into the face: toward q from the edge p r.
+        let along = (r - p).normalize();
+        let inward = (q - p) - along * along.dot(q - p);
+        if tangent.dot(inward) < 0.0 {
+            tangent = -tangent;
+        }
+        let at = |theta: f64| centre + rho * (theta.cos() * u + theta.sin() * tangent);
+        const MAX_TURN: f64 = 3.0;
+        let theta = match self.along_circle(centre, rho * u, rho * tangent) {
+            Some(c) => {
+                let t = self.solver.first_root(&c, 0.0, (0.5 * MAX_TURN).tan())?;
+                2.0 * t.atan()
+            }
+            None => {
+                // Bisection of the sign on the first sampled arc where it changes.
+                const SAMPLES: usize = 256;
+                let step = MAX_TURN / SAMPLES as f64;
+                let k = (1..=SAMPLES).find(|&k| self.value(at(k as f64 * step)) >= 0.0)?;
+                let (mut lo, mut hi) = ((k - 1) as f64 * step, k as f64 * step);
+                for _ in 0..64 {
+                    let mid = 0.5 * (lo + hi);
+                    if self.value(at(mid)) < 0.0 {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                hi
+            }
+        };
+        let x = at(theta);
+        // Barycentric coordinates in the face's plane.
+        let weight = |a: DVec3, b: DVec3| (b - x).cross(a - x).dot(n) / twice_area;
+        let inside = [weight(r, q), weight(p, r), weight(q, p)];
+        inside.iter().all(|&w| w >= END_GAP).then_some(x)
+    }
+
+    /// The coefficients (ascending in `t`) of `φ` along the circle
+    /// `centre + a·(1 − t²)/(1 + t²) + b·2t/(1 + t²)`, multiplied by `(1 + t²)^D` with `D`
+    /// the degree of `φ` (so a polynomial of degree `2D` with the signs of `φ`); `None` when
+    /// that degree is above 16.
+    fn along_circle(&self, centre: DVec3, a: DVec3, b: DVec3) -> Option<Vec<f64>> {
+        if 2 * self.degree() > MAX_DEGREE {
+            return None;
+        }
+        // N(t) = centre·(1 + t²) + a·(1 − t²) + b·2t, and W(t) = 1 + t².
+        let conic = [centre + a, 2.0 * b, centre - a];
+        let d = self.f.degree;
+        let f = along_conic(&self.f, d, conic);
+        Some(match self.kind {
+            SolidKind::Inside => f,
+            SolidKind::Outside => f.iter().map(|c| -c).collect(),
+            SolidKind::Shell { .. } => {
+                // φ·W^(2d) = F² − (T/2)²·W²·Σ Gᵢ², with F, Gᵢ homogenised to d and d − 1.
+                let mut out = multiply(&f, &f);
+                let w2 = [1.0, 0.0, 2.0, 0.0, 1.0];
+                for g in &self.gradient {
+                    let gs = along_conic(g, d.saturating_sub(1), conic);
+                    let sq = multiply(&multiply(&gs, &gs), &w2);
+                    for (k, c) in sq.iter().enumerate() {
+                        out[k] -= self.half_thickness_sq * c;
+                    }
+                }
+                out
+            }
+        })
+    }
+
     /// The gradient of `φ` at `p` (object space), by central differences of step `h`.
     pub fn gradient(&self, p: DVec3, h: f64) -> DVec3 {
         let d = |e: DVec3| (self.value(p + e * h) - self.value(p - e * h)) / (2.0 * h);
         DVec3::new(d(DVec3::X), d(DVec3::Y), d(DVec3::Z))
     }
+}
+
+/// The coefficients (ascending in `t`, `2k + 1` of them) of `W(t)^k · P(N(t)/W(t))` for the
+/// quadratic curve `N(t) = n[0] + n[1]·t + n[2]·t²` and `W(t) = 1 + t²`, with `k` at least
+/// `P`'s degree: each term `c·x^a·y^b·z^e` becomes `c·N_x^a·N_y^b·N_z^e·W^(k−a−b−e)`.
+fn along_conic(p: &Compiled, k: usize, n: [DVec3; 3]) -> Vec<f64> {
+    let powers = |q: [f64; 3]| {
+        let mut out = vec![vec![1.0]];
+        for i in 1..=k {
+            let next = multiply(&out[i - 1], &q);
+            out.push(next);
+        }
+        out
+    };
+    let xs = powers([n[0].x, n[1].x, n[2].x]);
+    let ys = powers([n[0].y, n[1].y, n[2].y]);
+    let zs = powers([n[0].z, n[1].z, n[2].z]);
+    let ws = powers([1.0, 0.0, 1.0]);
+    let mut out = vec![0.0; 2 * k + 1];
+    for term in &p.terms {
+        let [a, b, e] = term.e.map(usize::from);
+        let Some(rest) = k.checked_sub(a + b + e) else {
+            continue;
+        };
+        let product = multiply(&multiply(&xs[a], &ys[b]), &multiply(&zs[e], &ws[rest]));
+        for (o, c) in out.iter_mut().zip(&product) {
+            *o += term.c * c;
+        }
+    }
+    out
 }
 
 /// The product of two polynomials (ascending coefficients).

@@ -126,6 +126,12 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
         let _ = (ray, t_min, t_max);
         None
     }
+    /// The SHA-256 (hex) of the file the shape was read from (a `MESH`'s), which the render
+    /// key takes in so that a changed file is a new render; `None` for shapes read from no
+    /// file.
+    fn source_digest(&self) -> Option<String> {
+        None
+    }
     /// For a surface given by a polynomial (HEART, IMPLICIT): its exact polynomial, clip ball
     /// and placement, the solid that `kardia mesh` turns into triangles; `None` for others.
     fn polynomial_solid(&self) -> Option<PolynomialSolid> {

@@ -234,6 +234,10 @@ pub trait ObjectShape: Send + Sync + std::fmt::Debug {
         let _ = (at, world, local, t_min, t_max);
         None
     }
+    /// The SHA-256 (hex) of the file the shape was read from (a `MESH`'s), else `None`.
+    fn source_digest(&self) -> Option<String> {
+        None
+    }
     /// See [`Shape::polynomial_solid`]: the object-space polynomial (negative inside) and the
     /// object-space clip radius; the placement is added by [`Placed`].
     fn polynomial_solid(&self) -> Option<(std::sync::Arc<super::implicit::poly::Poly>, f64)> {
@@ -384,6 +388,9 @@ impl<S: ObjectShape> Shape for Placed<S> {
             .solver_report(&self.at, ray, &local, t_min, t_max)
     }
 
+    fn source_digest(&self) -> Option<String> {
+        self.shape.source_digest()
+    }
     fn polynomial_solid(&self) -> Option<super::PolynomialSolid> {
         let (polynomial, clip_radius) = self.shape.polynomial_solid()?;
         Some(super::PolynomialSolid {

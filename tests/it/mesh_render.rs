@@ -164,3 +164,56 @@ fn a_mesh_file_that_cannot_be_read_is_an_error_at_its_name() {
         assert!(message.contains(says), "{message}");
     }
 }
+
+/// An ASCII STL of the tetrahedron with corners at the origin and at `s` on each axis.
+fn tetrahedron_stl(s: f64) -> String {
+    let corners = [[0.0, 0.0, 0.0], [s, 0.0, 0.0], [0.0, s, 0.0], [0.0, 0.0, s]];
+    let mut text = String::from("solid t\n");
+    for [a, b, c] in [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]] {
+        text.push_str("facet normal 0 0 0\nouter loop\n");
+        for k in [a, b, c] {
+            let [x, y, z] = corners[k];
+            text.push_str(&format!("vertex {x} {y} {z}\n"));
+        }
+        text.push_str("endloop\nendfacet\n");
+    }
+    text + "endsolid t\n"
+}
+
+#[test]
+fn a_changed_mesh_file_is_a_new_render_for_resume() {
+    // The scene text stays the same; the MESH file it names changes: the render key (what
+    // `--resume` compares) must change with it, and only with it.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("t.scene"),
+        "SIZE 24 20\nCAMERA (3, 2, 1.5) (0.3, 0.3, 0.3) (0, 0, 1) 40\nLIGHT (5, 5, 5) (1, 1, 1)\n\
+         MESH \"t.stl\" (0, 0, 0) (1, 0, 0) (0, 1, 0) (0, 0, 1) (0.8, 0.3, 0.2)\n",
+    )
+    .unwrap();
+    let render = |out: &str, resume: bool| {
+        let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_kardia"));
+        c.current_dir(d)
+            .args(["render", "t.scene", "--spp", "1", "-o", out]);
+        if resume {
+            c.arg("--resume");
+        }
+        let o = c.output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).to_string()
+    };
+    let key = |name: &str| kardia::film::read_tag(&d.join(name), kardia::tiles::KEY_TAG).unwrap();
+    std::fs::write(d.join("t.stl"), tetrahedron_stl(1.0)).unwrap();
+    render("a.png", false);
+    render("same.png", false);
+    assert_eq!(key("a.png"), key("same.png"), "the same file, the same key");
+    let first = std::fs::read(d.join("a.png")).unwrap();
+    std::fs::write(d.join("t.stl"), tetrahedron_stl(0.5)).unwrap();
+    render("b.png", false);
+    assert_ne!(key("a.png"), key("b.png"), "a changed file, a new key");
+    // --resume redoes the frame made from the old file.
+    render("a.png", true);
+    assert_eq!(key("a.png"), key("b.png"));
+    assert_ne!(std::fs::read(d.join("a.png")).unwrap(), first);
+}

@@ -50,6 +50,8 @@ pub struct Triangles {
     corner_normals: Option<Vec<[DVec3; 3]>>,
     bvh: Bvh,
     bounds: Aabb,
+    /// The SHA-256 (hex) of the file the mesh was read from, if it was read from one.
+    source_digest: Option<String>,
 }
 
 impl std::fmt::Debug for Triangles {
@@ -70,9 +72,11 @@ impl MeshShape {
         [position, u, v, w]: [DVec3; 4],
         normals: MeshNormals,
     ) -> Result<Self, ShapeError> {
-        let data = read::read_mesh_file(path)
+        let (data, digest) = read::read_mesh_file_with_digest(path)
             .map_err(|e| ShapeError(format!("cannot read the mesh file {e}")))?;
-        Self::new(data.vertices, data.triangles, [position, u, v, w], normals)
+        let mut triangles = Triangles::new(data.vertices, data.triangles, normals)?;
+        triangles.source_digest = Some(digest);
+        Self::in_world(triangles, [position, u, v, w])
     }
 
     /// The mesh of `triangles` (indices into `vertices`, finite points) placed at `position`
@@ -84,16 +88,21 @@ impl MeshShape {
         [position, u, v, w]: [DVec3; 4],
         normals: MeshNormals,
     ) -> Result<Self, ShapeError> {
+        Self::in_world(
+            Triangles::new(vertices, triangles, normals)?,
+            [position, u, v, w],
+        )
+    }
+
+    /// `triangles` placed at `position` with basis `u`, `v`, `w`.
+    fn in_world(triangles: Triangles, [position, u, v, w]: [DVec3; 4]) -> Result<Self, ShapeError> {
         let names = PlacementNames {
             shape: "mesh",
             position: "position",
             vectors: "basis",
         };
         let at = Placement::named(position, u, v, w, names)?;
-        Ok(Placed::place(
-            at,
-            Triangles::new(vertices, triangles, normals)?,
-        ))
+        Ok(Placed::place(at, triangles))
     }
 }
 
@@ -156,6 +165,7 @@ impl Triangles {
             corner_normals,
             bvh,
             bounds,
+            source_digest: None,
         })
     }
 
@@ -343,6 +353,10 @@ impl Shear {
 }
 
 impl ObjectShape for Triangles {
+    fn source_digest(&self) -> Option<String> {
+        self.source_digest.clone()
+    }
+
     fn intersect(
         &self,
         _: &Placement,

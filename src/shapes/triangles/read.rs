@@ -20,6 +20,12 @@ pub struct MeshData {
 /// Reads a mesh file, its format chosen by the extension (`.stl`, `.obj`, `.ply`, any case).
 /// The message of an error completes "cannot read the mesh file: …".
 pub fn read_mesh_file(path: &Path) -> Result<MeshData, String> {
+    read_mesh_file_with_digest(path).map(|(mesh, _)| mesh)
+}
+
+/// [`read_mesh_file`], with the SHA-256 (hex) of the bytes it read: what a render key
+/// ([`crate::tiles::render_key`]) takes of the file, so a changed file is a new render.
+pub fn read_mesh_file_with_digest(path: &Path) -> Result<(MeshData, String), String> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -40,7 +46,12 @@ pub fn read_mesh_file(path: &Path) -> Result<MeshData, String> {
     if mesh.triangles.is_empty() {
         return Err(format!("{}: the file holds no triangles", path.display()));
     }
-    Ok(mesh)
+    use sha2::Digest;
+    let digest = sha2::Sha256::digest(&bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    Ok((mesh, digest))
 }
 
 /// Joins corners given one triangle at a time into shared vertices (equal bits, one vertex).
