@@ -5,6 +5,7 @@
 
 pub mod analysis;
 pub mod animation;
+pub mod background;
 pub mod bvh;
 pub mod camera;
 pub mod cli;

@@ -18,7 +18,7 @@ use crate::scene::{self, LoadOptions, Scene};
 use axum::extract::ws::{CloseFrame, Message, WebSocket};
 use futures_util::{SinkExt, StreamExt};
 use glam::Vec3;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio::sync::{mpsc, watch};
@@ -90,6 +90,7 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
     let mut save_cancel = CancelToken::new();
     let mut save_task: Option<tokio::task::JoinHandle<()>> = None;
     let mut mesh_task: Option<tokio::task::JoinHandle<()>> = None;
+    let mut mesh_cancel = Arc::new(AtomicBool::new(false));
     let mut rate = RateLimit::new(limits.max_messages_per_second);
     // The newest message over the rate limit, read once the window reopens: a burst loses its
     // intermediate messages, never its last (the state the page settled on).
@@ -215,30 +216,47 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                 }
             },
             ClientMessage::CancelSave {} => save_cancel.cancel(),
+            ClientMessage::CancelMesh {} => mesh_cancel.store(true, Ordering::Relaxed),
             ClientMessage::Mesh { seq, scene, format } => {
                 if mesh_task.as_ref().is_some_and(|t| !t.is_finished()) {
                     let _ = out
                         .send(error_message(
                             Some(seq),
-                            "a mesh is already being made: wait for it".into(),
+                            "a mesh is already being made: wait for it or cancel it".into(),
                         ))
                         .await;
                     continue;
                 }
-                match super::mesh::format_named(&format) {
-                    Ok(file_format) => {
-                        mesh_task = Some(tokio::spawn(make_mesh(
-                            seq,
-                            scene,
-                            (format, file_format),
-                            shared.clone(),
-                            out.clone(),
-                        )));
-                    }
+                let file_format = match super::mesh::format_named(&format) {
+                    Ok(file_format) => file_format,
                     Err(why) => {
                         let _ = out.send(error_message(Some(seq), why)).await;
+                        continue;
                     }
-                }
+                };
+                // The server-wide limit: a permit held until the mesh's work has stopped.
+                let Ok(permit) = shared.meshes.clone().try_acquire_owned() else {
+                    let _ = out
+                        .send(error_message(
+                            Some(seq),
+                            format!(
+                                "the server is already making {} meshes (its limit, all pages \
+                                 together): try again when one is done",
+                                limits.max_meshes
+                            ),
+                        ))
+                        .await;
+                    continue;
+                };
+                mesh_cancel = Arc::new(AtomicBool::new(false));
+                mesh_task = Some(tokio::spawn(make_mesh(
+                    seq,
+                    scene,
+                    (format, file_format),
+                    (shared.clone(), permit),
+                    mesh_cancel.clone(),
+                    out.clone(),
+                )));
             }
             ClientMessage::Probe {
                 seq,
@@ -333,8 +351,10 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
     if let Some(task) = save_task {
         let _ = task.await;
     }
+    // Its mesh stops within about one layer of the grid (see `make_mesh`); the file is not
+    // sent.
+    mesh_cancel.store(true, Ordering::Relaxed);
     if let Some(task) = mesh_task {
-        // Meshing cannot be cancelled: the page is gone, so its file is not sent.
         task.abort();
     }
     drop(out);
@@ -805,30 +825,34 @@ async fn save(
     let done = Arc::new(AtomicU64::new(0));
     let total = u64::from(width) * u64::from(height);
     let pixels_done = done.clone();
-    let mut work = tokio::task::spawn_blocking(move || -> Result<(Vec<u8>, f64), String> {
-        let renderer = &busy.0.renderer;
-        let scene: Scene = scene::parse(&text, "explore.scene", &page_load_options())
-            .map_err(|e| e.to_string())?;
-        let camera = scene.camera.clone();
-        let shared = share(scene);
-        let request = PassRequest {
-            width,
-            height,
-            camera,
-            spp,
-            seed: 0,
-            view,
-            alpha,
-            preview: false,
-            interactive: false,
-        };
-        let progress = |p: Progress| pixels_done.store(p.done, Ordering::Relaxed);
-        let result = render_pass_reporting(renderer, &shared, &request, &cancel, progress)
-            .map_err(|e| e.to_string())?;
-        let mut png = vec![];
-        crate::film::encode_png(&result.image, &mut png)
-            .map_err(|e| format!("cannot encode the PNG: {e}"))?;
-        Ok((png, result.elapsed.as_secs_f64() * 1e3))
+    let mut work = tokio::task::spawn_blocking(move || {
+        // Parsing and encoding run at the lowest OS priority, as the save's render does (a
+        // batch render of `Renderer::with_background_batch`): nobody waits for them now.
+        crate::background::run_in_background(move || -> Result<(Vec<u8>, f64), String> {
+            let renderer = &busy.0.renderer;
+            let scene: Scene = scene::parse(&text, "explore.scene", &page_load_options())
+                .map_err(|e| e.to_string())?;
+            let camera = scene.camera.clone();
+            let shared = share(scene);
+            let request = PassRequest {
+                width,
+                height,
+                camera,
+                spp,
+                seed: 0,
+                view,
+                alpha,
+                preview: false,
+                interactive: false,
+            };
+            let progress = |p: Progress| pixels_done.store(p.done, Ordering::Relaxed);
+            let result = render_pass_reporting(renderer, &shared, &request, &cancel, progress)
+                .map_err(|e| e.to_string())?;
+            let mut png = vec![];
+            crate::film::encode_png(&result.image, &mut png)
+                .map_err(|e| format!("cannot encode the PNG: {e}"))?;
+            Ok((png, result.elapsed.as_secs_f64() * 1e3))
+        })
     });
     let mut ticks = tokio::time::interval(Duration::from_millis(250));
     let work = loop {
@@ -866,22 +890,35 @@ async fn save(
 }
 
 /// Meshes a scene as `kardia mesh` does and sends the file, with a `mesh_progress` message
-/// about every quarter second.
+/// about every quarter second; `cancel` stops it (then an error saying so). The work runs on
+/// threads of its own at the lowest OS priority ([`crate::background`]), as many as the
+/// renderer's, and keeps `permit` (a place under [`super::Limits::max_meshes`]) until it has
+/// really stopped, even when the page has left.
 async fn make_mesh(
     seq: u64,
     text: String,
     (format, file_format): (String, crate::mesh::write::MeshFormat),
-    shared: Arc<Shared>,
+    (shared, permit): (Arc<Shared>, tokio::sync::OwnedSemaphorePermit),
+    cancel: Arc<AtomicBool>,
     out: Outbox,
 ) {
     let busy = Busy::new(&shared);
     let fraction = Arc::new(AtomicU64::new(0));
     let reported = fraction.clone();
     let start = Instant::now();
+    let stop = cancel.clone();
     let mut work = tokio::task::spawn_blocking(move || {
-        let _busy = busy;
+        let _held = (busy, permit);
+        let threads = rayon::ThreadPoolBuilder::new()
+            .num_threads(shared.renderer.threads())
+            .thread_name(|i| format!("kardia-mesh-{i}"))
+            .start_handler(|_| {
+                crate::background::lower_this_thread();
+            })
+            .build()
+            .map_err(|e| format!("cannot start the mesh threads: {e}"))?;
         let progress = |f: f64| reported.store(f.to_bits(), Ordering::Relaxed);
-        super::mesh::mesh_scene(&text, file_format, &progress)
+        threads.install(|| super::mesh::mesh_scene(&text, file_format, &progress, &stop))
     });
     let mut ticks = tokio::time::interval(Duration::from_millis(250));
     let work = loop {
@@ -909,6 +946,9 @@ async fn make_mesh(
             )
             .into(),
         ),
+        Ok(Err(_)) if cancel.load(Ordering::Relaxed) => {
+            error_message(Some(seq), "mesh cancelled".into())
+        }
         Ok(Err(why)) => error_message(Some(seq), format!("mesh failed: {why}")),
         Err(e) => error_message(Some(seq), format!("mesh failed: {e}")),
     };

@@ -16,7 +16,7 @@ use super::field::{Field, VertexKind};
 use super::TriangleMesh;
 use crate::geometry::DVec3;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 /// The six tetrahedra of the unit cube (corner offsets as bits x = 1, y = 2, z = 4),
 /// each ordered with positive orientation.
@@ -151,6 +151,19 @@ pub fn march(
     grid: Grid,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> (TriangleMesh, Vec<VertexKind>) {
+    march_cancellable(field, grid, progress, &AtomicBool::new(false)).expect("never cancelled")
+}
+
+/// [`march`], giving up (`None`) once `cancel` is set: it is read before each layer of the
+/// grid (labels and triangles) and before each vertex is placed on the boundary, so a
+/// cancelled march stops within about one layer's work.
+pub fn march_cancellable(
+    field: &Field,
+    grid: Grid,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    cancel: &AtomicBool,
+) -> Option<(TriangleMesh, Vec<VertexKind>)> {
+    let cancelled = || cancel.load(Ordering::Relaxed);
     let side = grid.side();
     let total = 2 * side + 1;
     let done = AtomicUsize::new(0);
@@ -162,6 +175,9 @@ pub fn march(
         .par_chunks_mut(side * side)
         .enumerate()
         .for_each(|(z, layer)| {
+            if cancelled() {
+                return;
+            }
             for y in 0..side {
                 for x in 0..side {
                     layer[x + side * y] = field.inside(grid.point(x, y, z));
@@ -172,6 +188,9 @@ pub fn march(
 
     // 2. Triangles as triples of edge keys (the lower vertex's index × 8 + the offset bits
     // to the upper one), one z layer of cubes per task, joined in order.
+    if cancelled() {
+        return None;
+    }
     let tetrahedra = cube_tetrahedra();
     let table = marching_table();
     let key = |v: usize, bits: u8| (v as u64) << 3 | u64::from(bits);
@@ -179,6 +198,9 @@ pub fn march(
         .into_par_iter()
         .map(|z| {
             let mut out = Vec::new();
+            if cancelled() {
+                return out;
+            }
             for y in 0..grid.cells {
                 for x in 0..grid.cells {
                     let base = grid.index(x, y, z);
@@ -212,6 +234,9 @@ pub fn march(
             out
         })
         .collect();
+    if cancelled() {
+        return None;
+    }
     let keyed: Vec<[u64; 3]> = by_layer.into_iter().flatten().collect();
 
     // 3. One vertex per crossed edge, placed on the exact boundary.
@@ -221,6 +246,9 @@ pub fn march(
     let placed: Vec<(DVec3, VertexKind)> = keys
         .par_iter()
         .map(|&k| {
+            if cancelled() {
+                return None;
+            }
             let lower = (k >> 3) as usize;
             let bits = (k & 7) as u8;
             let (x, y, z) = grid.coords(lower);
@@ -232,22 +260,22 @@ pub fn march(
             );
             let (a, b) = if labels[lower] { (p, q) } else { (q, p) };
             let (s, kind) = field.crossing(a, b);
-            (a + s * (b - a), kind)
+            Some((a + s * (b - a), kind))
         })
-        .collect();
+        .collect::<Option<_>>()?;
     tick();
     let triangles = keyed
         .par_iter()
         .map(|t| t.map(|k| keys.binary_search(&k).expect("every key was placed") as u32))
         .collect();
     let (vertices, kinds) = placed.into_iter().unzip();
-    (
+    Some((
         TriangleMesh {
             vertices,
             triangles,
         },
         kinds,
-    )
+    ))
 }
 
 #[cfg(test)]

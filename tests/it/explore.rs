@@ -658,6 +658,104 @@ async fn a_page_that_leaves_mid_render_frees_its_work_at_once() {
     server.stop().await;
 }
 
+/// A scene whose mesh takes seconds: Barth's sextic (its 65 nodes make many crossings).
+const BARTH_SCENE: &str = "CAMERA (0, -9, 3) (0, 0, 0) (0, 0, 1) 40\nLIGHT (4, -6, 5) (1, 1, 1)\n\
+    IMPLICIT barth_sextic (0, 0, 0) (0.55, 0, 0) (0, 0.55, 0) (0, 0, 0.55) (0.3, 0.7, 0.4)\n";
+
+fn mesh_message(seq: u64, scene: &str) -> Message {
+    Message::text(json!({"type": "mesh", "seq": seq, "scene": scene, "format": "stl"}).to_string())
+}
+
+/// Waits for a `mesh_progress` of `seq` with a fraction above 0; returns the fraction.
+async fn mesh_under_way(ws: &mut Ws, seq: u64) -> f64 {
+    loop {
+        let m = next_text(ws).await;
+        assert_eq!(m["type"], "mesh_progress", "{m}");
+        assert_eq!(m["seq"], seq);
+        let fraction = m["fraction"].as_f64().unwrap();
+        if fraction > 0.0 {
+            return fraction;
+        }
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn meshes_are_limited_server_wide_and_stop_on_cancel_or_when_the_page_leaves() {
+    let server = start(Limits {
+        max_meshes: 1,
+        ..Limits::default()
+    })
+    .await;
+    let mut first = connect(server.addr).await;
+    let mut second = connect(server.addr).await;
+    first.send(mesh_message(1, BARTH_SCENE)).await.unwrap();
+    let fraction = mesh_under_way(&mut first, 1).await;
+    assert_eq!(server.monitor.meshes(), 1);
+    // The server's one place is taken: another page is refused, and says why.
+    second.send(mesh_message(7, BARTH_SCENE)).await.unwrap();
+    let refused = next_text(&mut second).await;
+    assert_eq!(refused["type"], "error", "{refused}");
+    assert_eq!(refused["seq"], 7);
+    let why = refused["message"].as_str().unwrap();
+    assert!(why.contains("already making 1 meshes"), "{why}");
+    // Cancel stops the work itself (the place is free again), and the page is told.
+    let asked = Instant::now();
+    first
+        .send(Message::text(r#"{"type":"cancel_mesh"}"#))
+        .await
+        .unwrap();
+    let told = loop {
+        let m = next_text(&mut first).await;
+        if m["type"] == "mesh_progress" {
+            continue;
+        }
+        break m;
+    };
+    assert_eq!(told["type"], "error", "{told}");
+    assert_eq!(told["message"], "mesh cancelled");
+    let stopped = wait_until("the cancelled mesh stops", Duration::from_secs(30), || {
+        server.monitor.meshes() == 0
+    })
+    .await;
+    let cancel_ms = asked.elapsed().as_millis();
+    eprintln!(
+        "mesh cancelled at {:.0} % of its grid: stopped {cancel_ms} ms after cancel_mesh",
+        fraction * 100.0
+    );
+    if fraction < 1.0 {
+        // Cancelled while the grid was being worked: within about one layer.
+        assert!(stopped < Duration::from_secs(2), "{stopped:?}");
+    }
+    // A page that leaves mid-mesh frees its place as well.
+    second.send(mesh_message(8, BARTH_SCENE)).await.unwrap();
+    let fraction = mesh_under_way(&mut second, 8).await;
+    drop(second);
+    let freed = wait_until(
+        "the mesh of a page that left stops",
+        Duration::from_secs(30),
+        || server.monitor.meshes() == 0 && server.monitor.renders() == 0,
+    )
+    .await;
+    eprintln!(
+        "page left at {:.0} % of its mesh's grid: its work stopped {freed:?} later",
+        fraction * 100.0
+    );
+    if fraction < 1.0 {
+        assert!(freed < Duration::from_secs(2), "{freed:?}");
+    }
+    // The place is free: a small mesh is made and sent.
+    let sphere = "CAMERA (0, -5, 0) (0, 0, 0) (0, 0, 1) 40\nLIGHT (3, -4, 5) (1, 1, 1)\n\
+                  IMPLICIT \"x^2 + y^2 + z^2 - 1\" (0, 0, 0) (1, 0, 0) (0, 1, 0) (0, 0, 1) \
+                  (0.8, 0.2, 0.2) BOUND 1.5\n";
+    first.send(mesh_message(2, sphere)).await.unwrap();
+    let (header, stl) = next_binary(&mut first).await;
+    assert_eq!(header["type"], "mesh", "{header}");
+    assert_eq!(header["seq"], 2);
+    let triangles = header["triangles"].as_u64().unwrap() as usize;
+    assert_eq!(stl.len(), 84 + 50 * triangles);
+    server.stop().await;
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn several_pages_each_get_their_own_view_and_the_client_limit_is_told() {
     let server = start(Limits {
