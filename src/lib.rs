@@ -5,7 +5,6 @@
 
 pub mod analysis;
 pub mod animation;
-pub mod background;
 pub mod bvh;
 pub mod camera;
 pub mod cli;

@@ -371,19 +371,6 @@ impl Renderer {
         Ok(Self { pool })
     }
 
-    /// A renderer with `threads` worker threads (0: one per available core) whose
-    /// [`Priority::Batch`] renders run at the operating system's lowest priority (on Linux;
-    /// see [`crate::background`]), while its [`Priority::Interactive`] renders keep the
-    /// priority of the process. For a server where people wait for some images (the
-    /// explorer): a long batch render then takes only the cores nothing else on the machine
-    /// wants, so it slows neither the interactive renders nor the browser and network that
-    /// bring the next view. The images are the same as [`Renderer::new`]'s.
-    pub fn with_background_batch(threads: usize) -> Result<Self, PoolError> {
-        let pool = integrator::RenderPool::with_batch_priority(threads, true)
-            .map_err(|e| PoolError(e.to_string()))?;
-        Ok(Self { pool })
-    }
-
     /// Worker threads in the pool.
     pub fn threads(&self) -> usize {
         self.pool.threads()
@@ -680,62 +667,6 @@ mod tests {
             });
         assert_eq!(result, Err(RenderError::Cancelled));
         assert_eq!(bands.into_inner(), 0);
-    }
-
-    /// The niceness of the threads that rendered `priority`'s tiles of a small heart.
-    fn render_thread_niceness(renderer: &Renderer, priority: Priority) -> Vec<Option<i32>> {
-        let seen = Mutex::new(vec![]);
-        let control = Control::new(CancelToken::new(), |_| {
-            seen.lock()
-                .unwrap()
-                .push(crate::background::this_thread_niceness());
-        })
-        .with_priority(priority);
-        let request = RenderRequest {
-            width: Some(48),
-            height: Some(40),
-            spp: 1,
-            ..RenderRequest::default()
-        };
-        renderer.render(&heart(), &request, &control).unwrap();
-        drop(control);
-        let mut seen = seen.into_inner().unwrap();
-        seen.dedup();
-        seen
-    }
-
-    #[test]
-    #[cfg(target_os = "linux")]
-    fn background_batch_renders_run_at_the_lowest_priority_and_interactive_ones_do_not() {
-        let process = crate::background::this_thread_niceness();
-        let background = Renderer::with_background_batch(2).unwrap();
-        assert_eq!(
-            render_thread_niceness(&background, Priority::Batch),
-            vec![Some(crate::background::BACKGROUND_NICENESS)]
-        );
-        assert_eq!(
-            render_thread_niceness(&background, Priority::Interactive),
-            vec![process]
-        );
-        // The plain renderer (the CLI's, the farm's) keeps the process's priority.
-        let plain = Renderer::new(2).unwrap();
-        assert_eq!(
-            render_thread_niceness(&plain, Priority::Batch),
-            vec![process]
-        );
-        let request = RenderRequest {
-            width: Some(24),
-            height: Some(20),
-            ..RenderRequest::default()
-        };
-        let control = Control::default();
-        assert_eq!(
-            background
-                .render(&heart(), &request, &control)
-                .unwrap()
-                .image,
-            plain.render(&heart(), &request, &control).unwrap().image
-        );
     }
 
     #[test]

@@ -165,9 +165,7 @@ impl Server {
                 reason: e.to_string(),
             })?
             .port();
-        let renderer = Arc::new(crate::pipeline::Renderer::with_background_batch(
-            options.threads,
-        )?);
+        let renderer = Arc::new(crate::pipeline::Renderer::new(options.threads)?);
         let (stop, stopping) = tokio::sync::watch::channel(false);
         Ok(Self {
             listener,

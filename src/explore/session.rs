@@ -629,6 +629,11 @@ async fn render_views(
     let mut cache: Option<SceneCache> = None;
     // When the last frame went out (see `STARVED`).
     let mut last_frame = Instant::now();
+    // A refinement pass cancelled by a newer view, left to end on its own: it runs on the
+    // batch threads, which may be in the middle of another render's band (a save's, seconds
+    // long), and the newer view's first passes must not wait for it. The next refinement
+    // pass waits for it, so a page has at most one such pass and one running.
+    let mut draining: Option<tokio::task::JoinHandle<()>> = None;
     loop {
         let job = jobs.borrow_and_update().clone();
         let Some(job) = job else {
@@ -675,6 +680,21 @@ async fn render_views(
         let mut total_spp = 0;
         let mut changed = false;
         for (index, pass) in passes.iter().enumerate() {
+            if pass.accumulate {
+                if let Some(mut previous) = draining.take() {
+                    tokio::select! {
+                        _ = &mut previous => {}
+                        next = jobs.changed() => {
+                            draining = Some(previous);
+                            if next.is_err() {
+                                return;
+                            }
+                            changed = true;
+                            break;
+                        }
+                    }
+                }
+            }
             let cancel = CancelToken::new();
             let request = PassRequest {
                 width: pass.width,
@@ -709,7 +729,13 @@ async fn render_views(
                     changed = true;
                     if !finish_anyway {
                         cancel.cancel();
-                        let _ = task.await;
+                        if pass.accumulate {
+                            draining = Some(tokio::spawn(async move {
+                                let _ = task.await;
+                            }));
+                        } else {
+                            let _ = task.await;
+                        }
                         break;
                     }
                     superseded = true;
@@ -825,34 +851,30 @@ async fn save(
     let done = Arc::new(AtomicU64::new(0));
     let total = u64::from(width) * u64::from(height);
     let pixels_done = done.clone();
-    let mut work = tokio::task::spawn_blocking(move || {
-        // Parsing and encoding run at the lowest OS priority, as the save's render does (a
-        // batch render of `Renderer::with_background_batch`): nobody waits for them now.
-        crate::background::run_in_background(move || -> Result<(Vec<u8>, f64), String> {
-            let renderer = &busy.0.renderer;
-            let scene: Scene = scene::parse(&text, "explore.scene", &page_load_options())
-                .map_err(|e| e.to_string())?;
-            let camera = scene.camera.clone();
-            let shared = share(scene);
-            let request = PassRequest {
-                width,
-                height,
-                camera,
-                spp,
-                seed: 0,
-                view,
-                alpha,
-                preview: false,
-                interactive: false,
-            };
-            let progress = |p: Progress| pixels_done.store(p.done, Ordering::Relaxed);
-            let result = render_pass_reporting(renderer, &shared, &request, &cancel, progress)
-                .map_err(|e| e.to_string())?;
-            let mut png = vec![];
-            crate::film::encode_png(&result.image, &mut png)
-                .map_err(|e| format!("cannot encode the PNG: {e}"))?;
-            Ok((png, result.elapsed.as_secs_f64() * 1e3))
-        })
+    let mut work = tokio::task::spawn_blocking(move || -> Result<(Vec<u8>, f64), String> {
+        let renderer = &busy.0.renderer;
+        let scene: Scene = scene::parse(&text, "explore.scene", &page_load_options())
+            .map_err(|e| e.to_string())?;
+        let camera = scene.camera.clone();
+        let shared = share(scene);
+        let request = PassRequest {
+            width,
+            height,
+            camera,
+            spp,
+            seed: 0,
+            view,
+            alpha,
+            preview: false,
+            interactive: false,
+        };
+        let progress = |p: Progress| pixels_done.store(p.done, Ordering::Relaxed);
+        let result = render_pass_reporting(renderer, &shared, &request, &cancel, progress)
+            .map_err(|e| e.to_string())?;
+        let mut png = vec![];
+        crate::film::encode_png(&result.image, &mut png)
+            .map_err(|e| format!("cannot encode the PNG: {e}"))?;
+        Ok((png, result.elapsed.as_secs_f64() * 1e3))
     });
     let mut ticks = tokio::time::interval(Duration::from_millis(250));
     let work = loop {
@@ -890,10 +912,9 @@ async fn save(
 }
 
 /// Meshes a scene as `kardia mesh` does and sends the file, with a `mesh_progress` message
-/// about every quarter second; `cancel` stops it (then an error saying so). The work runs on
-/// threads of its own at the lowest OS priority ([`crate::background`]), as many as the
-/// renderer's, and keeps `permit` (a place under [`super::Limits::max_meshes`]) until it has
-/// really stopped, even when the page has left.
+/// about every quarter second; `cancel` stops it (then an error saying so). The work keeps
+/// `permit` (a place under [`super::Limits::max_meshes`]) until it has really stopped, even
+/// when the page has left.
 async fn make_mesh(
     seq: u64,
     text: String,
@@ -909,16 +930,8 @@ async fn make_mesh(
     let stop = cancel.clone();
     let mut work = tokio::task::spawn_blocking(move || {
         let _held = (busy, permit);
-        let threads = rayon::ThreadPoolBuilder::new()
-            .num_threads(shared.renderer.threads())
-            .thread_name(|i| format!("kardia-mesh-{i}"))
-            .start_handler(|_| {
-                crate::background::lower_this_thread();
-            })
-            .build()
-            .map_err(|e| format!("cannot start the mesh threads: {e}"))?;
         let progress = |f: f64| reported.store(f.to_bits(), Ordering::Relaxed);
-        threads.install(|| super::mesh::mesh_scene(&text, file_format, &progress, &stop))
+        super::mesh::mesh_scene(&text, file_format, &progress, &stop)
     });
     let mut ticks = tokio::time::interval(Duration::from_millis(250));
     let work = loop {

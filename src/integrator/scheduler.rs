@@ -82,32 +82,15 @@ pub(crate) struct RenderPool {
 impl RenderPool {
     /// A pool of `threads` threads (0: one per available core).
     pub(crate) fn new(threads: usize) -> Result<Self, rayon::ThreadPoolBuildError> {
-        Self::with_batch_priority(threads, false)
-    }
-
-    /// A pool of `threads` threads (0: one per available core) whose batch renders, with
-    /// `background`, run at the operating system's lowest priority
-    /// ([`crate::background::lower_this_thread`]): then every other thread of the machine
-    /// that wants a core (an interactive render's, but also the browser's and the network's
-    /// that bring the next view) gets it first, and batch renders use what is left.
-    pub(crate) fn with_batch_priority(
-        threads: usize,
-        background: bool,
-    ) -> Result<Self, rayon::ThreadPoolBuildError> {
-        let build = |name: &'static str, lower: bool| {
+        let build = |name: &'static str| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .thread_name(move |i| format!("kardia-{name}-{i}"))
-                .start_handler(move |_| {
-                    if lower {
-                        crate::background::lower_this_thread();
-                    }
-                })
                 .build()
         };
         Ok(Self {
-            threads: build("render", background)?,
-            interactive_threads: build("interactive", false)?,
+            threads: build("render")?,
+            interactive_threads: build("interactive")?,
             active: AtomicUsize::new(0),
             interactive: AtomicUsize::new(0),
             calm: (Mutex::new(()), Condvar::new()),
