@@ -658,6 +658,55 @@ async fn a_page_that_leaves_mid_render_frees_its_work_at_once() {
     server.stop().await;
 }
 
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_new_view_does_not_wait_for_a_refinement_pass_queued_behind_a_save() {
+    let server = start(Limits::default()).await;
+    // Another page saves the default heart at 1600×1200, 16 spp: each band of its render
+    // holds a render thread for seconds.
+    let mut saver = connect(server.addr).await;
+    let save = json!({"type": "save", "seq": 1, "scene": kardia::scene::DEFAULT_SCENE,
+                      "width": 1600, "height": 1200, "spp": 16});
+    saver.send(Message::text(save.to_string())).await.unwrap();
+    loop {
+        let m = next_text(&mut saver).await;
+        assert_eq!(m["type"], "save_progress", "{m}");
+        if m["done"].as_u64().unwrap() > 0 {
+            break;
+        }
+    }
+    // This page's view: its full frame at 1 spp, after which its first refinement pass (a
+    // batch render, sharing the threads with the save band by band) is under way.
+    let mut page = connect(server.addr).await;
+    let heart = kardia::scene::DEFAULT_SCENE;
+    page.send(view(1, heart, 320, 240)).await.unwrap();
+    loop {
+        let (header, _) = next_binary(&mut page).await;
+        if header["pass"] == 1 {
+            break;
+        }
+    }
+    tokio::time::sleep(Duration::from_millis(50)).await;
+    // A drag: the next view's first frame must not wait for that refinement pass to notice
+    // its cancellation, which it can do only once the save's bands let it have a thread.
+    let moved = heart.replace("CAMERA (6, 1.2, 0.9)", "CAMERA (6, 1.6, 0.9)");
+    assert_ne!(moved, heart);
+    let asked = Instant::now();
+    page.send(view(2, &moved, 320, 240)).await.unwrap();
+    let waited = loop {
+        let (header, _) = next_binary(&mut page).await;
+        if header["seq"] == 2 {
+            break asked.elapsed();
+        }
+    };
+    eprintln!("beside a save, a new view's first frame came {waited:?} after it was sent");
+    assert!(waited < Duration::from_millis(750), "{waited:?}");
+    saver
+        .send(Message::text(r#"{"type":"cancel_save"}"#))
+        .await
+        .unwrap();
+    server.stop().await;
+}
+
 /// A scene whose mesh takes seconds: Barth's sextic (its 65 nodes make many crossings).
 const BARTH_SCENE: &str = "CAMERA (0, -9, 3) (0, 0, 0) (0, 0, 1) 40\nLIGHT (4, -6, 5) (1, 1, 1)\n\
     IMPLICIT barth_sextic (0, 0, 0) (0.55, 0, 0) (0, 0.55, 0) (0, 0, 0.55) (0.3, 0.7, 0.4)\n";
