@@ -661,11 +661,17 @@ async fn a_page_that_leaves_mid_render_frees_its_work_at_once() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_new_view_does_not_wait_for_a_refinement_pass_queued_behind_a_save() {
     let server = start(Limits::default()).await;
-    // Another page saves the default heart at 1600×1200, 16 spp: each band of its render
-    // holds a render thread for seconds.
+    // Another page saves the default heart filling the frame (a field of view of 8°) at
+    // 1600×1200, 128 spp: each band of its render holds a render thread for seconds.
     let mut saver = connect(server.addr).await;
-    let save = json!({"type": "save", "seq": 1, "scene": kardia::scene::DEFAULT_SCENE,
-                      "width": 1600, "height": 1200, "spp": 16});
+    let heart = kardia::scene::DEFAULT_SCENE;
+    let close_up = heart.replace(
+        "CAMERA (6, 1.2, 0.9) (0, 0, 0.05) (0, 0, 1) 32",
+        "CAMERA (6, 1.2, 0.9) (0, 0, 0.05) (0, 0, 1) 8",
+    );
+    assert_ne!(close_up, heart);
+    let save = json!({"type": "save", "seq": 1, "scene": close_up,
+                      "width": 1600, "height": 1200, "spp": 128});
     saver.send(Message::text(save.to_string())).await.unwrap();
     loop {
         let m = next_text(&mut saver).await;
@@ -677,7 +683,6 @@ async fn a_new_view_does_not_wait_for_a_refinement_pass_queued_behind_a_save() {
     // This page's view: its full frame at 1 spp, after which its first refinement pass (a
     // batch render, sharing the threads with the save band by band) is under way.
     let mut page = connect(server.addr).await;
-    let heart = kardia::scene::DEFAULT_SCENE;
     page.send(view(1, heart, 320, 240)).await.unwrap();
     loop {
         let (header, _) = next_binary(&mut page).await;
@@ -687,7 +692,8 @@ async fn a_new_view_does_not_wait_for_a_refinement_pass_queued_behind_a_save() {
     }
     tokio::time::sleep(Duration::from_millis(50)).await;
     // A drag: the next view's first frame must not wait for that refinement pass to notice
-    // its cancellation, which it can do only once the save's bands let it have a thread.
+    // its cancellation, which it can do only once the save's bands let it have a thread
+    // (before this was fixed: 16 and 18 s with a release build, against 4 and 23 ms after).
     let moved = heart.replace("CAMERA (6, 1.2, 0.9)", "CAMERA (6, 1.6, 0.9)");
     assert_ne!(moved, heart);
     let asked = Instant::now();
