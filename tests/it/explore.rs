@@ -774,11 +774,13 @@ async fn meshes_are_limited_server_wide_and_stop_on_cancel_or_when_the_page_leav
     .await;
     let cancel_ms = asked.elapsed().as_millis();
     eprintln!(
-        "mesh cancelled at {:.0} % of its grid: stopped {cancel_ms} ms after cancel_mesh",
+        "mesh cancelled at {:.1} % of its grid: stopped {cancel_ms} ms after cancel_mesh",
         fraction * 100.0
     );
-    if fraction < 1.0 {
-        // Cancelled while the grid was being worked: within about one layer.
+    // Below 99 % the grid's labels or triangles were being made (the placement of the
+    // vertices starts at about 99 %, and the deviation measurement that follows the grid,
+    // not interrupted, reports the same fraction): then the work stops within about a layer.
+    if fraction < 0.99 {
         assert!(stopped < Duration::from_secs(2), "{stopped:?}");
     }
     // A page that leaves mid-mesh frees its place as well.
@@ -792,10 +794,10 @@ async fn meshes_are_limited_server_wide_and_stop_on_cancel_or_when_the_page_leav
     )
     .await;
     eprintln!(
-        "page left at {:.0} % of its mesh's grid: its work stopped {freed:?} later",
+        "page left at {:.1} % of its mesh's grid: its work stopped {freed:?} later",
         fraction * 100.0
     );
-    if fraction < 1.0 {
+    if fraction < 0.99 {
         assert!(freed < Duration::from_secs(2), "{freed:?}");
     }
     // The place is free: a small mesh is made and sent.
