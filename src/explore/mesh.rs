@@ -4,8 +4,9 @@
 //! `--size`), so the file's bytes are the command's.
 
 use crate::mesh::write::{write_3mf, write_stl, MeshFormat, MeshMetadata};
-use crate::mesh::{mesh_solids, scene_solids, MeshRequest, SolidKind};
+use crate::mesh::{mesh_solids_cancellable, scene_solids, MeshRequest, SolidKind};
 use crate::scene;
+use std::sync::atomic::AtomicBool;
 
 /// `kardia mesh`'s default `--max-cells`.
 const MAX_CELLS: usize = 512;
@@ -32,12 +33,15 @@ pub struct MeshFile {
 }
 
 /// Meshes the scene `text` into a file of `format`; `progress(fraction)` (0 to 1) is told how
-/// far the grid has got. An error (a scene that does not parse, one without a polynomial
-/// surface, a mesh that cannot be made) is a sentence for the page.
+/// far the grid has got; once `cancel` is set it stops within about one layer of the grid
+/// (see [`crate::mesh::mesh_solids_cancellable`]) with an error. An error (a scene that does
+/// not parse, one without a polynomial surface, a mesh that cannot be made, a cancel) is a
+/// sentence for the page.
 pub fn mesh_scene(
     text: &str,
     format: MeshFormat,
     progress: &(dyn Fn(f64) + Sync),
+    cancel: &AtomicBool,
 ) -> Result<MeshFile, String> {
     let scene = scene::parse(text, "explore.scene", &super::session::page_load_options())
         .map_err(|e| e.to_string())?;
@@ -48,9 +52,15 @@ pub fn mesh_scene(
         max_cells: MAX_CELLS,
     };
     let count = solids.len().max(1);
-    let printable = mesh_solids(&solids, &request, None, &|i, done, total| {
-        progress((i as f64 + done as f64 / total.max(1) as f64) / count as f64);
-    })
+    let printable = mesh_solids_cancellable(
+        &solids,
+        &request,
+        None,
+        &|i, done, total| {
+            progress((i as f64 + done as f64 / total.max(1) as f64) / count as f64);
+        },
+        cancel,
+    )
     .map_err(|e| e.to_string())?;
     let meta = MeshMetadata::of_solids(&solids, false);
     let mut bytes = std::io::Cursor::new(Vec::new());
@@ -76,21 +86,25 @@ mod tests {
                     IMPLICIT \"x^2 + y^2 + z^2 - 1\" (0, 0, 0) (1, 0, 0) (0, 1, 0) (0, 0, 1) \
                     (0.8, 0.2, 0.2) BOUND 1.5\n";
         let fractions = std::sync::Mutex::new(vec![]);
-        let stl = mesh_scene(text, MeshFormat::Stl, &|f| {
-            fractions.lock().unwrap().push(f)
-        })
+        let stl = mesh_scene(
+            text,
+            MeshFormat::Stl,
+            &|f| fractions.lock().unwrap().push(f),
+            &AtomicBool::new(false),
+        )
         .unwrap();
         assert!(stl.triangles > 100, "{}", stl.triangles);
         // Binary STL: 80-byte header, count, 50 bytes a triangle.
         assert_eq!(stl.bytes.len(), 84 + 50 * stl.triangles);
         let fractions = fractions.into_inner().unwrap();
         assert!(fractions.iter().all(|f| (0.0..=1.0).contains(f)) && !fractions.is_empty());
-        let three = mesh_scene(text, MeshFormat::ThreeMf, &|_| {}).unwrap();
+        let three =
+            mesh_scene(text, MeshFormat::ThreeMf, &|_| {}, &AtomicBool::new(false)).unwrap();
         assert_eq!(&three.bytes[..2], b"PK", "a zip");
         assert_eq!(three.triangles, stl.triangles);
         let plane = "SIZE 40 30\nCAMERA (0, -5, 0) (0, 0, 0) (0, 0, 1) 40\n\
                      PLANE (0, 0, 1) 0 (0.5, 0.5, 0.5)\n";
-        assert!(mesh_scene(plane, MeshFormat::Stl, &|_| {}).is_err());
+        assert!(mesh_scene(plane, MeshFormat::Stl, &|_| {}, &AtomicBool::new(false)).is_err());
         assert!(format_named("obj").is_err());
     }
 }

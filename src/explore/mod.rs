@@ -48,6 +48,9 @@ pub struct Limits {
     pub max_messages_per_second: u32,
     /// Most clients connected at once.
     pub max_clients: usize,
+    /// Most meshes (Download STL / 3MF) made at once on the server, all pages together; a
+    /// page asking for one more is refused until one is done. (A page makes one at a time.)
+    pub max_meshes: usize,
 }
 
 impl Default for Limits {
@@ -63,6 +66,7 @@ impl Default for Limits {
             max_save_samples: 1 << 28,
             max_messages_per_second: 200,
             max_clients: 16,
+            max_meshes: 2,
         }
     }
 }
@@ -124,6 +128,9 @@ pub(crate) struct Shared {
     pub(crate) port: u16,
     pub(crate) clients: AtomicUsize,
     pub(crate) renders: AtomicUsize,
+    /// One permit per mesh that may be made at once ([`Limits::max_meshes`]); a mesh holds
+    /// its permit until its work has really stopped (finished or cancelled).
+    pub(crate) meshes: Arc<tokio::sync::Semaphore>,
     /// Becomes `true` when the server stops: every session closes its page.
     pub(crate) stopping: tokio::sync::watch::Receiver<bool>,
     /// The gallery's thumbnails rendered so far (PNG files, by entry id); the lock is held
@@ -166,11 +173,12 @@ impl Server {
             shared: Arc::new(Shared {
                 stopping,
                 renderer,
-                options,
                 port,
                 clients: AtomicUsize::new(0),
                 renders: AtomicUsize::new(0),
+                meshes: Arc::new(tokio::sync::Semaphore::new(options.limits.max_meshes)),
                 thumbnails: Default::default(),
+                options,
             }),
         })
     }
@@ -229,6 +237,13 @@ impl Monitor {
     /// Renders (view passes and saves) running now.
     pub fn renders(&self) -> usize {
         self.0.renders.load(Ordering::SeqCst)
+    }
+
+    /// Meshes being made now, all pages together (their work still running, though a page
+    /// that cancelled it or left no longer waits for it).
+    pub fn meshes(&self) -> usize {
+        let limit = self.0.options.limits.max_meshes;
+        limit.saturating_sub(self.0.meshes.available_permits())
     }
 }
 

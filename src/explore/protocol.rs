@@ -67,6 +67,9 @@ pub enum ClientMessage {
     /// Stop the save in flight (its reply is then an error saying it was cancelled); nothing
     /// when none is rendering.
     CancelSave {},
+    /// Stop the mesh in flight (its reply is then an error saying it was cancelled); nothing
+    /// when none is being made.
+    CancelMesh {},
     /// Render this scene once at this size and samples, and send it as a PNG.
     Save {
         /// Echoed in the reply.

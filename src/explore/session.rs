@@ -18,7 +18,7 @@ use crate::scene::{self, LoadOptions, Scene};
 use axum::extract::ws::{CloseFrame, Message, WebSocket};
 use futures_util::{SinkExt, StreamExt};
 use glam::Vec3;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio::sync::{mpsc, watch};
@@ -90,6 +90,7 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
     let mut save_cancel = CancelToken::new();
     let mut save_task: Option<tokio::task::JoinHandle<()>> = None;
     let mut mesh_task: Option<tokio::task::JoinHandle<()>> = None;
+    let mut mesh_cancel = Arc::new(AtomicBool::new(false));
     let mut rate = RateLimit::new(limits.max_messages_per_second);
     // The newest message over the rate limit, read once the window reopens: a burst loses its
     // intermediate messages, never its last (the state the page settled on).
@@ -215,30 +216,47 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                 }
             },
             ClientMessage::CancelSave {} => save_cancel.cancel(),
+            ClientMessage::CancelMesh {} => mesh_cancel.store(true, Ordering::Relaxed),
             ClientMessage::Mesh { seq, scene, format } => {
                 if mesh_task.as_ref().is_some_and(|t| !t.is_finished()) {
                     let _ = out
                         .send(error_message(
                             Some(seq),
-                            "a mesh is already being made: wait for it".into(),
+                            "a mesh is already being made: wait for it or cancel it".into(),
                         ))
                         .await;
                     continue;
                 }
-                match super::mesh::format_named(&format) {
-                    Ok(file_format) => {
-                        mesh_task = Some(tokio::spawn(make_mesh(
-                            seq,
-                            scene,
-                            (format, file_format),
-                            shared.clone(),
-                            out.clone(),
-                        )));
-                    }
+                let file_format = match super::mesh::format_named(&format) {
+                    Ok(file_format) => file_format,
                     Err(why) => {
                         let _ = out.send(error_message(Some(seq), why)).await;
+                        continue;
                     }
-                }
+                };
+                // The server-wide limit: a permit held until the mesh's work has stopped.
+                let Ok(permit) = shared.meshes.clone().try_acquire_owned() else {
+                    let _ = out
+                        .send(error_message(
+                            Some(seq),
+                            format!(
+                                "the server is already making {} meshes (its limit, all pages \
+                                 together): try again when one is done",
+                                limits.max_meshes
+                            ),
+                        ))
+                        .await;
+                    continue;
+                };
+                mesh_cancel = Arc::new(AtomicBool::new(false));
+                mesh_task = Some(tokio::spawn(make_mesh(
+                    seq,
+                    scene,
+                    (format, file_format),
+                    (shared.clone(), permit),
+                    mesh_cancel.clone(),
+                    out.clone(),
+                )));
             }
             ClientMessage::Probe {
                 seq,
@@ -333,8 +351,10 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
     if let Some(task) = save_task {
         let _ = task.await;
     }
+    // Its mesh stops within about one layer of the grid (see `make_mesh`); the file is not
+    // sent.
+    mesh_cancel.store(true, Ordering::Relaxed);
     if let Some(task) = mesh_task {
-        // Meshing cannot be cancelled: the page is gone, so its file is not sent.
         task.abort();
     }
     drop(out);
@@ -609,6 +629,11 @@ async fn render_views(
     let mut cache: Option<SceneCache> = None;
     // When the last frame went out (see `STARVED`).
     let mut last_frame = Instant::now();
+    // A refinement pass cancelled by a newer view, left to end on its own: it runs on the
+    // batch threads, which may be in the middle of another render's band (a save's, seconds
+    // long), and the newer view's first passes must not wait for it. The next refinement
+    // pass waits for it, so a page has at most one such pass and one running.
+    let mut draining: Option<tokio::task::JoinHandle<()>> = None;
     loop {
         let job = jobs.borrow_and_update().clone();
         let Some(job) = job else {
@@ -655,6 +680,21 @@ async fn render_views(
         let mut total_spp = 0;
         let mut changed = false;
         for (index, pass) in passes.iter().enumerate() {
+            if pass.accumulate {
+                if let Some(mut previous) = draining.take() {
+                    tokio::select! {
+                        _ = &mut previous => {}
+                        next = jobs.changed() => {
+                            draining = Some(previous);
+                            if next.is_err() {
+                                return;
+                            }
+                            changed = true;
+                            break;
+                        }
+                    }
+                }
+            }
             let cancel = CancelToken::new();
             let request = PassRequest {
                 width: pass.width,
@@ -689,7 +729,13 @@ async fn render_views(
                     changed = true;
                     if !finish_anyway {
                         cancel.cancel();
-                        let _ = task.await;
+                        if pass.accumulate {
+                            draining = Some(tokio::spawn(async move {
+                                let _ = task.await;
+                            }));
+                        } else {
+                            let _ = task.await;
+                        }
                         break;
                     }
                     superseded = true;
@@ -866,22 +912,26 @@ async fn save(
 }
 
 /// Meshes a scene as `kardia mesh` does and sends the file, with a `mesh_progress` message
-/// about every quarter second.
+/// about every quarter second; `cancel` stops it (then an error saying so). The work keeps
+/// `permit` (a place under [`super::Limits::max_meshes`]) until it has really stopped, even
+/// when the page has left.
 async fn make_mesh(
     seq: u64,
     text: String,
     (format, file_format): (String, crate::mesh::write::MeshFormat),
-    shared: Arc<Shared>,
+    (shared, permit): (Arc<Shared>, tokio::sync::OwnedSemaphorePermit),
+    cancel: Arc<AtomicBool>,
     out: Outbox,
 ) {
     let busy = Busy::new(&shared);
     let fraction = Arc::new(AtomicU64::new(0));
     let reported = fraction.clone();
     let start = Instant::now();
+    let stop = cancel.clone();
     let mut work = tokio::task::spawn_blocking(move || {
-        let _busy = busy;
+        let _held = (busy, permit);
         let progress = |f: f64| reported.store(f.to_bits(), Ordering::Relaxed);
-        super::mesh::mesh_scene(&text, file_format, &progress)
+        super::mesh::mesh_scene(&text, file_format, &progress, &stop)
     });
     let mut ticks = tokio::time::interval(Duration::from_millis(250));
     let work = loop {
@@ -909,6 +959,9 @@ async fn make_mesh(
             )
             .into(),
         ),
+        Ok(Err(_)) if cancel.load(Ordering::Relaxed) => {
+            error_message(Some(seq), "mesh cancelled".into())
+        }
         Ok(Err(why)) => error_message(Some(seq), format!("mesh failed: {why}")),
         Err(e) => error_message(Some(seq), format!("mesh failed: {e}")),
     };

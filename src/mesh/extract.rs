@@ -17,7 +17,7 @@ use super::TriangleMesh;
 use crate::geometry::DVec3;
 use rayon::prelude::*;
 use std::collections::HashMap;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 /// The six tetrahedra of the unit cube (corner offsets as bits x = 1, y = 2, z = 4),
 /// each ordered with positive orientation.
@@ -146,6 +146,19 @@ pub fn march(
     grid: Grid,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> (TriangleMesh, Vec<VertexKind>) {
+    march_cancellable(field, grid, progress, &AtomicBool::new(false)).expect("never cancelled")
+}
+
+/// [`march`], giving up (`None`) once `cancel` is set: it is read before each layer of the
+/// grid (labels and triangles) and before each vertex is placed on the boundary, so a
+/// cancelled march stops within about one layer's work.
+pub fn march_cancellable(
+    field: &Field,
+    grid: Grid,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    cancel: &AtomicBool,
+) -> Option<(TriangleMesh, Vec<VertexKind>)> {
+    let cancelled = || cancel.load(Ordering::Relaxed);
     let side = grid.side();
     let total = 2 * side + 1;
     let done = AtomicUsize::new(0);
@@ -157,6 +170,9 @@ pub fn march(
         .par_chunks_mut(side * side)
         .enumerate()
         .for_each(|(z, layer)| {
+            if cancelled() {
+                return;
+            }
             for y in 0..side {
                 for x in 0..side {
                     layer[x + side * y] = field.inside(grid.point(x, y, z));
@@ -168,6 +184,9 @@ pub fn march(
     // 2. Polygons as cycles of edge keys (the lower vertex's index × 8 + the offset bits
     // to the upper one; a triangle's fourth key is NO_KEY), one z layer of cubes per task,
     // joined in order.
+    if cancelled() {
+        return None;
+    }
     let tetrahedra = cube_tetrahedra();
     let table = marching_table();
     let key = |v: usize, bits: u8| (v as u64) << 3 | u64::from(bits);
@@ -175,6 +194,9 @@ pub fn march(
         .into_par_iter()
         .map(|z| {
             let mut out = Vec::new();
+            if cancelled() {
+                return out;
+            }
             for y in 0..grid.cells {
                 for x in 0..grid.cells {
                     let base = grid.index(x, y, z);
@@ -211,6 +233,9 @@ pub fn march(
             out
         })
         .collect();
+    if cancelled() {
+        return None;
+    }
     let polygons: Vec<[u64; 4]> = by_layer.into_iter().flatten().collect();
 
     // 3. One vertex per crossed edge, placed on the exact boundary.
@@ -240,13 +265,16 @@ pub fn march(
     let placed: Vec<(DVec3, VertexKind)> = keys
         .par_iter()
         .map(|&k| {
+            if cancelled() {
+                return None;
+            }
             let (lower, upper) = ends(k);
             let (p, q) = (position(lower), position(upper));
             let (a, b) = if labels[lower] { (p, q) } else { (q, p) };
             let (s, kind) = field.crossing(a, b);
-            (a + s * (b - a), kind)
+            Some((a + s * (b - a), kind))
         })
-        .collect();
+        .collect::<Option<_>>()?;
     tick();
     let (mut vertices, mut kinds): (Vec<DVec3>, Vec<VertexKind>) = placed.into_iter().unzip();
     let indexed: Vec<([u32; 4], usize)> = polygons
@@ -260,6 +288,10 @@ pub fn march(
             (out, n)
         })
         .collect();
+
+    if cancelled() {
+        return None;
+    }
 
     // 4. Where a polygon's side joins a surface vertex to a cap vertex, a vertex on the
     // crease, in the face of the tetrahedron that holds the side (shared by the two
@@ -331,13 +363,13 @@ pub fn march(
             ]);
         }
     }
-    (
+    Some((
         TriangleMesh {
             vertices,
             triangles,
         },
         kinds,
-    )
+    ))
 }
 
 /// The fourth key of a triangle's polygon (no vertex).

@@ -18,6 +18,7 @@ pub mod write;
 use crate::geometry::{DMat3, DVec3, Frame};
 use crate::shapes::PolynomialSolid;
 pub use field::{Field, SolidKind, VertexKind};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// A triangle mesh: vertex positions and triangles of three vertex indices, wound
 /// counter-clockwise seen from outside (the right-hand normal faces out).
@@ -142,6 +143,9 @@ pub enum MeshError {
     /// A guarantee failed on the finished mesh (a bug: please report it).
     #[error("the mesh failed its own check: {0}")]
     Broken(String),
+    /// The caller's cancel flag was set ([`mesh_solids_cancellable`]).
+    #[error("the mesh was cancelled")]
+    Cancelled,
 }
 
 /// A solid's mesh in world coordinates, with what was measured on it.
@@ -207,6 +211,18 @@ pub fn mesh_solid(
     request: &MeshRequest,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<MeshedSolid, MeshError> {
+    mesh_solid_cancellable(solid, request, progress, &AtomicBool::new(false))
+}
+
+/// [`mesh_solid`], stopping with [`MeshError::Cancelled`] once `cancel` is set (read before
+/// each of the grid's layers, [`extract::march_cancellable`], and before the deviation is
+/// measured).
+pub fn mesh_solid_cancellable(
+    solid: &PolynomialSolid,
+    request: &MeshRequest,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    cancel: &AtomicBool,
+) -> Result<MeshedSolid, MeshError> {
     let frame: Frame = solid.frame;
     let grow = stretch(&frame.m);
     let radius = solid.clip_radius;
@@ -241,7 +257,11 @@ pub fn mesh_solid(
         });
     }
     let field = Field::new(&solid.polynomial, radius, kind);
-    let (object_mesh, kinds) = extract::march(&field, grid, progress);
+    let (object_mesh, kinds) =
+        extract::march_cancellable(&field, grid, progress, cancel).ok_or(MeshError::Cancelled)?;
+    if cancel.load(Ordering::Relaxed) {
+        return Err(MeshError::Cancelled);
+    }
     if object_mesh.triangles.is_empty() {
         return Err(MeshError::Empty);
     }
@@ -359,6 +379,19 @@ pub fn mesh_solids(
     size: Option<f64>,
     progress: &(dyn Fn(usize, usize, usize) + Sync),
 ) -> Result<Printable, MeshError> {
+    mesh_solids_cancellable(solids, request, size, progress, &AtomicBool::new(false))
+}
+
+/// [`mesh_solids`], stopping with [`MeshError::Cancelled`] once `cancel` is set: read in
+/// each solid's meshing ([`mesh_solid_cancellable`]) and before the joined mesh is checked.
+/// (The deviation of one solid and the final check are not interrupted.)
+pub fn mesh_solids_cancellable(
+    solids: &[NamedSolid],
+    request: &MeshRequest,
+    size: Option<f64>,
+    progress: &(dyn Fn(usize, usize, usize) + Sync),
+    cancel: &AtomicBool,
+) -> Result<Printable, MeshError> {
     if solids.is_empty() {
         return Err(MeshError::Invalid(
             "nothing to mesh: the scene has no HEART or IMPLICIT object".into(),
@@ -367,12 +400,16 @@ pub fn mesh_solids(
     let mut parts = Vec::new();
     let mut joined = TriangleMesh::default();
     for (i, s) in solids.iter().enumerate() {
-        let part = mesh_solid(&s.solid, request, &|done, total| progress(i, done, total)).map_err(
-            |e| match e {
-                MeshError::Empty => MeshError::Invalid(format!("{}: {e}", s.name)),
-                e => e,
-            },
-        )?;
+        let part = mesh_solid_cancellable(
+            &s.solid,
+            request,
+            &|done, total| progress(i, done, total),
+            cancel,
+        )
+        .map_err(|e| match e {
+            MeshError::Empty => MeshError::Invalid(format!("{}: {e}", s.name)),
+            e => e,
+        })?;
         joined.append(&part.mesh);
         parts.push(part);
     }
@@ -386,6 +423,9 @@ pub fn mesh_solids(
         let (lo, hi) = joined.extent();
         scale = size / (hi - lo).max_element();
         joined = joined.mapped(|p| (p - lo) * scale, false);
+    }
+    if cancel.load(Ordering::Relaxed) {
+        return Err(MeshError::Cancelled);
     }
     let mesh = joined.rounded_to_f32();
     let verified = check::verify(&mesh).map_err(MeshError::Broken)?;
@@ -522,6 +562,52 @@ mod tests {
         assert!((v.volume - exact).abs() < 0.02 * exact, "{}", v.volume);
         let (lo, hi) = m.mesh.extent();
         assert!((lo.x - 3.0).abs() < 0.05 && (hi.x - 7.0).abs() < 0.05);
+    }
+
+    #[test]
+    fn a_cancelled_mesh_stops_within_a_few_layers() {
+        let named = NamedSolid {
+            name: "sphere".into(),
+            solid: solid("x^2 + y^2 + z^2 = 1", 1.5),
+            colour: [200, 50, 50],
+        };
+        let request = MeshRequest {
+            tolerance: Some(0.02),
+            ..MeshRequest::default()
+        };
+        let cancel = AtomicBool::new(false);
+        let layers = std::sync::atomic::AtomicUsize::new(0);
+        let total = std::sync::atomic::AtomicUsize::new(0);
+        let result = mesh_solids_cancellable(
+            std::slice::from_ref(&named),
+            &request,
+            None,
+            &|_, _, all| {
+                total.store(all, Ordering::Relaxed);
+                if layers.fetch_add(1, Ordering::Relaxed) + 1 == 3 {
+                    cancel.store(true, Ordering::Relaxed);
+                }
+            },
+            &cancel,
+        );
+        assert!(matches!(result, Err(MeshError::Cancelled)), "{result:?}");
+        // Layers already started when the flag was set may finish: one per thread.
+        let done = layers.into_inner();
+        let threads = rayon::current_num_threads();
+        assert!(
+            done <= 3 + threads,
+            "{done} layers of {} done after a cancel at the third ({threads} threads)",
+            total.into_inner()
+        );
+        // Not cancelled, the same call meshes the sphere.
+        let whole = mesh_solids_cancellable(
+            &[named],
+            &request,
+            None,
+            &|_, _, _| {},
+            &AtomicBool::new(false),
+        );
+        assert!(whole.unwrap().mesh.triangles.len() > 1000);
     }
 
     #[test]

@@ -4,7 +4,7 @@
 import { chromium } from "playwright-core";
 import { mkdtempSync, rmSync, writeFileSync, readFileSync } from "node:fs";
 import { execFileSync } from "node:child_process";
-import { tmpdir } from "node:os";
+import { cpus, loadavg, tmpdir } from "node:os";
 import { join } from "node:path";
 import assert from "node:assert/strict";
 import pngjs from "pngjs";
@@ -13,7 +13,7 @@ const url = process.argv[2];
 if (!url) throw new Error("usage: node tests/browser/explore.mjs URL");
 
 const profile = mkdtempSync(join(tmpdir(), "kardia-chromium-"));
-const context = await chromium.launchPersistentContext(profile, {
+const browserOptions = {
   executablePath: process.env.CHROMIUM || "/usr/bin/chromium",
   headless: true,
   args: [
@@ -21,7 +21,8 @@ const context = await chromium.launchPersistentContext(profile, {
     "--disable-background-networking", "--disable-component-update", "--disable-sync",
   ],
   viewport: { width: 1000, height: 640 },
-});
+};
+const context = await chromium.launchPersistentContext(profile, browserOptions);
 const page = context.pages()[0] || (await context.newPage());
 const pageErrors = [];
 page.on("pageerror", (e) => pageErrors.push(e.message));
@@ -567,6 +568,19 @@ await check("Download STL and 3MF: the same bytes as `kardia mesh` of Copy scene
       assert.ok(bytes.equals(cli), `${format}: ${bytes.length} bytes from the page, ${cli.length} from kardia mesh`);
       assert.match(await page.textContent("#message"), new RegExp(`saved kardia-torus-1\\.85-0\\.3\\.${format}: \\d+ triangles`));
     }
+    // Cancel mesh stops a mesh (Barth's sextic takes seconds): the page is told, nothing is
+    // downloaded, and the button has nothing left to cancel.
+    assert.ok(await page.isDisabled("#mesh-cancel"), "nothing to cancel before a mesh");
+    await page.click('#gallery button[data-preset="barth_sextic"]');
+    await fullFrameAfter((await sentSeq()) - 1);
+    const errors = await page.evaluate(() => window.kardia.errors.length);
+    await page.evaluate(() => { window.kardia.lastMesh = null; window.kardia.meshProgress = []; });
+    await page.click("#mesh-stl");
+    await page.waitForFunction(() => window.kardia.meshProgress.length >= 1, null, { timeout: 60000 });
+    await page.click("#mesh-cancel");
+    await page.waitForFunction((n) => window.kardia.errors.slice(n).includes("mesh cancelled"), errors, { timeout: 30000 });
+    assert.ok(await page.isDisabled("#mesh-cancel"), "nothing left to cancel");
+    assert.equal(await page.evaluate(() => window.kardia.lastMesh), null, "no file from a cancelled mesh");
   } finally {
     rmSync(dir, { recursive: true, force: true });
   }
@@ -684,14 +698,19 @@ await check("an orthographic camera pans by its view height and zooms by it", as
 });
 
 await check("fairness: a dragging page keeps its frames beside a page saving 1600×1200 at 16 spp", async () => {
-  const dragger = await context.newPage();
-  dragger.on("pageerror", (e) => pageErrors.push("dragging page: " + e.message));
+  // The dragging page is this browser's only page: a second visible page in the same
+  // headless chromium slows the first one's input events to a few a second (7 mouse moves in
+  // 3 s instead of 28, measured), whatever the server does.
+  for (const other of context.pages()) if (other !== page) await other.close();
+  const dragger = page;
+  await dragger.goto("about:blank");
   await dragger.goto(`${url}#mode=equation&preset=heart&size=400x300`);
   await dragger.waitForFunction(() => window.kardia.frames.some((f) => f.width === 400 && f.done), null, { timeout: 120000 });
   const box = await dragger.locator("#view").boundingBox();
   const [cx, cy] = [box.x + box.width / 2, box.y + box.height / 2];
   const sent = () => dragger.evaluate(() => window.kardia.sent());
-  // Drags for 3 s (a move every 16 ms); frames drawn a second, and the release to the full frame.
+  // Drags for 3 s (a move every 16 ms): frames drawn a second, views sent a second, and the
+  // time from the release to the full frame.
   const drag = async () => {
     await dragger.waitForTimeout(300);
     const before = await sent();
@@ -706,40 +725,62 @@ await check("fairness: a dragging page keeps its frames beside a page saving 160
     }
     const seconds = (Date.now() - start) / 1000;
     const drawn = await dragger.evaluate((s) => window.kardia.frames.filter((f) => f.seq > s).length, before);
+    const views = (await sent()) - before;
     const released = await dragger.evaluate(() => performance.now());
     await dragger.mouse.up();
     const last = await sent();
     await dragger.waitForFunction((s) => window.kardia.frames.some((f) => f.seq >= s && f.width === 400), last, { timeout: 120000 });
     const full = await dragger.evaluate((s) => window.kardia.frames.find((f) => f.seq >= s && f.width === 400).receivedAt, last);
-    return { fps: drawn / seconds, releaseToFull: full - released };
+    return { fps: drawn / seconds, views: views / seconds, releaseToFull: full - released };
   };
+  const loadBefore = loadavg()[0];
   const alone = await drag();
-  const saver = await context.newPage();
-  saver.on("pageerror", (e) => pageErrors.push("saving page: " + e.message));
-  await saver.goto(`${url}#mode=equation&preset=heart&size=200x150&save=1600x1200x16`);
-  await saver.waitForFunction(() => window.kardia.frames.length > 0, null, { timeout: 120000 });
-  await saver.evaluate(() => { window.kardia.saveProgress = []; document.getElementById("save").click(); });
-  await saver.waitForFunction(() => window.kardia.saveProgress.some((f) => f > 0), null, { timeout: 60000 });
-  const beside = await drag();
-  const progress = await saver.evaluate(() => window.kardia.saveProgress.at(-1));
-  const finished = await saver.evaluate(() => Boolean(window.kardia.lastPng));
-  await saver.evaluate(() => document.getElementById("save-cancel").click());
-  await saver.close();
-  await dragger.close();
-  console.log(`# fairness: dragging alone ${alone.fps.toFixed(1)} frames/s, full frame ${Math.round(alone.releaseToFull)} ms ` +
-    `after release; beside the save ${beside.fps.toFixed(1)} frames/s, ${Math.round(beside.releaseToFull)} ms ` +
-    `(the save at ${Math.round(progress * 100)} %${finished ? ", finished" : ""})`);
-  assert.ok(!finished, "the save was still rendering while the page dragged");
-  // The issue's target is 10 frames/s and the full frame within 300 ms of release. On the
-  // shared 2-core machine (load 12-17) this branch measured 1.6-2.2 frames/s and 0.5-1.7 s
-  // beside the save (12 frames/s and 20-120 ms alone), so the target is not asserted; what is
-  // asserted is that the dragging page is never starved (before: 0 frames/s, 16-38 s).
-  if (beside.fps < 10 || beside.releaseToFull > 300) {
-    console.log("# !!!!! fairness target NOT met here: 10 frames/s and 300 ms beside the save (see above)");
+  // The saving page is another person's: a browser of its own (see above).
+  const otherProfile = mkdtempSync(join(tmpdir(), "kardia-chromium-"));
+  const other = await chromium.launchPersistentContext(otherProfile, browserOptions);
+  try {
+    const saver = other.pages()[0] || (await other.newPage());
+    saver.on("pageerror", (e) => pageErrors.push("saving page: " + e.message));
+    await saver.goto(`${url}#mode=equation&preset=heart&size=200x150&save=1600x1200x16`);
+    await saver.waitForFunction(() => window.kardia.frames.length > 0, null, { timeout: 120000 });
+    await saver.evaluate(() => { window.kardia.saveProgress = []; document.getElementById("save").click(); });
+    await saver.waitForFunction(() => window.kardia.saveProgress.some((f) => f > 0), null, { timeout: 60000 });
+    const beside = await drag();
+    const progress = await saver.evaluate(() => window.kardia.saveProgress.at(-1));
+    const finished = await saver.evaluate(() => Boolean(window.kardia.lastPng));
+    await saver.evaluate(() => document.getElementById("save-cancel").click());
+    const load = Math.max(loadBefore, loadavg()[0]);
+    const cores = cpus().length;
+    console.log(`# fairness (load average ${loadBefore.toFixed(1)} → ${loadavg()[0].toFixed(1)}, ${cores} cores): ` +
+      `dragging alone ${alone.fps.toFixed(1)} frames/s (${alone.views.toFixed(1)} views sent/s), full frame ` +
+      `${Math.round(alone.releaseToFull)} ms after release; beside the save ${beside.fps.toFixed(1)} frames/s ` +
+      `(${beside.views.toFixed(1)} views sent/s), ${Math.round(beside.releaseToFull)} ms ` +
+      `(the save at ${Math.round(progress * 100)} %${finished ? ", finished" : ""})`);
+    assert.ok(!finished, "the save was still rendering while the page dragged");
+    // The issue's target: ≥ 10 frames/s and the full frame within 300 ms of release, beside
+    // the save. It is asserted when it can be measured here: the machine not loaded by
+    // anything else (load average below the cores) and this harness able to send 10 views a
+    // second alone (each view is at most one frame). Otherwise the floor: beside the save the
+    // page keeps at least half its frames and gets its full frame within 1.5 s.
+    const measurable = load < cores && alone.views >= 10;
+    if (measurable) {
+      assert.ok(beside.fps >= 10, `beside a save ${beside.fps} frames/s, alone ${alone.fps}`);
+      assert.ok(beside.releaseToFull <= 300, `beside a save the full frame came ${beside.releaseToFull} ms after release`);
+    } else {
+      console.log(`# !!!!! fairness target (10 frames/s, 300 ms) NOT asserted: load average ${load.toFixed(1)} ` +
+        `with ${cores} cores, ${alone.views.toFixed(1)} views sent a second alone; the floor is asserted`);
+      assert.ok(beside.fps >= Math.min(10, alone.fps) / 2, `beside a save ${beside.fps} frames/s, alone ${alone.fps}`);
+      assert.ok(beside.releaseToFull <= 1500,
+        `beside a save the full frame came ${beside.releaseToFull} ms after release, alone ${alone.releaseToFull}`);
+    }
+  } finally {
+    await other.close();
+    rmSync(otherProfile, { recursive: true, force: true });
+    // The page as the next checks expect it: the explorer at its defaults.
+    await page.goto("about:blank");
+    await page.goto(url);
+    await fullFrameAfter(0);
   }
-  assert.ok(beside.fps >= 1, `beside a save ${beside.fps} frames/s, alone ${alone.fps}`);
-  assert.ok(beside.releaseToFull <= 3000,
-    `beside a save the full frame came ${beside.releaseToFull} ms after release, alone ${alone.releaseToFull}`);
 });
 
 await check("a hidden page pauses its refinement and resumes when shown", async () => {

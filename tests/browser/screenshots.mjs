@@ -1,6 +1,6 @@
 // The screenshots of docs/explorer.md (a script, not a test): the desktop (1280×800) on
-// Togliatti's quintic in the `path` study view with a pixel probed, and a phone (390×844) on
-// the heart, each once its view has refined to 16 samples a pixel or more.
+// Togliatti's quintic and a phone (390×844) on the heart, as a new user first sees them
+// (shaded), each once its view has refined to 16 samples a pixel or more.
 //
 // Usage: node tests/browser/screenshots.mjs URL DIR
 //   (URL: a running `kardia explore`; DIR: where explorer_desktop.png and explorer_phone.png go)
@@ -23,13 +23,10 @@ const refined = (page) => page.waitForFunction(() => window.kardia.frames.some(
 try {
   const desktop = context.pages()[0] || (await context.newPage());
   await desktop.setViewportSize({ width: 1280, height: 800 });
-  await desktop.goto(`${url}#mode=equation&preset=togliatti&view=path`);
+  await desktop.goto(`${url}#mode=equation&preset=togliatti`);
   await refined(desktop);
   await desktop.waitForFunction(() => [...document.querySelectorAll("#gallery img")].every((i) => i.complete), null,
     { timeout: 300000 });
-  const box = await desktop.locator("#view").boundingBox();
-  await desktop.mouse.move(box.x + box.width * 0.5, box.y + box.height * 0.45);
-  await desktop.waitForFunction(() => window.kardia.lastProbe, null, { timeout: 30000 });
   await desktop.screenshot({ path: join(dir, "explorer_desktop.png") });
   const phone = await context.newPage();
   await phone.setViewportSize({ width: 390, height: 844 });

@@ -276,7 +276,7 @@ function onText(m) {
     window.kardia.errors.push(m.message);
     say(m.message);
     if (pendingSave && m.seq === pendingSave.seq) endSave();
-    if (pendingMesh && m.seq === pendingMesh.seq) pendingMesh = null;
+    if (pendingMesh && m.seq === pendingMesh.seq) endMesh();
   }
 }
 
@@ -985,15 +985,25 @@ function onSaveProgress(m) {
 let pendingMesh = null;
 let meshSeq = 2000000;
 function requestMesh(format) {
-  if (pendingMesh) return say("a mesh is being made: wait for it");
+  if (pendingMesh) return say("a mesh is being made: wait for it or cancel it");
   meshSeq += 1;
   pendingMesh = { seq: meshSeq, format };
   $("mesh-progress").value = 0;
+  $("mesh-cancel").disabled = false;
   say(`meshing the surface for ${format.toUpperCase()}…`);
   send({ type: "mesh", seq: meshSeq, scene: currentScene(), format });
 }
 $("mesh-stl").onclick = () => requestMesh("stl");
 $("mesh-3mf").onclick = () => requestMesh("3mf");
+$("mesh-cancel").onclick = () => {
+  if (!pendingMesh) return;
+  send({ type: "cancel_mesh" });
+  say("cancelling the mesh…");
+};
+function endMesh() {
+  pendingMesh = null;
+  $("mesh-cancel").disabled = true;
+}
 function onMeshProgress(m) {
   if (!pendingMesh || m.seq !== pendingMesh.seq) return;
   $("mesh-progress").value = m.fraction;
@@ -1002,7 +1012,7 @@ function onMeshProgress(m) {
 }
 function onMesh(header, payload) {
   if (!pendingMesh || header.seq !== pendingMesh.seq) return;
-  pendingMesh = null;
+  endMesh();
   $("mesh-progress").value = 1;
   const type = header.format === "3mf" ? "model/3mf" : "model/stl";
   const blob = new Blob([payload], { type });
