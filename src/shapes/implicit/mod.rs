@@ -294,12 +294,17 @@ impl Surface {
         if g.abs().max_element() > GRADIENT_MARGIN * noise {
             return g;
         }
-        if self
+        if let Some((g0, bound)) = self
             .tree
             .as_ref()
-            .is_some_and(|tree| tree_says_smooth(tree, q, h))
+            .and_then(|tree| tree_smooth_direction(tree, q, h))
         {
-            // The double-double gradient at `q` alone, as `smooth_gradient` answers.
+            // The tree's own gradient where its bound puts its direction far below any
+            // angle a normal needs; else the double-double gradient at `q` alone, as
+            // `smooth_gradient` answers.
+            if g0.abs().max_element() >= TREE_NORMAL_MARGIN * bound {
+                return g0;
+            }
             return self.gradient_dd(q);
         }
         if let Some(n) = self.smooth_gradient(q, h, g, noise) {
@@ -348,39 +353,43 @@ const TETRAHEDRON: [[f64; 3]; 4] = [
     [-1.0, -1.0, 1.0],
 ];
 
-/// [`Surface::smooth_gradient`]'s test read from the equation's tree
-/// ([`tree::Tree::gradient`], with its error bounds for the rounding): true when, at `q` and
-/// at the four probes on the sphere of radius `h` about it, `∇f` is [`GRADIENT_MARGIN`]
-/// times above its bound (the largest of its components') and its directions agree within
-/// [`FLAT_ANGLE`]; the surface is then flat across the sphere, and `∇f` at `q` (taken in
-/// double-double, the normal `smooth_gradient` gives) is its normal. Where the expansion
-/// cancels and the tree does not (`(x+y+z+1)^16 = 1`), the probes cost a few `f64`
-/// operations each instead of a double-double evaluation of the expansion. False near a
-/// curve where `∇f` vanishes, or where the tree's own bound is not clear.
-fn tree_says_smooth(tree: &tree::Tree, q: DVec3, h: f64) -> bool {
-    tree_smooth_direction(tree, q, h).is_some()
-}
+/// How far above its error bound (the largest of its components') the tree's `∇f` at a
+/// point must be for its `f64` value to be the normal itself
+/// ([`Surface::direction_from_gradient`]): the direction is then good to about `1e-12`
+/// radians, far below any angle the normal needs (and below what the double-double
+/// gradient, the fallback, rounded to `f64`, is needed for).
+const TREE_NORMAL_MARGIN: f64 = 1e12;
 
-/// [`tree_says_smooth`]'s test, with the tree's gradient at `q` where it passes.
-fn tree_smooth_direction(tree: &tree::Tree, q: DVec3, h: f64) -> Option<DVec3> {
+/// [`Surface::smooth_gradient`]'s test read from the equation's tree
+/// ([`tree::Tree::gradient`], with its error bounds for the rounding): `Some` when, at `q`
+/// and at the four probes on the sphere of radius `h` about it, `∇f` is [`GRADIENT_MARGIN`]
+/// times above its bound (the largest of its components') and its directions agree within
+/// [`FLAT_ANGLE`]; the surface is then flat across the sphere, and `∇f` at `q` is its
+/// normal. Answers the tree's `∇f` at `q` with its bound (the largest of its components'
+/// error bounds), for the caller to take it where the bound is
+/// [`TREE_NORMAL_MARGIN`] times below it, or else `∇f` in double-double. Where the expansion
+/// cancels and the tree does not (`(x+y+z+1)^16 = 1`), the probes cost a few `f64`
+/// operations each instead of a double-double evaluation of the expansion. `None` near a
+/// curve where `∇f` vanishes, or where the tree's own bound is not clear.
+fn tree_smooth_direction(tree: &tree::Tree, q: DVec3, h: f64) -> Option<(DVec3, f64)> {
     let clear = |p: DVec3| {
         let g = tree.gradient(p.to_array());
         let v = DVec3::from_array(g.map(|c| c.value));
         let bound = g.iter().fold(0.0f64, |m, c| m.max(c.error));
         // False for a NaN or an infinite bound too.
-        (v.abs().max_element() > GRADIENT_MARGIN * bound && bound.is_finite()).then_some(v)
+        (v.abs().max_element() > GRADIENT_MARGIN * bound && bound.is_finite()).then_some((v, bound))
     };
-    let g0 = clear(q)?;
+    let (g0, bound0) = clear(q)?;
     let dir0 = g0 / g0.length();
     for s in TETRAHEDRON {
-        let gk = clear(q + h / 3f64.sqrt() * DVec3::from_array(s))?;
+        let (gk, _) = clear(q + h / 3f64.sqrt() * DVec3::from_array(s))?;
         // False for a NaN too.
         let flat = (gk / gk.length() - dir0).length() <= FLAT_ANGLE;
         if !flat {
             return None;
         }
     }
-    Some(g0)
+    Some((g0, bound0))
 }
 
 impl Surface {
@@ -2320,8 +2329,11 @@ mod tests {
 
     /// Where the expansion cancels so much that `f64`'s gradient is not far enough above its
     /// rounding (issue 36's cliffs: every such normal went to the sign-plane, hundreds of
-    /// double-double evaluations), the normal is `∇f` in double-double arithmetic: the exact
-    /// normal to 1e-9, and the sign-plane's to 1e-4 where that one answers.
+    /// double-double evaluations), the normal is a gradient taken exactly enough — the
+    /// equation's tree's where it goes through the tree and its bound certifies it, else
+    /// `∇f` in double-double arithmetic: along the closed form's normal and the double-double
+    /// gradient to 1e-12 (the sign-plane, good to about its sphere's radius, is not used),
+    /// and the sign-plane's to 1e-4 where that one answers.
     #[test]
     fn a_cancelling_expansion_takes_its_gradient_in_double_double() {
         type Normal = fn(DVec3) -> DVec3;
@@ -2353,13 +2365,18 @@ mod tests {
                 if g.abs().max_element() > GRADIENT_MARGIN * noise {
                     continue; // f64's gradient does
                 }
-                let n = s
-                    .smooth_gradient(q, h, g, noise)
-                    .unwrap_or_else(|| panic!("{equation} at {q}: smooth, yet not taken"));
+                // Smooth about `q`, so answered before the sign-plane: by the tree's test
+                // where the surface goes through the tree, by the expansion's otherwise.
+                let smooth = match &s.tree {
+                    Some(tree) => tree_smooth_direction(tree, q, h).is_some(),
+                    None => s.smooth_gradient(q, h, g, noise).is_some(),
+                };
+                assert!(smooth, "{equation} at {q}: smooth, yet not taken");
                 taken += 1;
-                let n = n.normalize();
-                assert!((n - exact(q)).length() < 1e-9, "{equation} at {q}: {n}");
-                assert_eq!(s.normal_direction(q, h).normalize(), n, "{equation} at {q}");
+                let n = s.normal_direction(q, h).normalize();
+                assert!((n - exact(q)).length() < 1e-12, "{equation} at {q}: {n}");
+                let dd = s.gradient_dd(q).normalize();
+                assert!((n - dd).length() < 1e-12, "{equation} at {q}: {n}, {dd}");
                 if let Some(plane) = s.normal_from_signs(q, h) {
                     assert!((plane - n).length() < 1e-4, "{equation} at {q}: {plane}");
                     compared += 1;
