@@ -3,7 +3,7 @@
 //! Each file carries the animation's render key (a comment in a GIF, a text chunk in an APNG),
 //! so that `--resume` keeps only an animation made with the same scene and settings.
 
-use std::io::Write;
+use std::io::{Read, Write};
 use std::path::Path;
 
 use crate::film::{Image, OutputError};
@@ -184,27 +184,27 @@ impl<W: Write> AnimatedEncoder<W> {
 /// The render key an animated file carries (see [`AnimatedEncoder::new`]), if it is a GIF or
 /// APNG that holds one; `None` for anything else, a damaged file included.
 pub fn read_key(path: &Path) -> Option<String> {
-    let bytes = std::fs::read(path).ok()?;
+    let file = std::io::BufReader::new(std::fs::File::open(path).ok()?);
     match AnimatedFormat::from_path(path)? {
-        AnimatedFormat::Gif => gif_comments(&bytes)?
-            .into_iter()
-            .find_map(|c| {
-                c.strip_prefix(format!("{}=", crate::tiles::KEY_TAG).as_bytes())
-                    .map(|k| k.to_vec())
-            })
-            .and_then(|k| String::from_utf8(k).ok()),
-        AnimatedFormat::Apng => {
-            let reader = png::Decoder::new(std::io::Cursor::new(bytes))
-                .read_info()
-                .ok()?;
-            let info = reader.info();
-            info.uncompressed_latin1_text
-                .iter()
-                .find(|t| t.keyword == crate::tiles::KEY_TAG)
-                .map(|t| t.text.clone())
+        AnimatedFormat::Gif => {
+            // The key is written before the first frame, within the file's first bytes
+            // (header, screen descriptor, loop extension, the comment): no need to read the
+            // frames.
+            let mut head = Vec::new();
+            file.take(GIF_KEY_WITHIN).read_to_end(&mut head).ok()?;
+            let prefix = format!("{}=", crate::tiles::KEY_TAG);
+            gif_comments(&head)?
+                .into_iter()
+                .find_map(|c| c.strip_prefix(prefix.as_bytes()).map(<[u8]>::to_vec))
+                .and_then(|k| String::from_utf8(k).ok())
         }
+        AnimatedFormat::Apng => crate::film::read_png_tag(file, crate::tiles::KEY_TAG),
     }
 }
+
+/// How far into a GIF [`read_key`] looks for the key: past the largest global colour table
+/// (768 bytes) and the loop extension, with room for a key of any length kardia writes.
+const GIF_KEY_WITHIN: u64 = 64 * 1024;
 
 /// The comment extensions of a GIF that come before its first image (where
 /// [`AnimatedEncoder`] writes the key), each with its sub-blocks joined; `None` when the

@@ -145,14 +145,7 @@ pub fn encode_tagged(
 pub fn read_tag(path: &Path, name: &str) -> Option<String> {
     let file = std::io::BufReader::new(std::fs::File::open(path).ok()?);
     match ImageFormat::from_path(path).ok()? {
-        ImageFormat::Png => {
-            let reader = png::Decoder::new(file).read_info().ok()?;
-            let info = reader.info();
-            info.uncompressed_latin1_text
-                .iter()
-                .find(|t| t.keyword == name)
-                .map(|t| t.text.clone())
-        }
+        ImageFormat::Png => read_png_tag(file, name),
         ImageFormat::ExrFloat | ImageFormat::ExrHalf => {
             use exr::prelude::{AttributeValue, Text};
             let meta = exr::meta::MetaData::read_from_buffered(file, false).ok()?;
@@ -169,6 +162,21 @@ pub fn read_tag(path: &Path, name: &str) -> Option<String> {
             }
         }
     }
+}
+
+/// The text of the `tEXt` chunk `name` that a PNG (or APNG) stream holds before its image
+/// data, if any; `None` for a stream that is not a PNG.
+pub(crate) fn read_png_tag(
+    stream: impl std::io::BufRead + std::io::Seek,
+    name: &str,
+) -> Option<String> {
+    let reader = png::Decoder::new(stream).read_info().ok()?;
+    reader
+        .info()
+        .uncompressed_latin1_text
+        .iter()
+        .find(|t| t.keyword == name)
+        .map(|t| t.text.clone())
 }
 
 /// An error unless the image holds `width·height ≥ 1` pixels.

@@ -345,7 +345,7 @@ const PROBE_MARGIN: f64 = 10.0 / FLAT_ANGLE;
 const SIGN_SPHERE: f64 = 1e-5;
 
 /// The corners of a regular tetrahedron on the unit cube's diagonals (times `1/√3` on the
-/// unit sphere): the probes of [`Surface::smooth_gradient`] and [`tree_smooth_gradient`].
+/// unit sphere): the probes of [`Surface::smooth_gradient`] and [`tree_smooth_direction`].
 const TETRAHEDRON: [[f64; 3]; 4] = [
     [1.0, 1.0, 1.0],
     [1.0, -1.0, -1.0],
