@@ -16,20 +16,24 @@ use super::{
 use crate::geometry::{DVec3, Ray};
 use crate::shapes::placed::Placement;
 use crate::shapes::LANES;
+use std::mem::MaybeUninit;
 
 /// One `f64` per lane.
 type Lanes = [f64; LANES];
 
 /// [`HeartShape::chord`] of each lane's object-space ray `local[i]` with its range
-/// `(t_min[i], t_max[i])`: lane `i` is `Some(out[i])` where `chord` gives `Some`, written to
-/// `out[i]`, and `false` where it gives `None` (`out[i]` is then meaningless).
+/// `(t_min[i], t_max[i])`: lane `i` is `true` where `chord` gives `Some`, that chord written
+/// to `out[i]`, and `false` where it gives `None` (`out[i]` is then meaningless). Every one of
+/// `out`'s chords is written: the caller may take it as initialised. (`out` starts
+/// uninitialised: an array of chords made only to be overwritten cost a 544-byte `memset` a
+/// query, and chords returned by value a `memcpy`.)
 #[inline]
 pub(super) fn chords(
     at: &Placement,
     local: &[Ray; LANES],
     t_min: Lanes,
     t_max: Lanes,
-    out: &mut [Chord; LANES],
+    out: &mut MaybeUninit<[Chord; LANES]>,
 ) -> [bool; LANES] {
     #[cfg(target_arch = "x86_64")]
     if crate::cpu::avx2() {
@@ -50,7 +54,7 @@ unsafe fn chords_avx2(
     local: &[Ray; LANES],
     t_min: Lanes,
     t_max: Lanes,
-    out: &mut [Chord; LANES],
+    out: &mut MaybeUninit<[Chord; LANES]>,
 ) -> [bool; LANES] {
     chords_in(at, local, t_min, t_max, out)
 }
@@ -73,7 +77,7 @@ fn chords_in(
     local: &[Ray; LANES],
     t_min: Lanes,
     t_max: Lanes,
-    chords: &mut [Chord; LANES],
+    out: &mut MaybeUninit<[Chord; LANES]>,
 ) -> [bool; LANES] {
     let (mut ox, mut oy, mut oz) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
     let (mut dx, mut dy, mut dz) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
@@ -153,12 +157,14 @@ fn chords_in(
         t1[i] = c1;
     }
     // The chord and its sextic, every lane (a dead lane's values are never read).
-    for (i, chord) in chords.iter_mut().enumerate() {
+    // Each chord written once, straight into `out`.
+    let first = out.as_mut_ptr().cast::<Chord>();
+    for i in 0..LANES {
         let len = t1[i] - t0[i];
         alive[i] &= (len > 0.0) & len.is_finite();
         let o = DVec3::new(ox[i], oy[i], oz[i]) + t0[i] * DVec3::new(dx[i], dy[i], dz[i]);
         let d = DVec3::new(dx[i], dy[i], dz[i]) * len;
-        *chord = Chord {
+        let chord = Chord {
             t_lo: t_lo[i],
             t0: t0[i],
             len,
@@ -167,20 +173,11 @@ fn chords_in(
             coeffs: sextic_coefficients(o, d),
             window: POLISH_WINDOW / (dir_len[i] * len),
         };
+        // SAFETY: `i < LANES`: inside the array `out` points to.
+        unsafe { first.add(i).write(chord) };
     }
     alive
 }
-
-/// A chord to be overwritten by [`chords`].
-pub(super) const NO_CHORD: Chord = Chord {
-    t_lo: 0.0,
-    t0: 0.0,
-    len: 0.0,
-    o: DVec3::ZERO,
-    d: DVec3::ZERO,
-    coeffs: [0.0; 7],
-    window: 0.0,
-};
 
 impl HeartShape {
     /// [`HeartShape::chord`] of each lane, one at a time (the reference the lanes must match).
@@ -278,10 +275,14 @@ mod tests {
                         |alive: [bool; LANES], out: [Chord; LANES]| -> [Option<Chord>; LANES] {
                             std::array::from_fn(|i| alive[i].then_some(out[i]))
                         };
-                    let mut out = [NO_CHORD; LANES];
-                    let baseline = lanes_of(chords_in(&at, &local, t_min, t_max, &mut out), out);
-                    let mut out = [NO_CHORD; LANES];
-                    let chosen = lanes_of(chords(&at, &local, t_min, t_max, &mut out), out);
+                    let mut out = MaybeUninit::uninit();
+                    let alive = chords_in(&at, &local, t_min, t_max, &mut out);
+                    // SAFETY: `chords_in` writes every chord.
+                    let baseline = lanes_of(alive, unsafe { out.assume_init() });
+                    let mut out = MaybeUninit::uninit();
+                    let alive = chords(&at, &local, t_min, t_max, &mut out);
+                    // SAFETY: `chords` writes every chord.
+                    let chosen = lanes_of(alive, unsafe { out.assume_init() });
                     for i in 0..LANES {
                         assert!(same(&want[i], &baseline[i]), "{:?}", group[i]);
                         assert!(same(&want[i], &chosen[i]), "{:?}", group[i]);

@@ -424,11 +424,16 @@ impl ObjectShape for HeartShape {
         t_max: [f64; LANES],
     ) -> [Option<f64>; LANES] {
         let solver = self.solver;
-        let mut chords = [lanes::NO_CHORD; LANES];
+        let mut chords = std::mem::MaybeUninit::uninit();
         let alive = lanes::chords(at, local, t_min, t_max, &mut chords);
+        // SAFETY: `lanes::chords` writes every chord; borrowed, not copied out.
+        let chords = unsafe { chords.assume_init_ref() };
         // Every chord's first query, `(0, 1]`, for the lanes at once; a lane's later queries
         // (past a root the checks skipped) one at a time.
-        let coeffs = chords.map(|chord| chord.coeffs);
+        let mut coeffs = [[0.0; 7]; LANES];
+        for (c, chord) in coeffs.iter_mut().zip(chords) {
+            *c = chord.coeffs;
+        }
         let first = solver.first_root_lanes(&coeffs, [0.0; LANES], [1.0; LANES], alive);
         let mut hits = [None; LANES];
         for (i, hit) in hits.iter_mut().enumerate() {
