@@ -70,8 +70,10 @@ pub(crate) struct RenderPool {
     /// As many threads again, for interactive renders only: idle between them (batch
     /// renders wait while one runs, so the two never compete for the cores), which also
     /// keeps the operating system's scheduler from counting a long batch render's CPU time
-    /// against the threads a person waits for.
-    interactive_threads: rayon::ThreadPool,
+    /// against the threads a person waits for. Started by the first interactive render (a
+    /// command-line render never has one: its threads would only compete with the render's
+    /// start for the cores); should that start fail, interactive renders run on `threads`.
+    interactive_threads: std::sync::OnceLock<Option<rayon::ThreadPool>>,
     active: AtomicUsize,
     /// Interactive renders running now.
     interactive: AtomicUsize,
@@ -82,15 +84,9 @@ pub(crate) struct RenderPool {
 impl RenderPool {
     /// A pool of `threads` threads (0: one per available core).
     pub(crate) fn new(threads: usize) -> Result<Self, rayon::ThreadPoolBuildError> {
-        let build = |name: &'static str| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .thread_name(move |i| format!("kardia-{name}-{i}"))
-                .build()
-        };
         Ok(Self {
-            threads: build("render")?,
-            interactive_threads: build("interactive")?,
+            threads: build_threads(threads, "render")?,
+            interactive_threads: std::sync::OnceLock::new(),
             active: AtomicUsize::new(0),
             interactive: AtomicUsize::new(0),
             calm: (Mutex::new(()), Condvar::new()),
@@ -100,6 +96,14 @@ impl RenderPool {
     /// Threads in the pool.
     pub(crate) fn threads(&self) -> usize {
         self.threads.current_num_threads()
+    }
+
+    /// The threads interactive renders run on, started at the first call.
+    fn interactive_threads(&self) -> &rayon::ThreadPool {
+        self.interactive_threads
+            .get_or_init(|| build_threads(self.threads(), "interactive").ok())
+            .as_ref()
+            .unwrap_or(&self.threads)
     }
 
     /// Whether an interactive render is running (a render that is not hands its threads over).
@@ -125,6 +129,17 @@ impl RenderPool {
         self.interactive.fetch_add(1, Ordering::SeqCst);
         InteractiveGuard(self)
     }
+}
+
+/// A pool of `threads` threads (0: one per available core) named `kardia-{name}-{i}`.
+fn build_threads(
+    threads: usize,
+    name: &'static str,
+) -> Result<rayon::ThreadPool, rayon::ThreadPoolBuildError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .thread_name(move |i| format!("kardia-{name}-{i}"))
+        .build()
 }
 
 /// An interactive render running on a [`RenderPool`]; dropping it wakes the renders waiting
@@ -339,7 +354,7 @@ pub(crate) fn run<S: Shader>(
             pool.wait_for_interactive(hooks.cancelled);
         }
         let threads = if hooks.interactive {
-            &pool.interactive_threads
+            pool.interactive_threads()
         } else {
             &pool.threads
         };
