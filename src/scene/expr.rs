@@ -80,10 +80,34 @@ struct Defined {
     uses_time: bool,
 }
 
+/// Hashes a name by FNV-1a, 64 bits: names are short and chosen by the scene's author, so
+/// the standard library's SipHash (resistant to chosen keys) cost more than the rest of a
+/// lookup; a `REPEAT` of thousands of objects looks a name up for each of its values.
+#[derive(Debug, Clone, Copy)]
+struct NameHasher(u64);
+
+impl Default for NameHasher {
+    fn default() -> Self {
+        Self(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl std::hash::Hasher for NameHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
 /// The names an expression can use: the built-ins and the `LET` definitions read so far.
 #[derive(Debug)]
 pub(super) struct Names {
-    lets: HashMap<String, Defined>,
+    lets: HashMap<String, Defined, std::hash::BuildHasherDefault<NameHasher>>,
     /// The frame being read; `None` reads the scene as a still (frame 0 of 1).
     pub(super) time: Option<FrameTime>,
 }
@@ -92,7 +116,7 @@ impl Names {
     /// No `LET` names yet, at the given time.
     pub(super) fn new(time: Option<FrameTime>) -> Self {
         Self {
-            lets: HashMap::new(),
+            lets: HashMap::default(),
             time,
         }
     }
