@@ -168,6 +168,22 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
             part.grid.cells,
             part.grid.step()
         );
+        match part.coarsened {
+            Some(c) => outln!(
+                "    coarsened where flat: {} triangles from marching tetrahedra's {} ({} \
+                 collapses in {} passes, each within {:.3e} of the surface)",
+                part.mesh.triangles.len(),
+                part.extracted_triangles,
+                c.collapses,
+                c.passes,
+                crate::mesh::COARSEN_SHARE * part.tolerance
+            ),
+            None => outln!(
+                "    not coarsened: the coarsened mesh failed the check, so marching \
+                 tetrahedra's {} triangles are kept",
+                part.extracted_triangles
+            ),
+        }
         if part.kinds.contains(&crate::mesh::VertexKind::Cap) {
             outln!(
                 "    crease: {} vertices on both the surface and the clip sphere; {} triangles \

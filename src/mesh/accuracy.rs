@@ -21,6 +21,7 @@ use crate::shapes::implicit::MAX_DEGREE;
 pub use crate::shapes::triangles::closest_on_triangle;
 use rayon::prelude::*;
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The directions of the grid's edges ([`super::extract`]: the cube's axes, face diagonals
 /// and main diagonal).
@@ -84,9 +85,38 @@ pub fn measure(
     tolerance: f64,
     step: f64,
 ) -> Deviation {
+    measure_cancellable(
+        field,
+        mesh,
+        kinds,
+        tolerance,
+        step,
+        &AtomicBool::new(false),
+        &|_| {},
+    )
+    .expect("never cancelled")
+}
+
+/// The parts of [`measure_cancellable`] reported to its `part_done` (1, 2, 3: the vertices,
+/// the mesh→surface side, the surface→mesh side).
+pub const MEASURE_PARTS: usize = 3;
+
+/// [`measure`], giving up (`None`) once `cancel` is set: every vertex, triangle and surface
+/// sample reads it first, so a cancelled measurement stops within about one sample's work
+/// per thread. `part_done(k)` is called as each of the [`MEASURE_PARTS`] parts ends.
+pub fn measure_cancellable(
+    field: &Field,
+    mesh: &TriangleMesh,
+    kinds: &[VertexKind],
+    tolerance: f64,
+    step: f64,
+    cancel: &AtomicBool,
+    part_done: &(dyn Fn(usize) + Sync),
+) -> Option<Deviation> {
     if field.degree() > MAX_DEGREE {
-        return Deviation::default();
+        return Some(Deviation::default());
     }
+    let cancelled = || cancel.load(Ordering::Relaxed);
     let reach = 2.0 * step;
     let h = 1e-7 * field.radius();
     let surface_vertices: Vec<usize> = (0..mesh.vertices.len())
@@ -94,8 +124,17 @@ pub fn measure(
         .collect();
     let vertex_distances: Vec<Option<f64>> = surface_vertices
         .par_iter()
-        .map(|&v| vertex_distance(field, mesh.vertices[v], tolerance))
+        .map(|&v| {
+            if cancelled() {
+                return None;
+            }
+            vertex_distance(field, mesh.vertices[v], tolerance)
+        })
         .collect();
+    if cancelled() {
+        return None;
+    }
+    part_done(1);
     let vertex = vertex_distances
         .iter()
         .flatten()
@@ -121,6 +160,9 @@ pub fn measure(
                 .all(|&v| kinds[v as usize].on_surface())
         })
         .map(|t| {
+            if cancelled() {
+                return None;
+            }
             let [a, b, c] = mesh.corners(t);
             let centroid = (a + b + c) / 3.0;
             let along_normal = field.distance_along(centroid, mesh.normal(t), reach);
@@ -136,12 +178,25 @@ pub fn measure(
         .map(|d| d.unwrap_or(reach))
         .fold(0.0, f64::max);
 
+    if cancelled() {
+        return None;
+    }
+    part_done(2);
     let samples = surface_samples(field, step);
     let nearest = NearestTriangle::new(mesh, step);
     let surface_side: Vec<Option<f64>> = samples
         .par_iter()
-        .map(|&p| nearest.distance(p, reach))
+        .map(|&p| {
+            if cancelled() {
+                return None;
+            }
+            nearest.distance(p, reach)
+        })
         .collect();
+    if cancelled() {
+        return None;
+    }
+    part_done(3);
     let surface_to_mesh = surface_side
         .iter()
         .map(|d| d.unwrap_or(reach))
@@ -151,7 +206,7 @@ pub fn measure(
         .chain(&surface_side)
         .filter(|d| d.is_none())
         .count();
-    Deviation {
+    Some(Deviation {
         vertex,
         vertices: surface_vertices.len(),
         vertices_beyond,
@@ -161,7 +216,7 @@ pub fn measure(
         surface_samples: samples.len(),
         beyond_reach,
         measured: true,
-    }
+    })
 }
 
 /// An upper bound on the distance from the object-space point `p` to `φ = 0`: the nearest
