@@ -171,16 +171,18 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
         match part.coarsened {
             Some(c) => outln!(
                 "    coarsened where flat: {} triangles from marching tetrahedra's {} ({} \
-                 collapses in {} passes, each within {:.3e} of the surface)",
+                 collapses and {} flips in {} passes, each new triangle within {:.3e} of the \
+                 surface)",
                 part.mesh.triangles.len(),
                 part.extracted_triangles,
-                c.collapses,
-                c.passes,
-                crate::mesh::COARSEN_SHARE * part.tolerance
+                c.done.collapses,
+                c.done.flips,
+                c.done.passes,
+                c.budget
             ),
             None => outln!(
-                "    not coarsened: the coarsened mesh failed the check, so marching \
-                 tetrahedra's {} triangles are kept",
+                "    not coarsened: the coarsened mesh had crossing triangles at every budget \
+                 tried, so marching tetrahedra's {} triangles are kept",
                 part.extracted_triangles
             ),
         }

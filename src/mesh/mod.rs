@@ -101,6 +101,9 @@ impl TriangleMesh {
 /// triangles it leaves alone.
 pub const COARSEN_SHARE: f64 = 0.5;
 
+/// Budgets tried by the coarsening (each half the last) before the extracted mesh is kept.
+pub const COARSEN_ATTEMPTS: u32 = 3;
+
 /// What to mesh and how finely.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MeshRequest {
@@ -171,8 +174,19 @@ pub struct MeshedSolid {
     /// Triangles of the mesh marching tetrahedra made, before it was coarsened.
     pub extracted_triangles: usize,
     /// What the coarsening did ([`simplify::coarsen`]); `None` when its result failed the
-    /// check and the extracted mesh was kept.
-    pub coarsened: Option<simplify::Coarsened>,
+    /// check at every budget tried and the extracted mesh was kept.
+    pub coarsened: Option<Coarsening>,
+}
+
+/// The coarsening that made a mesh: what it did and within what distance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Coarsening {
+    /// Collapses, flips and passes made.
+    pub done: simplify::Coarsened,
+    /// The budget it kept each new triangle within (world units, by the first-order
+    /// estimate): [`COARSEN_SHARE`] of the tolerance, or half or a quarter of that where the
+    /// larger budget made two triangles cross.
+    pub budget: f64,
 }
 
 impl MeshedSolid {
@@ -286,25 +300,32 @@ pub fn mesh_solid_cancellable(
         return Err(MeshError::Empty);
     }
     let extracted_triangles = extracted.triangles.len();
-    let (mut object_mesh, mut kinds) = (extracted.clone(), extracted_kinds.clone());
-    let coarsened = simplify::coarsen(
-        &field,
-        &mut object_mesh,
-        &mut kinds,
-        COARSEN_SHARE * tolerance / grow,
-        cancel,
-        &|pass| progress(march_total + quarter * pass / simplify::MAX_PASSES, all),
-    )
-    .ok_or(MeshError::Cancelled)?;
     // The collapses keep every guarantee but whether two triangles cross, which the check
-    // decides; should it ever fail, the extracted mesh (which keeps them all) is used.
-    let coarsened = match check::verify(&object_mesh) {
-        Ok(_) => Some(coarsened),
-        Err(_) => {
-            (object_mesh, kinds) = (extracted, extracted_kinds);
-            None
+    // decides: where it finds a crossing, the coarsening is redone within half the budget
+    // (twice), and failing that the extracted mesh (which keeps them all) is used.
+    let mut coarsened = None;
+    let (mut object_mesh, mut kinds) = (extracted.clone(), extracted_kinds.clone());
+    for attempt in 0..COARSEN_ATTEMPTS {
+        let budget = COARSEN_SHARE * tolerance / grow / f64::from(1u32 << attempt);
+        let (mut mesh, mut mesh_kinds) = (extracted.clone(), extracted_kinds.clone());
+        let done = simplify::coarsen(
+            &field,
+            &mut mesh,
+            &mut mesh_kinds,
+            budget,
+            cancel,
+            &|pass| progress(march_total + quarter * pass / simplify::MAX_PASSES, all),
+        )
+        .ok_or(MeshError::Cancelled)?;
+        if check::verify(&mesh).is_ok() {
+            coarsened = Some(Coarsening {
+                done,
+                budget: budget * grow,
+            });
+            (object_mesh, kinds) = (mesh, mesh_kinds);
+            break;
         }
-    };
+    }
     if cancel.load(Ordering::Relaxed) {
         return Err(MeshError::Cancelled);
     }

@@ -75,6 +75,9 @@ struct Work<'a> {
     alive: Vec<bool>,
     around: Vec<Vec<u32>>,
     removed: Vec<bool>,
+    /// Scratch marks for the link condition (a vertex is marked when it holds `stamp`).
+    mark: Vec<u32>,
+    stamp: u32,
     budget: f64,
     h: f64,
 }
@@ -82,18 +85,6 @@ struct Work<'a> {
 impl Work<'_> {
     fn corners(&self, t: [u32; 3]) -> [DVec3; 3] {
         t.map(|v| self.vertices[v as usize])
-    }
-
-    /// The neighbours of `u` (each once).
-    fn neighbours(&self, u: u32) -> Vec<u32> {
-        let mut out: Vec<u32> = self.around[u as usize]
-            .iter()
-            .flat_map(|&t| self.triangles[t as usize])
-            .filter(|&w| w != u)
-            .collect();
-        out.sort_unstable();
-        out.dedup();
-        out
     }
 
     /// The first-order distance estimate of `p` from the part `surface` (φ = 0) or the sphere.
@@ -131,7 +122,9 @@ impl Work<'_> {
         if c == d
             || self.around[a as usize].len() <= 3
             || self.around[b as usize].len() <= 3
-            || self.neighbours(c).contains(&d)
+            || self.around[c as usize]
+                .iter()
+                .any(|&x| self.triangles[x as usize].contains(&d))
         {
             return false;
         }
@@ -200,8 +193,14 @@ impl Work<'_> {
                 k.on_sphere()
             }
         };
-        let nu = self.neighbours(u);
-        if nu.len() <= 3 || !nu.contains(&v) || !nu.iter().all(|&w| same_part(w)) {
+        // Valences (on a closed 2-manifold, a vertex has as many neighbours as triangles).
+        if self.around[u as usize].len() <= 3 || self.around[v as usize].len() <= 3 {
+            return false;
+        }
+        if !self.around[u as usize]
+            .iter()
+            .all(|&t| self.triangles[t as usize].iter().all(|&w| same_part(w)))
+        {
             return false;
         }
         // The two triangles on the edge and their opposite vertices.
@@ -219,20 +218,27 @@ impl Work<'_> {
                 count += 1;
             }
         }
-        if count != 2 || opposite[0] == opposite[1] {
+        if count != 2
+            || opposite[0] == opposite[1]
+            || opposite.iter().any(|&o| self.around[o as usize].len() <= 3)
+        {
             return false;
         }
-        let nv = self.neighbours(v);
-        if nv.len() <= 3 {
-            return false;
-        }
-        for &w in &nu {
-            if w != v && !opposite.contains(&w) && nv.binary_search(&w).is_ok() {
-                return false;
+        // The link condition: v's neighbours marked, none of u's but v and the two opposite
+        // may be among them.
+        self.stamp += 1;
+        let stamp = self.stamp;
+        for &t in &self.around[v as usize] {
+            for w in self.triangles[t as usize] {
+                self.mark[w as usize] = stamp;
             }
         }
-        if opposite.iter().any(|&o| self.neighbours(o).len() <= 3) {
-            return false;
+        for &t in &self.around[u as usize] {
+            for w in self.triangles[t as usize] {
+                if w != u && w != v && !opposite.contains(&w) && self.mark[w as usize] == stamp {
+                    return false;
+                }
+            }
         }
         // The new triangles, checked.
         let target = self.vertices[v as usize];
@@ -323,11 +329,13 @@ pub fn coarsen(
         alive: vec![true; mesh.triangles.len()],
         around,
         removed: vec![false; n],
+        mark: vec![0; n],
+        stamp: 0,
         budget,
         h: 1e-7 * field.radius(),
     };
     let mut done = Coarsened::default();
-    let i_cancelled = |i: usize| i % 4096 == 0 && cancel.load(Ordering::Relaxed);
+    let i_cancelled = |i: usize| i.is_multiple_of(4096) && cancel.load(Ordering::Relaxed);
     for _ in 0..MAX_PASSES {
         // Every live edge in both directions, shortest first.
         let mut edges: Vec<(f64, u32, u32)> = Vec::new();
