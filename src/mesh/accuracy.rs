@@ -351,6 +351,27 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_cancelled_measurement_stops_before_its_first_part_ends() {
+        let poly = crate::shapes::implicit::expand("x^2 + y^2 + z^2 = 1").unwrap();
+        let field = Field::new(&poly, 1.5, super::super::SolidKind::Inside);
+        let grid = super::super::extract::Grid::covering(1.5, 0.05);
+        let (mesh, kinds) = super::super::extract::march(&field, grid, &|_, _| {});
+        let parts = std::sync::atomic::AtomicUsize::new(0);
+        let count = |_| {
+            parts.fetch_add(1, Ordering::Relaxed);
+        };
+        let run = |cancel: bool| {
+            let flag = AtomicBool::new(cancel);
+            measure_cancellable(&field, &mesh, &kinds, 0.025, grid.step(), &flag, &count)
+        };
+        assert!(run(true).is_none());
+        assert_eq!(parts.load(Ordering::Relaxed), 0);
+        let d = run(false).unwrap();
+        assert_eq!(parts.load(Ordering::Relaxed), MEASURE_PARTS);
+        assert!(d.measured && d.vertex < 1e-9, "{d:?}");
+    }
+
+    #[test]
     fn surface_samples_are_on_the_surface() {
         let poly = crate::shapes::implicit::expand("x^2 + y^2 + z^2 = 1").unwrap();
         let field = Field::new(&poly, 1.5, super::super::SolidKind::Inside);
