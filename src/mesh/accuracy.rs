@@ -368,7 +368,8 @@ mod tests {
         assert_eq!(parts.load(Ordering::Relaxed), 0);
         let d = run(false).unwrap();
         assert_eq!(parts.load(Ordering::Relaxed), MEASURE_PARTS);
-        assert!(d.measured && d.vertex < 1e-9, "{d:?}");
+        // Vertices are on the sphere but for those held off an edge's end (0.1% of an edge).
+        assert!(d.measured && d.vertex < 2e-4, "{d:?}");
     }
 
     #[test]
