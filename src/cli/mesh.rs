@@ -168,6 +168,24 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
             part.grid.cells,
             part.grid.step()
         );
+        match part.coarsened {
+            Some(c) => outln!(
+                "    coarsened where flat: {} triangles from marching tetrahedra's {} ({} \
+                 collapses and {} flips in {} passes, each new triangle within {:.3e} of the \
+                 surface)",
+                part.mesh.triangles.len(),
+                part.extracted_triangles,
+                c.done.collapses,
+                c.done.flips,
+                c.done.passes,
+                c.budget
+            ),
+            None => outln!(
+                "    not coarsened: the coarsened mesh had crossing triangles at every budget \
+                 tried, so marching tetrahedra's {} triangles are kept",
+                part.extracted_triangles
+            ),
+        }
         if part.kinds.contains(&crate::mesh::VertexKind::Cap) {
             outln!(
                 "    crease: {} vertices on both the surface and the clip sphere; {} triangles \

@@ -33,7 +33,7 @@ pub struct MeshFile {
 }
 
 /// Meshes the scene `text` into a file of `format`; `progress(fraction)` (0 to 1) is told how
-/// far the grid has got; once `cancel` is set it stops within about one layer of the grid
+/// far the meshing has got (the grid, the coarsening and the measurement); once `cancel` is set it stops within about one layer of the grid
 /// (see [`crate::mesh::mesh_solids_cancellable`]) with an error. An error (a scene that does
 /// not parse, one without a polynomial surface, a mesh that cannot be made, a cancel) is a
 /// sentence for the page.

@@ -21,6 +21,7 @@ use crate::shapes::implicit::MAX_DEGREE;
 pub use crate::shapes::triangles::closest_on_triangle;
 use rayon::prelude::*;
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The directions of the grid's edges ([`super::extract`]: the cube's axes, face diagonals
 /// and main diagonal).
@@ -84,9 +85,38 @@ pub fn measure(
     tolerance: f64,
     step: f64,
 ) -> Deviation {
+    measure_cancellable(
+        field,
+        mesh,
+        kinds,
+        tolerance,
+        step,
+        &AtomicBool::new(false),
+        &|_| {},
+    )
+    .expect("never cancelled")
+}
+
+/// The parts of [`measure_cancellable`] reported to its `part_done` (1, 2, 3: the vertices,
+/// the mesh→surface side, the surface→mesh side).
+pub const MEASURE_PARTS: usize = 3;
+
+/// [`measure`], giving up (`None`) once `cancel` is set: every vertex, triangle and surface
+/// sample reads it first, so a cancelled measurement stops within about one sample's work
+/// per thread. `part_done(k)` is called as each of the [`MEASURE_PARTS`] parts ends.
+pub fn measure_cancellable(
+    field: &Field,
+    mesh: &TriangleMesh,
+    kinds: &[VertexKind],
+    tolerance: f64,
+    step: f64,
+    cancel: &AtomicBool,
+    part_done: &(dyn Fn(usize) + Sync),
+) -> Option<Deviation> {
     if field.degree() > MAX_DEGREE {
-        return Deviation::default();
+        return Some(Deviation::default());
     }
+    let cancelled = || cancel.load(Ordering::Relaxed);
     let reach = 2.0 * step;
     let h = 1e-7 * field.radius();
     let surface_vertices: Vec<usize> = (0..mesh.vertices.len())
@@ -94,8 +124,17 @@ pub fn measure(
         .collect();
     let vertex_distances: Vec<Option<f64>> = surface_vertices
         .par_iter()
-        .map(|&v| vertex_distance(field, mesh.vertices[v], tolerance))
+        .map(|&v| {
+            if cancelled() {
+                return None;
+            }
+            vertex_distance(field, mesh.vertices[v], tolerance)
+        })
         .collect();
+    if cancelled() {
+        return None;
+    }
+    part_done(1);
     let vertex = vertex_distances
         .iter()
         .flatten()
@@ -121,6 +160,9 @@ pub fn measure(
                 .all(|&v| kinds[v as usize].on_surface())
         })
         .map(|t| {
+            if cancelled() {
+                return None;
+            }
             let [a, b, c] = mesh.corners(t);
             let centroid = (a + b + c) / 3.0;
             let along_normal = field.distance_along(centroid, mesh.normal(t), reach);
@@ -136,12 +178,25 @@ pub fn measure(
         .map(|d| d.unwrap_or(reach))
         .fold(0.0, f64::max);
 
+    if cancelled() {
+        return None;
+    }
+    part_done(2);
     let samples = surface_samples(field, step);
     let nearest = NearestTriangle::new(mesh, step);
     let surface_side: Vec<Option<f64>> = samples
         .par_iter()
-        .map(|&p| nearest.distance(p, reach))
+        .map(|&p| {
+            if cancelled() {
+                return None;
+            }
+            nearest.distance(p, reach)
+        })
         .collect();
+    if cancelled() {
+        return None;
+    }
+    part_done(3);
     let surface_to_mesh = surface_side
         .iter()
         .map(|d| d.unwrap_or(reach))
@@ -151,7 +206,7 @@ pub fn measure(
         .chain(&surface_side)
         .filter(|d| d.is_none())
         .count();
-    Deviation {
+    Some(Deviation {
         vertex,
         vertices: surface_vertices.len(),
         vertices_beyond,
@@ -161,19 +216,26 @@ pub fn measure(
         surface_samples: samples.len(),
         beyond_reach,
         measured: true,
-    }
+    })
 }
 
 /// An upper bound on the distance from the object-space point `p` to `φ = 0`: the nearest
-/// root of `φ` on the line through `p` along `∇φ` or along any of the grid's seven edge
-/// directions (a vertex was found on one of them; at a node, where `∇φ` vanishes, that is
-/// the line that sees the root), by the root finder; `None` if there is none within `reach`.
+/// root of `φ` on the line through `p` along `∇φ`, or where that line has none within
+/// `reach` (at a node, where `∇φ` vanishes), the nearest on the lines along the grid's seven
+/// edge directions (a vertex was found on one of them), by the root finder; `None` if there
+/// is none within `reach`. (The line along `∇φ` is the one that meets the surface nearest
+/// wherever the surface is smooth on the scale of the distance, so the others are searched
+/// only when it finds nothing: one root search per vertex instead of eight.)
 pub fn vertex_distance(field: &Field, p: DVec3, reach: f64) -> Option<f64> {
     let h = 1e-7 * field.radius();
-    std::iter::once(field.gradient(p, h))
-        .chain(EDGE_DIRECTIONS)
-        .filter_map(|d| field.distance_along(p, d, reach))
-        .reduce(f64::min)
+    field
+        .distance_along(p, field.gradient(p, h), reach)
+        .or_else(|| {
+            EDGE_DIRECTIONS
+                .into_iter()
+                .filter_map(|d| field.distance_along(p, d, reach))
+                .reduce(f64::min)
+        })
 }
 
 /// Points of `φ = 0` inside the clip ball: every root on the lines parallel to each axis
@@ -248,19 +310,36 @@ impl<'a> NearestTriangle<'a> {
         (p / cell).floor().as_i64vec3().to_array()
     }
 
-    /// The distance from `p` to the nearest triangle, if one is within `reach`.
+    /// The distance from `p` to the nearest triangle, if one is within `reach`: the cells
+    /// are searched in rings of growing Chebyshev distance about `p`'s cell, stopping once
+    /// the box of cells searched holds the ball of the best distance found (or of `reach`).
     fn distance(&self, p: DVec3, reach: f64) -> Option<f64> {
-        let lo = Self::key(p - DVec3::splat(reach), self.cell);
-        let hi = Self::key(p + DVec3::splat(reach), self.cell);
+        let centre = Self::key(p, self.cell);
+        let rings = (reach / self.cell).ceil() as i64 + 1;
         let mut best = f64::INFINITY;
-        for x in lo[0]..=hi[0] {
-            for y in lo[1]..=hi[1] {
-                for z in lo[2]..=hi[2] {
-                    for &t in self.buckets.get(&[x, y, z]).into_iter().flatten() {
-                        let q = closest_on_triangle(p, self.mesh.corners(t as usize));
-                        best = best.min((p - q).length());
+        for ring in 0..=rings {
+            for x in centre[0] - ring..=centre[0] + ring {
+                for y in centre[1] - ring..=centre[1] + ring {
+                    for z in centre[2] - ring..=centre[2] + ring {
+                        let on_ring = (x - centre[0]).abs() == ring
+                            || (y - centre[1]).abs() == ring
+                            || (z - centre[2]).abs() == ring;
+                        if !on_ring {
+                            continue;
+                        }
+                        for &t in self.buckets.get(&[x, y, z]).into_iter().flatten() {
+                            let q = closest_on_triangle(p, self.mesh.corners(t as usize));
+                            best = best.min((p - q).length());
+                        }
                     }
                 }
+            }
+            // Every point within `covered` of p lies in a cell already searched.
+            let lo = (DVec3::from_array(centre.map(|c| c as f64)) - ring as f64) * self.cell;
+            let hi = lo + (2 * ring + 1) as f64 * self.cell;
+            let covered = (p - lo).min(hi - p).min_element();
+            if best <= covered || covered >= reach {
+                break;
             }
         }
         (best <= reach).then_some(best)
@@ -270,6 +349,28 @@ impl<'a> NearestTriangle<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_cancelled_measurement_stops_before_its_first_part_ends() {
+        let poly = crate::shapes::implicit::expand("x^2 + y^2 + z^2 = 1").unwrap();
+        let field = Field::new(&poly, 1.5, super::super::SolidKind::Inside);
+        let grid = super::super::extract::Grid::covering(1.5, 0.05);
+        let (mesh, kinds) = super::super::extract::march(&field, grid, &|_, _| {});
+        let parts = std::sync::atomic::AtomicUsize::new(0);
+        let count = |_| {
+            parts.fetch_add(1, Ordering::Relaxed);
+        };
+        let run = |cancel: bool| {
+            let flag = AtomicBool::new(cancel);
+            measure_cancellable(&field, &mesh, &kinds, 0.025, grid.step(), &flag, &count)
+        };
+        assert!(run(true).is_none());
+        assert_eq!(parts.load(Ordering::Relaxed), 0);
+        let d = run(false).unwrap();
+        assert_eq!(parts.load(Ordering::Relaxed), MEASURE_PARTS);
+        // Vertices are on the sphere but for those held off an edge's end (0.1% of an edge).
+        assert!(d.measured && d.vertex < 2e-4, "{d:?}");
+    }
 
     #[test]
     fn surface_samples_are_on_the_surface() {

@@ -6,6 +6,7 @@
 
 use super::TriangleMesh;
 use crate::geometry::DVec3;
+use rayon::prelude::*;
 use std::collections::HashMap;
 
 /// What [`verify`] measured on a mesh that keeps every guarantee.
@@ -212,26 +213,33 @@ pub fn crossing_triangles(mesh: &TriangleMesh) -> Vec<(usize, usize)> {
             }
         }
     }
-    let mut seen = vec![u32::MAX; tris.len()];
-    let mut found = Vec::new();
-    for (i, &(a, b)) in ranges.iter().enumerate() {
-        for x in a.0..=b.0 {
-            for y in a.1..=b.1 {
-                for z in a.2..=b.2 {
-                    for &j in &cells[&(x, y, z)] {
-                        let j = j as usize;
-                        if j <= i || seen[j] == i as u32 {
-                            continue;
-                        }
-                        seen[j] = i as u32;
-                        if triangles_cross(mesh, i, j) {
-                            found.push((i, j));
-                        }
+    // Each triangle against the later triangles of its cells, in parallel.
+    let mut found: Vec<(usize, usize)> = ranges
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(i, &(a, b))| {
+            let mut candidates = Vec::new();
+            for x in a.0..=b.0 {
+                for y in a.1..=b.1 {
+                    for z in a.2..=b.2 {
+                        candidates.extend(
+                            cells[&(x, y, z)]
+                                .iter()
+                                .map(|&j| j as usize)
+                                .filter(|&j| j > i),
+                        );
                     }
                 }
             }
-        }
-    }
+            candidates.sort_unstable();
+            candidates.dedup();
+            candidates
+                .into_iter()
+                .filter(move |&j| triangles_cross(mesh, i, j))
+                .map(move |j| (i, j))
+        })
+        .collect();
+    found.sort_unstable();
     found
 }
 

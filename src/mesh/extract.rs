@@ -139,6 +139,12 @@ impl Grid {
     }
 }
 
+/// The `total` that [`march`] reports progress against for `grid`: its layers of labels, its
+/// layers of cubes, and the placing of the vertices.
+pub fn march_steps(grid: Grid) -> usize {
+    2 * grid.side() + 1
+}
+
 /// The mesh of `field`'s solid on `grid`, in object space, with each vertex's kind.
 /// `progress(done, total)` is called as the grid's layers are done (from any thread).
 pub fn march(
@@ -160,7 +166,7 @@ pub fn march_cancellable(
 ) -> Option<(TriangleMesh, Vec<VertexKind>)> {
     let cancelled = || cancel.load(Ordering::Relaxed);
     let side = grid.side();
-    let total = 2 * side + 1;
+    let total = march_steps(grid);
     let done = AtomicUsize::new(0);
     let tick = || progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
 
