@@ -847,11 +847,13 @@ impl Implicit {
                 },
             ));
         }
-        Self::generic(&expr, poly, f, frame, bound)
+        Self::generic(&expr, poly, f, frame, bound, true)
     }
 
-    /// As [`Implicit::new`] with the bound given, always through the generic path, even for an
-    /// equation that is the paper's heart ([`Implicit::is_heart`]): for comparing the two.
+    /// As [`Implicit::new`] with the bound given, always through the generic path of the
+    /// whole expansion, even for an equation that is the paper's heart
+    /// ([`Implicit::is_heart`]) or a power shifted by a constant ([`composed`], which
+    /// [`Implicit::new`] traces as its level sets): for comparing the two.
     pub fn new_generic(equation: &str, frame: Frame, bound: f64) -> Result<Self, EquationError> {
         check_bound(
             bound,
@@ -862,20 +864,24 @@ impl Implicit {
         )?;
         let (expr, poly) = parse_and_expand(equation, &|_| None)?;
         let f = Compiled::new(&poly);
-        Self::generic(&expr, poly, f, frame, bound)
+        Self::generic(&expr, poly, f, frame, bound, false)
     }
 
     /// The generic path's shape of the expanded `poly` (compiled to `f`) of the syntax tree
-    /// `expr`, clipped to `bound` (already checked).
+    /// `expr`, clipped to `bound` (already checked): traced as its level sets where it is a
+    /// composition ([`composed`]) and `decompose` is set, else through the whole expansion.
     fn generic(
         expr: &equation::Expr,
         poly: Poly,
         f: Compiled,
         frame: Frame,
         bound: f64,
+        decompose: bool,
     ) -> Result<Self, EquationError> {
-        let composition =
-            composed::recognise(expr).and_then(|form| Composed::new(form, &f, &poly, bound));
+        let composition = decompose
+            .then(|| composed::recognise(expr))
+            .flatten()
+            .and_then(|form| Composed::new(form, &f, &poly, bound));
         let kind = match composition {
             Some(c) => Kind::Composed(Box::new(c)),
             None => Kind::Generic(Box::new(Surface::new(expr, &poly, f, bound))),
@@ -2542,7 +2548,7 @@ mod tests {
             }),
         ];
         for (equation, exact) in cases {
-            let shape = Implicit::new(equation, Frame::identity(), Some(2.0)).unwrap();
+            let shape = Implicit::new_generic(equation, Frame::identity(), 2.0).unwrap();
             let Kind::Generic(s) = &shape.object().kind else {
                 panic!("{equation}: the generic path")
             };
