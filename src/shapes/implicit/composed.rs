@@ -49,6 +49,11 @@ impl Composition {
     pub fn outer(&self, p: f64) -> f64 {
         self.scale * p.powi(self.power as i32) + self.constant
     }
+
+    /// `h′(P) = a·n·Pⁿ⁻¹` for the value `p` of `P`, in `f64`.
+    pub fn outer_derivative(&self, p: f64) -> f64 {
+        self.scale * f64::from(self.power) * p.powi(self.power as i32 - 1)
+    }
 }
 
 /// Whether `a` and `b` are the same expression (spans aside).

@@ -564,10 +564,10 @@ enum Kind {
 struct Composed {
     /// The whole expansion (for [`Implicit::degree`] and the study views' ray polynomial).
     f: Compiled,
-    /// Its partial derivatives (for [`Implicit::gradient`]).
-    grad: [Compiled; 3],
     /// `P` expanded and compiled (for the value `a·P(p)ⁿ + c`).
     inner: Compiled,
+    /// `P`'s partial derivatives (for the gradient `h′(P)·∇P`).
+    inner_grad: [Compiled; 3],
     /// The recognised form.
     form: composed::Composition,
     /// One surface `P − r = 0` for each real root `r`, ascending in `r`, with whether the
@@ -589,6 +589,13 @@ impl Composed {
             .map(|(_, level)| level)
             .expect("a composition has a level");
         (&nearest.0, nearest.1)
+    }
+
+    /// `∇f = h′(P)·∇P` at the object-space point `p`, in `f64`.
+    fn gradient(&self, p: DVec3) -> DVec3 {
+        let q = p.to_array();
+        let slope = self.form.outer_derivative(self.inner.eval(q));
+        slope * DVec3::from_array(self.inner_grad.each_ref().map(|g| g.eval(q)))
     }
 }
 
@@ -633,8 +640,9 @@ impl Composed {
     /// The level sets of `form` (recognised from the equation whose expansion is `poly`,
     /// compiled to `f`) as generic surfaces clipped to `bound`; `None` when a level's
     /// expression does not expand (never expected: `P` is part of the equation).
-    fn new(form: composed::Composition, f: &Compiled, poly: &Poly, bound: f64) -> Option<Self> {
-        let inner = Compiled::new(&Poly::expand(&form.inner).ok()?);
+    fn new(form: composed::Composition, f: &Compiled, bound: f64) -> Option<Self> {
+        let inner_poly = Poly::expand(&form.inner).ok()?;
+        let inner = Compiled::new(&inner_poly);
         let span = form.inner.span;
         let levels = form
             .levels
@@ -664,8 +672,8 @@ impl Composed {
             .collect::<Option<Vec<_>>>()?;
         Some(Composed {
             f: f.clone(),
-            grad: [0, 1, 2].map(|v| Compiled::new(&poly.derivative(v))),
             inner,
+            inner_grad: [0, 1, 2].map(|v| Compiled::new(&inner_poly.derivative(v))),
             form,
             levels,
         })
@@ -881,7 +889,7 @@ impl Implicit {
         let composition = decompose
             .then(|| composed::recognise(expr))
             .flatten()
-            .and_then(|form| Composed::new(form, &f, &poly, bound));
+            .and_then(|form| Composed::new(form, &f, bound));
         let kind = match composition {
             Some(c) => Kind::Composed(Box::new(c)),
             None => Kind::Generic(Box::new(Surface::new(expr, &poly, f, bound))),
@@ -965,11 +973,12 @@ impl Implicit {
         }
     }
 
-    /// The symbolic gradient at an object-space point (may be zero at singular points).
+    /// The symbolic gradient at an object-space point (may be zero at singular points; for a
+    /// composition `a·Pⁿ + c`, [`composed`], `h′(P)·∇P`).
     pub fn gradient(&self, p: DVec3) -> DVec3 {
         match &self.object().kind {
             Kind::Generic(s) => s.gradient(p),
-            Kind::Composed(c) => DVec3::from_array(c.grad.each_ref().map(|g| g.eval(p.to_array()))),
+            Kind::Composed(c) => c.gradient(p),
             Kind::Heart(_) => super::heart::gradient_f(p),
             Kind::MappedHeart(m) => {
                 m.scale * (m.to_heart.transpose() * super::heart::gradient_f(m.to_heart * p))
@@ -2292,9 +2301,7 @@ impl ObjectShape for ImplicitShape {
         let gradient = hit.map(|t| {
             let p = local.at(t);
             match &self.kind {
-                Kind::Composed(c) => {
-                    DVec3::from_array(c.grad.each_ref().map(|g| g.eval(p.to_array()))).length()
-                }
+                Kind::Composed(c) => c.gradient(p).length(),
                 _ => s[0].gradient(p).length(),
             }
         });
@@ -2413,17 +2420,9 @@ impl ObjectShape for ImplicitShape {
         match &self.kind {
             // Every hit lies in the box (the chord is clipped to it) and on a zero of `f`.
             Kind::Generic(s) => s.cells.clone(),
-            // The level sets' cells, when every level set with a box has them.
-            Kind::Composed(c) => {
-                let with_box = c.levels.iter().filter(|(s, _)| s.object_box.is_some());
-                if with_box.clone().any(|(s, _)| s.cells.is_empty()) {
-                    return Vec::new();
-                }
-                with_box
-                    .flat_map(|(s, _)| s.cells.iter().copied())
-                    .collect()
-            }
-            Kind::Heart(_) | Kind::MappedHeart(_) => Vec::new(),
+            // None for a composition: its level sets' cells would hold it, but are left out
+            // as the whole surface's are where they fill its box (the degree-16 sphere's).
+            Kind::Composed(_) | Kind::Heart(_) | Kind::MappedHeart(_) => Vec::new(),
         }
     }
 }
