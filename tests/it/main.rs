@@ -19,6 +19,7 @@ mod heart_hard_cases;
 mod heart_solvers;
 mod implicit_algebra;
 mod implicit_cliffs;
+mod implicit_composed;
 mod implicit_lanes;
 mod implicit_measure;
 mod implicit_render;

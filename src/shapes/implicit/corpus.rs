@@ -29,13 +29,20 @@ pub const TYPED_SURFACES: [(&str, usize); 4] = [
     ("(x^2+y^2+z^2)^8 = 1", 16),
 ];
 
-/// The surface of a [`TYPED_SURFACES`] entry, in object space (identity frame).
+/// The surface of a [`TYPED_SURFACES`] entry, in object space (identity frame), through
+/// its whole expansion (the degree-16 sphere is a power shifted by a constant, which
+/// [`Implicit::new`] would trace as its level sets, of degree 2).
 fn surface(text: &str) -> Implicit {
     let mut words = text.split(' ');
     let name = words.next().unwrap_or("");
     let params: Vec<f64> = words.filter_map(|w| w.parse().ok()).collect();
     Implicit::from_preset(name, &params, Frame::identity(), None)
-        .or_else(|_| Implicit::new(text, Frame::identity(), None).map_err(|e| e.message))
+        .or_else(|_| {
+            let bound = Implicit::new(text, Frame::identity(), None)
+                .map_err(|e| e.message)?
+                .bound();
+            Implicit::new_generic(text, Frame::identity(), bound).map_err(|e| e.message)
+        })
         .expect("a corpus surface")
 }
 

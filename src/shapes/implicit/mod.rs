@@ -25,6 +25,7 @@
 //! [`Implicit::new_generic`] asks for the generic path instead.
 
 pub mod coef;
+pub mod composed;
 mod corpus;
 pub mod dd;
 pub mod equation;
@@ -552,8 +553,131 @@ impl Surface {
 #[derive(Debug, Clone)]
 enum Kind {
     Generic(Box<Surface>),
+    Composed(Box<Composed>),
     Heart(HeartShape),
     MappedHeart(Box<MappedHeart>),
+}
+
+/// A surface `f = a·Pⁿ + c` ([`composed`]) traced as the union of its level sets `P = r`
+/// (`r` a real root of `a·sⁿ + c`), each a generic surface of `P`'s low degree.
+#[derive(Debug, Clone)]
+struct Composed {
+    /// The whole expansion (for [`Implicit::degree`] and the study views' ray polynomial).
+    f: Compiled,
+    /// `P` expanded and compiled (for the value `a·P(p)ⁿ + c`).
+    inner: Compiled,
+    /// `P`'s partial derivatives (for the gradient `h′(P)·∇P`).
+    inner_grad: [Compiled; 3],
+    /// The recognised form.
+    form: composed::Composition,
+    /// One surface `P − r = 0` for each real root `r`, ascending in `r`, with whether the
+    /// outward normal of `f` there is `−∇P` (`h′(r) < 0`).
+    levels: Vec<(Surface, bool)>,
+}
+
+impl Composed {
+    /// The level whose set holds (or lies nearest to) the object-space point `q`, with
+    /// whether its normal is flipped.
+    fn level_at(&self, q: DVec3) -> (&Surface, bool) {
+        let p = self.inner.eval(q.to_array());
+        let nearest = self
+            .form
+            .levels
+            .iter()
+            .zip(&self.levels)
+            .min_by(|(a, _), (b, _)| (p - a.value).abs().total_cmp(&(p - b.value).abs()))
+            .map(|(_, level)| level)
+            .expect("a composition has a level");
+        (&nearest.0, nearest.1)
+    }
+
+    /// `∇f = h′(P)·∇P` at the object-space point `p`, in `f64`.
+    fn gradient(&self, p: DVec3) -> DVec3 {
+        let q = p.to_array();
+        let slope = self.form.outer_derivative(self.inner.eval(q));
+        slope * DVec3::from_array(self.inner_grad.each_ref().map(|g| g.eval(q)))
+    }
+}
+
+impl Surface {
+    /// The generic path's surface of the expanded `poly` (compiled to `f`) of the syntax
+    /// tree `expr`, clipped to the ball of radius `bound`: its partials, closed forms, tree
+    /// (where it pays), box and cells.
+    fn new(expr: &equation::Expr, poly: &Poly, f: Compiled, bound: f64) -> Surface {
+        let grad = [0, 1, 2].map(|v| Compiled::new(&poly.derivative(v)));
+        let torus = torus_form::recognise(poly);
+        let tree = if torus.is_none() {
+            tree::Tree::new(expr, f.degree).filter(|t| through_tree(&f, t, bound))
+        } else {
+            None
+        };
+        let zero_set = extent::zero_set(&f, bound);
+        let to_box = |(lo, hi): ([f64; 3], [f64; 3])| {
+            Aabb::new(DVec3::from_array(lo), DVec3::from_array(hi))
+        };
+        let object_box = zero_set.as_ref().map(|z| to_box(z.bounds));
+        let mut cells: Vec<Aabb> =
+            zero_set.map_or_else(Vec::new, |z| z.cells.into_iter().map(to_box).collect());
+        // Cells that fill most of their hull would leave out few pixels for their cost.
+        let volume = |b: &Aabb| (b.max - b.min).max(DVec3::ZERO).element_product();
+        let filled: f64 = cells.iter().map(volume).sum();
+        if object_box.is_none_or(|b| filled > MAX_CELL_SHARE * volume(&b)) {
+            cells.clear();
+        }
+        Surface {
+            torus,
+            tree,
+            f,
+            gradient: Gradient::new(&grad),
+            grad,
+            object_box,
+            cells,
+        }
+    }
+}
+
+impl Composed {
+    /// The level sets of `form` (recognised from the equation whose expansion is `poly`,
+    /// compiled to `f`) as generic surfaces clipped to `bound`; `None` when a level's
+    /// expression does not expand (never expected: `P` is part of the equation).
+    fn new(form: composed::Composition, f: &Compiled, bound: f64) -> Option<Self> {
+        let inner_poly = Poly::expand(&form.inner).ok()?;
+        let inner = Compiled::new(&inner_poly);
+        let span = form.inner.span;
+        let levels = form
+            .levels
+            .iter()
+            .map(|level| {
+                // `P − r`, r as the f64 found.
+                let expr = equation::Expr {
+                    node: equation::Node::Sum(vec![
+                        (false, form.inner.clone()),
+                        (
+                            true,
+                            equation::Expr {
+                                node: equation::Node::Num(coef::Coef::Approx(level.value)),
+                                span,
+                            },
+                        ),
+                    ]),
+                    span,
+                };
+                let level_poly = Poly::expand(&expr).ok()?;
+                let compiled = Compiled::new(&level_poly);
+                Some((
+                    Surface::new(&expr, &level_poly, compiled, bound),
+                    level.descending,
+                ))
+            })
+            .collect::<Option<Vec<_>>>()?;
+        Some(Composed {
+            f: f.clone(),
+            inner,
+            inner_grad: [0, 1, 2].map(|v| Compiled::new(&inner_poly.derivative(v))),
+            form,
+            levels,
+        })
+    }
 }
 
 /// The paper's heart in other coordinates ([`heart_form`]: Taubin's heart, stretched
@@ -731,11 +855,13 @@ impl Implicit {
                 },
             ));
         }
-        Self::generic(&expr, poly, f, frame, bound)
+        Self::generic(&expr, poly, f, frame, bound, true)
     }
 
-    /// As [`Implicit::new`] with the bound given, always through the generic path, even for an
-    /// equation that is the paper's heart ([`Implicit::is_heart`]): for comparing the two.
+    /// As [`Implicit::new`] with the bound given, always through the generic path of the
+    /// whole expansion, even for an equation that is the paper's heart
+    /// ([`Implicit::is_heart`]) or a power shifted by a constant ([`composed`], which
+    /// [`Implicit::new`] traces as its level sets): for comparing the two.
     pub fn new_generic(equation: &str, frame: Frame, bound: f64) -> Result<Self, EquationError> {
         check_bound(
             bound,
@@ -746,53 +872,35 @@ impl Implicit {
         )?;
         let (expr, poly) = parse_and_expand(equation, &|_| None)?;
         let f = Compiled::new(&poly);
-        Self::generic(&expr, poly, f, frame, bound)
+        Self::generic(&expr, poly, f, frame, bound, false)
     }
 
     /// The generic path's shape of the expanded `poly` (compiled to `f`) of the syntax tree
-    /// `expr`, clipped to `bound` (already checked).
+    /// `expr`, clipped to `bound` (already checked): traced as its level sets where it is a
+    /// composition ([`composed`]) and `decompose` is set, else through the whole expansion.
     fn generic(
         expr: &equation::Expr,
         poly: Poly,
         f: Compiled,
         frame: Frame,
         bound: f64,
+        decompose: bool,
     ) -> Result<Self, EquationError> {
-        let grad = [0, 1, 2].map(|v| Compiled::new(&poly.derivative(v)));
-        let torus = torus_form::recognise(&poly);
-        let tree = if torus.is_none() {
-            tree::Tree::new(expr, f.degree).filter(|t| through_tree(&f, t, bound))
-        } else {
-            None
+        let composition = decompose
+            .then(|| composed::recognise(expr))
+            .flatten()
+            .and_then(|form| Composed::new(form, &f, bound));
+        let kind = match composition {
+            Some(c) => Kind::Composed(Box::new(c)),
+            None => Kind::Generic(Box::new(Surface::new(expr, &poly, f, bound))),
         };
-        let zero_set = extent::zero_set(&f, bound);
-        let to_box = |(lo, hi): ([f64; 3], [f64; 3])| {
-            Aabb::new(DVec3::from_array(lo), DVec3::from_array(hi))
-        };
-        let object_box = zero_set.as_ref().map(|z| to_box(z.bounds));
-        let mut cells: Vec<Aabb> =
-            zero_set.map_or_else(Vec::new, |z| z.cells.into_iter().map(to_box).collect());
-        // Cells that fill most of their hull would leave out few pixels for their cost.
-        let volume = |b: &Aabb| (b.max - b.min).max(DVec3::ZERO).element_product();
-        let filled: f64 = cells.iter().map(volume).sum();
-        if object_box.is_none_or(|b| filled > MAX_CELL_SHARE * volume(&b)) {
-            cells.clear();
-        }
         Ok(Placed::place(
             Placement::new(frame),
             ImplicitShape {
                 solver: Solver::default(),
                 bound,
                 polynomial: std::sync::Arc::new(poly),
-                kind: Kind::Generic(Box::new(Surface {
-                    torus,
-                    tree,
-                    f,
-                    gradient: Gradient::new(&grad),
-                    grad,
-                    object_box,
-                    cells,
-                })),
+                kind,
             },
         ))
     }
@@ -828,7 +936,7 @@ impl Implicit {
         match &mut shape.kind {
             Kind::Heart(h) => *h = HeartShape::with_solver(solver),
             Kind::MappedHeart(m) => m.heart = HeartShape::with_solver(solver),
-            Kind::Generic(_) => {}
+            Kind::Generic(_) | Kind::Composed(_) => {}
         }
         self
     }
@@ -849,23 +957,28 @@ impl Implicit {
     pub fn degree(&self) -> usize {
         match &self.object().kind {
             Kind::Generic(s) => s.f.degree,
+            Kind::Composed(c) => c.f.degree,
             Kind::Heart(_) | Kind::MappedHeart(_) => 6,
         }
     }
 
-    /// The polynomial's value at an object-space point (negative inside, positive outside).
+    /// The polynomial's value at an object-space point (negative inside, positive outside;
+    /// for a composition `a·Pⁿ + c`, [`composed`], that form evaluated at `P`'s value).
     pub fn value(&self, p: DVec3) -> f64 {
         match &self.object().kind {
             Kind::Generic(s) => s.f.eval(p.to_array()),
+            Kind::Composed(c) => c.form.outer(c.inner.eval(p.to_array())),
             Kind::Heart(_) => super::heart::heart_fn(p),
             Kind::MappedHeart(m) => m.scale * super::heart::heart_fn(m.to_heart * p),
         }
     }
 
-    /// The symbolic gradient at an object-space point (may be zero at singular points).
+    /// The symbolic gradient at an object-space point (may be zero at singular points; for a
+    /// composition `a·Pⁿ + c`, [`composed`], `h′(P)·∇P`).
     pub fn gradient(&self, p: DVec3) -> DVec3 {
         match &self.object().kind {
             Kind::Generic(s) => s.gradient(p),
+            Kind::Composed(c) => c.gradient(p),
             Kind::Heart(_) => super::heart::gradient_f(p),
             Kind::MappedHeart(m) => {
                 m.scale * (m.to_heart.transpose() * super::heart::gradient_f(m.to_heart * p))
@@ -935,6 +1048,11 @@ impl ImplicitShape {
                 let (_, c, q) = self.first_query(s, ray, 0.0, f64::INFINITY)?;
                 Some((c[..=q.deg].to_vec(), q.s_lo, q.s_hi))
             }
+            // The first level set's query on the ray.
+            Kind::Composed(c) => c.levels.iter().find_map(|(s, _)| {
+                let (_, c, q) = self.first_query(s, ray, 0.0, f64::INFINITY)?;
+                Some((c[..=q.deg].to_vec(), q.s_lo, q.s_hi))
+            }),
             Kind::Heart(_) | Kind::MappedHeart(_) => None,
         }
     }
@@ -944,6 +1062,7 @@ impl ImplicitShape {
         let (t_mid, t_half, mid, e) = self.chord(ray)?;
         let coeffs: Vec<f64> = match &self.kind {
             Kind::Generic(s) => s.f.compose(mid.to_array(), e.to_array())[..=s.f.degree].to_vec(),
+            Kind::Composed(c) => c.f.compose(mid.to_array(), e.to_array())[..=c.f.degree].to_vec(),
             Kind::Heart(_) => super::heart::sextic_coefficients(mid, e).to_vec(),
             Kind::MappedHeart(m) => {
                 super::heart::sextic_coefficients(m.to_heart * mid, m.to_heart * e)
@@ -2043,6 +2162,26 @@ impl ObjectShape for ImplicitShape {
                     &mut false,
                 )
             }
+            Kind::Composed(c) => {
+                // The nearest hit over the level sets: each searched below the nearest so far.
+                let solver = self.solver;
+                let mut nearest = None;
+                let mut far = t_max;
+                for (s, _) in &c.levels {
+                    if let Some(t) = self.intersect_generic(
+                        s,
+                        local,
+                        t_min,
+                        far,
+                        &mut |c, lo, hi| solver.first_root(c, lo, hi),
+                        &mut false,
+                    ) {
+                        nearest = Some(t);
+                        far = t;
+                    }
+                }
+                nearest
+            }
             Kind::Heart(h) => {
                 let (lo, hi) = self.heart_span(presets::HEART_RADIUS, local, t_min, t_max)?;
                 h.intersect(at, world, local, lo, hi)
@@ -2071,6 +2210,29 @@ impl ObjectShape for ImplicitShape {
                     return unsafe { self.intersect_lanes_generic_avx2(s, local, t_min, t_max) };
                 }
                 self.intersect_lanes_generic(s, local, t_min, t_max)
+            }
+            Kind::Composed(c) => {
+                // As `intersect`, lane by lane: each level set below each lane's nearest hit.
+                let mut nearest = [None; LANES];
+                let mut far = t_max;
+                for (s, _) in &c.levels {
+                    #[cfg(target_arch = "x86_64")]
+                    let hits = if crate::cpu::avx2() {
+                        // SAFETY: the processor has AVX2, checked just above.
+                        unsafe { self.intersect_lanes_generic_avx2(s, local, t_min, far) }
+                    } else {
+                        self.intersect_lanes_generic(s, local, t_min, far)
+                    };
+                    #[cfg(not(target_arch = "x86_64"))]
+                    let hits = self.intersect_lanes_generic(s, local, t_min, far);
+                    for i in 0..LANES {
+                        if let Some(t) = hits[i] {
+                            nearest[i] = Some(t);
+                            far[i] = t;
+                        }
+                    }
+                }
+                nearest
             }
             Kind::Heart(_) => super::each_lane(t_min, t_max, |i| {
                 self.intersect(at, &world[i], &local[i], t_min[i], t_max[i])
@@ -2112,22 +2274,37 @@ impl ObjectShape for ImplicitShape {
                 let heart_local = m.at.ray_to_object(world);
                 return m.heart.solver_report(&m.at, world, &heart_local, lo, hi);
             }
-            Kind::Generic(s) => s,
+            Kind::Generic(s) => std::slice::from_ref(s.as_ref()),
+            // Every level set's queries in turn, each below the nearest hit so far.
+            Kind::Composed(c) => &c.levels.iter().map(|(s, _)| s.clone()).collect::<Vec<_>>(),
         };
         let mut recorder = Recorder::new(self.solver);
         let mut recentred = false;
-        let hit = self.intersect_generic(
-            s,
-            local,
-            t_min,
-            t_max,
-            &mut |c, lo, hi| recorder.first_root(c, lo, hi),
-            &mut recentred,
-        );
+        let mut hit = None;
+        let mut far = t_max;
+        for s in s {
+            if let Some(t) = self.intersect_generic(
+                s,
+                local,
+                t_min,
+                far,
+                &mut |c, lo, hi| recorder.first_root(c, lo, hi),
+                &mut recentred,
+            ) {
+                hit = Some(t);
+                far = t;
+            }
+        }
         if recentred {
             recorder.recentred();
         }
-        let gradient = hit.map(|t| s.gradient(local.at(t)).length());
+        let gradient = hit.map(|t| {
+            let p = local.at(t);
+            match &self.kind {
+                Kind::Composed(c) => c.gradient(p).length(),
+                _ => s[0].gradient(p).length(),
+            }
+        });
         recorder.finish(hit, false, gradient)
     }
 
@@ -2136,6 +2313,12 @@ impl ObjectShape for ImplicitShape {
             Kind::Heart(h) => return h.normal(at, q),
             Kind::MappedHeart(m) => return m.heart.normal(&m.at, m.to_heart * q),
             Kind::Generic(s) => s,
+            Kind::Composed(c) => {
+                // ∇f = h′(P)·∇P: the level set's normal, turned where h′ < 0 there.
+                let (s, descending) = c.level_at(q);
+                let g = s.normal_direction(q, SIGN_SPHERE * self.bound);
+                return Self::world_normal(at, q, if descending { -g } else { g });
+            }
         };
         let g = s.normal_direction(q, SIGN_SPHERE * self.bound);
         Self::world_normal(at, q, g)
@@ -2196,6 +2379,18 @@ impl ObjectShape for ImplicitShape {
                 }
                 None => Aabb::new(sphere.min, sphere.min),
             },
+            Kind::Composed(c) => {
+                // The union of the level sets' boxes.
+                let boxes: Vec<Aabb> = c.levels.iter().filter_map(|(s, _)| s.object_box).collect();
+                let Some(first) = boxes.first() else {
+                    return Aabb::new(sphere.min, sphere.min);
+                };
+                let b = boxes
+                    .iter()
+                    .fold(*first, |u, b| Aabb::new(u.min.min(b.min), u.max.max(b.max)));
+                let wb = at.bounds_to_world(&b).padded(1e-9);
+                Aabb::new(wb.min.max(sphere.min), wb.max.min(sphere.max))
+            }
         }
     }
 
@@ -2225,7 +2420,9 @@ impl ObjectShape for ImplicitShape {
         match &self.kind {
             // Every hit lies in the box (the chord is clipped to it) and on a zero of `f`.
             Kind::Generic(s) => s.cells.clone(),
-            Kind::Heart(_) | Kind::MappedHeart(_) => Vec::new(),
+            // None for a composition: its level sets' cells would hold it, but are left out
+            // as the whole surface's are where they fill its box (the degree-16 sphere's).
+            Kind::Composed(_) | Kind::Heart(_) | Kind::MappedHeart(_) => Vec::new(),
         }
     }
 }
@@ -2350,7 +2547,7 @@ mod tests {
             }),
         ];
         for (equation, exact) in cases {
-            let shape = Implicit::new(equation, Frame::identity(), Some(2.0)).unwrap();
+            let shape = Implicit::new_generic(equation, Frame::identity(), 2.0).unwrap();
             let Kind::Generic(s) = &shape.object().kind else {
                 panic!("{equation}: the generic path")
             };
