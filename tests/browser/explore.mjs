@@ -138,6 +138,27 @@ await check("typing a torus one character at a time: no error, no half-typed can
   if (gaps === 0) assert.equal(await page.evaluate(() => window.problemShown), false, "the error box never showed");
   else console.log(`# typing stalled ${gaps} times (a loaded machine): the error box is not checked`);
   assert.ok((await canvasStats()).red > 0.04, "the torus is drawn");
+  // A slower typist (5 characters a second): the pause adapts to their pace (twice it), so
+  // the half-typed equations between keystrokes are not sent either.
+  await page.fill("#equation", "");
+  await page.waitForTimeout(1200);
+  const slowBefore = await sentSeq();
+  await page.evaluate(() => { window.inputTimes = []; });
+  await page.type("#equation", torus, { delay: 200 });
+  await page.waitForTimeout(800);
+  await fullFrameAfter((await sentSeq()) - 1);
+  const slow = await page.evaluate((b) => ({
+    views: window.kardia.views.filter((v) => v.seq > b), inputs: window.inputTimes,
+  }), slowBefore);
+  const slowGaps = slow.inputs.slice(1).map((t, i) => t - slow.inputs[i]);
+  const pace = [...slowGaps].sort((a, b) => a - b)[slowGaps.length >> 1];
+  const stalls = slowGaps.filter((g) => g >= 1.8 * pace).length;
+  // The first character comes before any pace is known: it may go out after 150 ms.
+  const halfTyped = slow.views.map((v) => v.scene.match(/IMPLICIT "([^"]*)"/)?.[1])
+    .filter((typed) => typed !== torus && typed !== torus[0]);
+  assert.ok(slow.views.some((v) => v.scene.includes(`"${torus}"`)), "the whole equation was sent");
+  assert.ok(halfTyped.length <= stalls, `typing at ${Math.round(pace)} ms a character sent ${halfTyped.length} ` +
+    `half-typed views (${stalls} pauses of twice that): ${JSON.stringify(halfTyped)}`);
 });
 
 await check("an invalid equation: one plain sentence, the part marked, the last image dimmed, nothing moves", async () => {
@@ -494,6 +515,24 @@ await check("keyboard and screen readers: focusable canvas, arrows orbit, +/− 
   await fullFrameAfter((await sentSeq()) - 1);
 });
 
+await check("Save's fields show what is saved: a width of 40000 is clamped to the limits and said", async () => {
+  const size = await page.evaluate(() => [document.getElementById("view").width, document.getElementById("view").height]);
+  await page.fill("#save-width", "40000");
+  await page.dispatchEvent("#save-width", "change");
+  assert.equal(await page.inputValue("#save-width"), "8192", "the field holds the largest side");
+  assert.match(await page.textContent("#message"), /at most 8192 px a side.*: 8192×\d+ at \d+ spp is used/);
+  await page.fill("#save-height", "8192");
+  await page.dispatchEvent("#save-height", "change");
+  const [w, h, spp] = await Promise.all(["#save-width", "#save-height", "#save-spp"].map((id) => page.inputValue(id)));
+  assert.ok(Number(w) * Number(h) <= 4096 * 4096 && Number(w) * Number(h) * Number(spp) <= 2 ** 28, `${w}×${h} at ${spp}`);
+  assert.deepEqual(await page.evaluate(() => [document.getElementById("view").width, document.getElementById("view").height]),
+    size, "the live view keeps its size");
+  await page.fill("#save-width", "80");
+  await page.fill("#save-height", "60");
+  await page.fill("#save-spp", "1");
+  await page.dispatchEvent("#save-spp", "change");
+});
+
 await check("Save names its file after the surface and its parameters", async () => {
   await page.fill("#save-width", "80");
   await page.fill("#save-height", "60");
@@ -602,7 +641,9 @@ await check("a burst of states over the rate limit ends on the last state", asyn
     return performance.now() - start;
   });
   const last = await sentSeq();
-  assert.ok(last - before >= 290 && took < 1000, `${last - before} views sent in ${took} ms`);
+  // Over the limit: more than 200 a second (each view is a message).
+  const rate = ((last - before) * 1000) / took;
+  assert.ok(last - before >= 290 && rate > 200, `${last - before} views sent in ${Math.round(took)} ms`);
   await page.waitForFunction((s) => window.kardia.frames.some((f) => f.seq === s && f.width === f.view_width),
     last, { timeout: 60000 });
   const scene = await page.evaluate((s) => window.kardia.views.find((v) => v.seq === s).scene, last);
@@ -629,6 +670,24 @@ await check("a burst of states over the rate limit ends on the last state", asyn
   });
   await fresh.close();
   assert.deepEqual(grid, freshGrid, "the same image as the final state's");
+  // A preset slider sends two messages a step (the preset to expand, then the view): a burst
+  // of them ends on the last expansion too, the equation showing the final tube radius.
+  const presetBefore = await sentSeq();
+  await page.evaluate(() => {
+    const r = document.getElementById("param-1");
+    for (let i = 1; i <= 300; i++) {
+      r.value = String(i === 300 ? 0.27 : 0.1 + (i % 80) / 100);
+      r.dispatchEvent(new Event("input", { bubbles: true }));
+    }
+  });
+  assert.ok((await sentSeq()) - presetBefore >= 250, "the burst went out");
+  await page.waitForFunction(() => document.getElementById("equation").value.includes("0.27^2"), null, { timeout: 30000 })
+    .catch(() => {});
+  assert.match(await page.inputValue("#equation"), /- 0\.27\^2\)/, "the equation is the final state's");
+  assert.deepEqual(await page.evaluate(() => window.kardia.errors.filter((e) => /too many/.test(e))), [],
+    "no preset the page settled on was refused");
+  await page.waitForFunction((s) => window.kardia.frames.some((f) => f.seq === s && f.width === f.view_width),
+    await sentSeq(), { timeout: 60000 });
 });
 
 await check("hovering the path view names that pixel's legend entry", async () => {
@@ -693,6 +752,16 @@ await check("an orthographic camera pans by its view height and zooms by it", as
   assert.ok(zoomed.fov > 4.5, `zooming out widens the view: height ${zoomed.fov}`);
   assert.match(await page.inputValue("#scene-text"), /ORTHOGRAPHIC [\d.]+/);
   await fullFrameAfter((await sentSeq()) - 1);
+  // Its link opens the same orthographic view.
+  await page.click("#copy-link");
+  const link = await page.evaluate(() => window.kardia.clipboard);
+  const scene = await page.evaluate(() => window.kardia.currentScene());
+  const second = await context.newPage();
+  second.on("pageerror", (e) => pageErrors.push("orthographic link: " + e.message));
+  await second.goto(link);
+  await second.waitForFunction(() => window.kardia.frames.length > 0, null, { timeout: 60000 });
+  assert.equal(await second.evaluate(() => window.kardia.currentScene()), scene, "the link keeps the orthographic camera");
+  await second.close();
   await page.click("#mode-equation");
   await fullFrameAfter((await sentSeq()) - 1);
 });
