@@ -44,7 +44,9 @@ fn main() {
         std::process::exit(2);
     }
     match convert(&args[0], &args[1]) {
-        Ok((before, after)) => println!("{}: {before} bytes -> {}: {after} bytes", args[0], args[1]),
+        Ok((before, after)) => {
+            println!("{}: {before} bytes -> {}: {after} bytes", args[0], args[1])
+        }
         Err(e) => {
             eprintln!("png_palette: {e}");
             std::process::exit(1);

@@ -1070,13 +1070,17 @@ mod tests {
         assert!(r.next_free() <= Instant::now(), "room left: at once");
         assert!(r.admit(t));
         assert!(!r.admit(t));
-        assert!(r.next_free() > Instant::now() + Duration::from_millis(900), "full: when the window ends");
+        assert!(
+            r.next_free() > Instant::now() + Duration::from_millis(900),
+            "full: when the window ends"
+        );
         assert!(r.admit(t + Duration::from_millis(1001)));
     }
 
     #[test]
     fn deferred_messages_keep_the_last_of_each_stale_kind_in_order() {
-        let preset = |r: f64| json_text("preset", &format!(r#","name":"torus","params":[{r},0.3]"#));
+        let preset =
+            |r: f64| json_text("preset", &format!(r#","name":"torus","params":[{r},0.3]"#));
         let view = |seq: u32| json_text("view", &format!(r#","seq":{seq}"#));
         let mut d = Deferred::default();
         for i in 1..=50 {
@@ -1086,14 +1090,20 @@ mod tests {
         assert!(d.push(json_text("save", "")));
         assert!(d.push(json_text("pause", "")));
         let order: Vec<String> = std::iter::from_fn(|| d.pop()).collect();
-        assert_eq!(order, [preset(0.5), json_text("save", ""), json_text("pause", "")]);
+        assert_eq!(
+            order,
+            [preset(0.5), json_text("save", ""), json_text("pause", "")]
+        );
         // Messages no newer one replaces are kept up to the limit, then refused.
         for _ in 0..Deferred::MAX_KEPT {
             assert!(d.push(json_text("cancel_save", "")));
         }
         assert!(!d.push(json_text("save", "")));
         assert!(d.push(view(1)), "a view still replaces");
-        assert!(!d.push("not json".into()), "a text that is no message is kept, and counted");
+        assert!(
+            !d.push("not json".into()),
+            "a text that is no message is kept, and counted"
+        );
     }
 
     fn json_text(kind: &str, rest: &str) -> String {

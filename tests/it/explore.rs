@@ -541,7 +541,10 @@ async fn a_preset_slider_burst_over_the_rate_limit_ends_on_its_last_preset_and_v
     let mut errors = vec![];
     let read_all = async {
         loop {
-            match next_message(&mut ws).await.expect("the page stays connected") {
+            match next_message(&mut ws)
+                .await
+                .expect("the page stays connected")
+            {
                 Message::Text(t) => {
                     let m: Value = serde_json::from_str(&t).unwrap();
                     match m["type"].as_str() {
@@ -574,9 +577,20 @@ async fn a_preset_slider_burst_over_the_rate_limit_ends_on_its_last_preset_and_v
             }
         }
     }
-    assert_eq!(errors, Vec::<String>::new(), "no message of the burst refused");
-    assert!(presets.len() < steps as usize, "the burst was over the limit: {presets:?}");
-    assert_eq!(presets.last(), Some(&tube(steps)), "the last preset expanded: {presets:?}");
+    assert_eq!(
+        errors,
+        Vec::<String>::new(),
+        "no message of the burst refused"
+    );
+    assert!(
+        presets.len() < steps as usize,
+        "the burst was over the limit: {presets:?}"
+    );
+    assert_eq!(
+        presets.last(),
+        Some(&tube(steps)),
+        "the last preset expanded: {presets:?}"
+    );
     server.stop().await;
 }
 
