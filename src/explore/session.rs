@@ -92,22 +92,27 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
     let mut mesh_task: Option<tokio::task::JoinHandle<()>> = None;
     let mut mesh_cancel = Arc::new(AtomicBool::new(false));
     let mut rate = RateLimit::new(limits.max_messages_per_second);
-    // The newest message over the rate limit, read once the window reopens: a burst loses its
-    // intermediate messages, never its last (the state the page settled on).
-    let mut deferred: Option<String> = None;
+    // The messages over the rate limit, read in order as the window reopens: a burst loses
+    // its intermediate views, presets and probes, never the last of each (the state the page
+    // settled on).
+    let mut deferred = Deferred::default();
     // The scene the last probe asked about (a probe of the same scene re-reads only its
     // CAMERA line).
     let mut probe_cache: Option<SceneCache> = None;
 
     let mut stopping = shared.stopping.clone();
     loop {
-        let reopens = tokio::time::Instant::from_std(rate.reopens());
+        let reopens = tokio::time::Instant::from_std(rate.next_free());
+        // A waiting message is read as soon as the window has room, before any newer one.
+        let mut was_waiting = false;
         let received = tokio::select! {
-            received = stream.next() => received,
-            () = tokio::time::sleep_until(reopens), if deferred.is_some() => {
+            biased;
+            () = tokio::time::sleep_until(reopens), if !deferred.is_empty() => {
                 rate.admit(Instant::now());
-                deferred.take().map(|text| Ok(Message::Text(text.into())))
+                was_waiting = true;
+                deferred.pop().map(|text| Ok(Message::Text(text.into())))
             }
+            received = stream.next() => received,
             _ = stopping.changed() => {
                 let _ = out.send(close(1001, "the server is stopping")).await;
                 break;
@@ -152,21 +157,19 @@ pub(crate) async fn run(socket: WebSocket, shared: Arc<Shared>, admitted: bool) 
                 .await;
             continue;
         }
-        if deferred.is_some() || !rate.admit(Instant::now()) {
-            // Kept for when the window reopens, in place of the one kept before: a view or a
-            // pause replaced by a newer message is stale anyway; anything else is reported.
-            if let Some(dropped) = deferred.replace(text.to_string()) {
-                if !supersedable(&dropped) {
-                    let _ = out
-                        .send(error_message(
-                            None,
-                            format!(
-                                "too many messages: at most {} a second are read; one was dropped",
-                                limits.max_messages_per_second
-                            ),
-                        ))
-                        .await;
-                }
+        if !was_waiting && (!deferred.is_empty() || !rate.admit(Instant::now())) {
+            // Kept for when the window reopens (behind the messages already waiting), in place
+            // of a waiting one that it makes stale; refused only when too many others wait.
+            if !deferred.push(text.to_string()) {
+                let _ = out
+                    .send(error_message(
+                        None,
+                        format!(
+                            "too many messages: at most {} a second are read; one was dropped",
+                            limits.max_messages_per_second
+                        ),
+                    ))
+                    .await;
             }
             continue;
         }
@@ -413,15 +416,59 @@ fn check_save(limits: &Limits, width: u32, height: u32, spp: u32) -> Result<(), 
     Ok(())
 }
 
-/// Whether a newer message makes `text` stale: a view or a pause (judged by its `type`; a
-/// text that is not such a message is not).
-fn supersedable(text: &str) -> bool {
+/// What a message over the rate limit stands for, judged by its `type`: a newer message of
+/// the same kind makes it stale (a view or a pause: the page's current view; a preset's
+/// expansion; a probe). `None`: a message that must not be lost (a save, a mesh, a cancel,
+/// or a text that is not a message at all, which is answered in its turn).
+fn stale_kind(text: &str) -> Option<&'static str> {
     #[derive(serde::Deserialize)]
     struct Kind {
         #[serde(rename = "type")]
         kind: String,
     }
-    serde_json::from_str::<Kind>(text).is_ok_and(|k| k.kind == "view" || k.kind == "pause")
+    match serde_json::from_str::<Kind>(text).ok()?.kind.as_str() {
+        "view" | "pause" => Some("view"),
+        "preset" => Some("preset"),
+        "probe" => Some("probe"),
+        _ => None,
+    }
+}
+
+/// Messages over the rate limit, waiting in the order they came: at most one of each stale
+/// kind (the newest; see [`stale_kind`]) and at most [`Deferred::MAX_KEPT`] others.
+#[derive(Default)]
+struct Deferred {
+    waiting: std::collections::VecDeque<(Option<&'static str>, String)>,
+}
+
+impl Deferred {
+    /// Most waiting messages that no newer one replaces (saves, meshes, cancels).
+    const MAX_KEPT: usize = 8;
+
+    fn is_empty(&self) -> bool {
+        self.waiting.is_empty()
+    }
+
+    /// Queues `text` behind the others, dropping a waiting message of its stale kind.
+    /// `false`: refused (too many messages that cannot be replaced are waiting).
+    fn push(&mut self, text: String) -> bool {
+        let kind = stale_kind(&text);
+        match kind {
+            Some(kind) => self.waiting.retain(|(k, _)| *k != Some(kind)),
+            None => {
+                if self.waiting.iter().filter(|(k, _)| k.is_none()).count() >= Self::MAX_KEPT {
+                    return false;
+                }
+            }
+        }
+        self.waiting.push_back((kind, text));
+        true
+    }
+
+    /// The oldest waiting message.
+    fn pop(&mut self) -> Option<String> {
+        self.waiting.pop_front().map(|(_, text)| text)
+    }
 }
 
 /// At most `per_second` messages in any one-second window.
@@ -440,9 +487,14 @@ impl RateLimit {
         }
     }
 
-    /// When the current window ends (a message over the limit can be read then).
-    fn reopens(&self) -> Instant {
-        self.window_start + Duration::from_secs(1)
+    /// When the next message can be read: at once (the window's start, already past) while
+    /// the window has room, else when the window ends.
+    fn next_free(&self) -> Instant {
+        if self.count < self.per_second {
+            self.window_start
+        } else {
+            self.window_start + Duration::from_secs(1)
+        }
     }
 
     fn admit(&mut self, now: Instant) -> bool {
@@ -1014,9 +1066,48 @@ mod tests {
     fn rate_limit_window() {
         let mut r = RateLimit::new(3);
         let t = Instant::now();
-        assert!(r.admit(t) && r.admit(t) && r.admit(t));
+        assert!(r.admit(t) && r.admit(t));
+        assert!(r.next_free() <= Instant::now(), "room left: at once");
+        assert!(r.admit(t));
         assert!(!r.admit(t));
+        assert!(
+            r.next_free() > Instant::now() + Duration::from_millis(900),
+            "full: when the window ends"
+        );
         assert!(r.admit(t + Duration::from_millis(1001)));
+    }
+
+    #[test]
+    fn deferred_messages_keep_the_last_of_each_stale_kind_in_order() {
+        let preset =
+            |r: f64| json_text("preset", &format!(r#","name":"torus","params":[{r},0.3]"#));
+        let view = |seq: u32| json_text("view", &format!(r#","seq":{seq}"#));
+        let mut d = Deferred::default();
+        for i in 1..=50 {
+            assert!(d.push(preset(f64::from(i) / 100.0)));
+            assert!(d.push(view(i)));
+        }
+        assert!(d.push(json_text("save", "")));
+        assert!(d.push(json_text("pause", "")));
+        let order: Vec<String> = std::iter::from_fn(|| d.pop()).collect();
+        assert_eq!(
+            order,
+            [preset(0.5), json_text("save", ""), json_text("pause", "")]
+        );
+        // Messages no newer one replaces are kept up to the limit, then refused.
+        for _ in 0..Deferred::MAX_KEPT {
+            assert!(d.push(json_text("cancel_save", "")));
+        }
+        assert!(!d.push(json_text("save", "")));
+        assert!(d.push(view(1)), "a view still replaces");
+        assert!(
+            !d.push("not json".into()),
+            "a text that is no message is kept, and counted"
+        );
+    }
+
+    fn json_text(kind: &str, rest: &str) -> String {
+        format!(r#"{{"type":"{kind}"{rest}}}"#)
     }
 
     #[test]

@@ -1,11 +1,14 @@
 // The screenshots of docs/explorer.md (a script, not a test): the desktop (1280×800) on
 // Togliatti's quintic and a phone (390×844) on the heart, as a new user first sees them
-// (shaded), each once its view has refined to 16 samples a pixel or more.
+// (shaded), each once its view has refined to 16 samples a pixel or more, then rewritten as
+// indexed-colour PNGs (`cargo run --release --example png_palette`: 272 KB -> 108 KB for
+// the desktop, the text as legible).
 //
 // Usage: node tests/browser/screenshots.mjs URL DIR
 //   (URL: a running `kardia explore`; DIR: where explorer_desktop.png and explorer_phone.png go)
 import { chromium } from "playwright-core";
 import { mkdtempSync, rmSync } from "node:fs";
+import { execFileSync } from "node:child_process";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
 
@@ -33,6 +36,10 @@ try {
   await phone.goto(`${url}#mode=equation&preset=heart`);
   await refined(phone);
   await phone.screenshot({ path: join(dir, "explorer_phone.png") });
+  for (const name of ["explorer_desktop.png", "explorer_phone.png"]) {
+    execFileSync("cargo", ["run", "--quiet", "--release", "--example", "png_palette", "--",
+      join(dir, name), join(dir, name)], { stdio: "inherit" });
+  }
 } finally {
   await context.close();
   rmSync(profile, { recursive: true, force: true });

@@ -515,6 +515,86 @@ async fn fifty_view_changes_a_second_end_on_the_last_view_without_stale_frames()
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_preset_slider_burst_over_the_rate_limit_ends_on_its_last_preset_and_view() {
+    // A preset slider sends two messages a step: the preset to expand, then the view. A burst
+    // over the limit may lose intermediate steps, never the last of either, and no error.
+    let server = start(Limits {
+        max_messages_per_second: 20,
+        max_view_spp: 1,
+        ..Limits::default()
+    })
+    .await;
+    let mut ws = connect(server.addr).await;
+    let steps = 40u64;
+    let tube = |step: u64| 0.2 + step as f64 / 200.0;
+    for step in 1..=steps {
+        let params = json!([1.0, tube(step)]);
+        ws.send(Message::text(
+            json!({"type": "preset", "name": "torus", "params": params}).to_string(),
+        ))
+        .await
+        .unwrap();
+        let scene = sphere_scene(step as f64 * 0.01, "(0.2, 0.8, 0.2)");
+        ws.send(view(step, &scene, 32, 24)).await.unwrap();
+    }
+    let mut presets = vec![];
+    let mut errors = vec![];
+    let read_all = async {
+        loop {
+            match next_message(&mut ws)
+                .await
+                .expect("the page stays connected")
+            {
+                Message::Text(t) => {
+                    let m: Value = serde_json::from_str(&t).unwrap();
+                    match m["type"].as_str() {
+                        Some("preset") => presets.push(m["params"][1].as_f64().unwrap()),
+                        Some("error") => errors.push(m["message"].to_string()),
+                        _ => {}
+                    }
+                }
+                Message::Binary(b) => {
+                    let (header, _) = split_binary(&b);
+                    if header["seq"] == steps && header["done"] == true {
+                        break;
+                    }
+                }
+                _ => {}
+            }
+        }
+    };
+    tokio::time::timeout(Duration::from_secs(60), read_all)
+        .await
+        .expect("the last view is drawn");
+    // The last preset's reply may come after the last view's frame (it was queued before it).
+    if presets.last() != Some(&tube(steps)) {
+        while let Ok(Some(Message::Text(t))) =
+            tokio::time::timeout(Duration::from_secs(3), next_message(&mut ws)).await
+        {
+            let m: Value = serde_json::from_str(&t).unwrap();
+            if m["type"] == "preset" {
+                presets.push(m["params"][1].as_f64().unwrap());
+            }
+        }
+    }
+    assert_eq!(
+        errors,
+        Vec::<String>::new(),
+        "no message of the burst refused"
+    );
+    assert!(
+        presets.len() < steps as usize,
+        "the burst was over the limit: {presets:?}"
+    );
+    assert_eq!(
+        presets.last(),
+        Some(&tube(steps)),
+        "the last preset expanded: {presets:?}"
+    );
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn gallery_thumbnails_are_kardia_renders_of_their_scenes() {
     let server = start(Limits::default()).await;
     let get = |path: &'static str, host: String| async move {

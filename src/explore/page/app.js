@@ -264,6 +264,21 @@ function updateSoon(ms = 150) {
   pendingTimer = setTimeout(update, ms);
 }
 
+// How long typed text must be still before it is drawn: 150 ms, or twice the typist's pace
+// (the median interval of their last keystrokes, a second's stillness starting afresh) up to
+// 600 ms, so someone typing at 5 characters a second does not see every half-typed equation.
+const keystrokes = [];
+function typingPause() {
+  const now = performance.now();
+  if (keystrokes.length && now - keystrokes[keystrokes.length - 1] >= 1000) keystrokes.length = 0;
+  keystrokes.push(now);
+  if (keystrokes.length > 7) keystrokes.shift();
+  const gaps = keystrokes.slice(1).map((t, i) => t - keystrokes[i]).sort((a, b) => a - b);
+  const pace = gaps.length ? gaps[Math.floor(gaps.length / 2)] : 0;
+  window.kardia.typingPause = clamp(2 * pace, 150, 600);
+  return window.kardia.typingPause;
+}
+
 function onText(m) {
   if (m.type === "hello") return onHello(m);
   if (m.type === "scene_error") return showProblem(m.seq, m.problem);
@@ -526,7 +541,7 @@ function renderSliders() {
 
 $("equation").addEventListener("input", () => {
   typedEquation($("equation").value);
-  updateSoon();
+  updateSoon(typingPause());
 });
 $("equation").addEventListener("keydown", (e) => {
   if (e.key === "Enter" && !e.shiftKey) {
@@ -641,7 +656,7 @@ $("scene-text").addEventListener("input", () => {
   showLineNumbers();
   const c = cameraFromText(state.sceneText);
   if (c) state.camera = c;
-  updateSoon();
+  updateSoon(typingPause());
 });
 
 function setMode(mode) {
@@ -660,7 +675,28 @@ function setMode(mode) {
   clearProblem();
   update();
 }
-for (const id of ["save-width", "save-height", "save-spp"]) $(id).addEventListener("change", () => update());
+// The Save fields show what will be saved: clamped to the server's limits, with a sentence.
+function clampSaveFields() {
+  if (!hello) return;
+  const l = hello.limits;
+  const asked = ["save-width", "save-height", "save-spp"].map((id) => Math.round(Number($(id).value)));
+  let [w, h] = saveSize();
+  if (w * h > l.max_save_pixels) {
+    const k = Math.sqrt(l.max_save_pixels / (w * h));
+    [w, h] = [Math.max(1, Math.floor(w * k)), Math.max(1, Math.floor(h * k))];
+  }
+  const spp = clamp(saveSpp(), 1, Math.max(1, Math.floor(l.max_save_samples / (w * h))));
+  if (asked[0] === w && asked[1] === h && asked[2] === spp) return;
+  [$("save-width").value, $("save-height").value, $("save-spp").value] = [w, h, spp];
+  say(`A saved image is at most ${l.max_save_side} px a side, ${l.max_save_pixels} pixels and ` +
+    `${l.max_save_spp} samples a pixel (${l.max_save_samples} samples in all): ${w}×${h} at ${spp} spp is used.`);
+}
+for (const id of ["save-width", "save-height", "save-spp"]) {
+  $(id).addEventListener("change", () => {
+    clampSaveFields();
+    update();
+  });
+}
 $("study").addEventListener("change", () => {
   state.view = $("study").value;
   showLegend();
@@ -952,6 +988,7 @@ $("reset").onclick = () => {
 // ---------- export and share ----------
 $("save").onclick = () => {
   if (pendingSave) return say("a save is rendering: wait for it or cancel it");
+  clampSaveFields();
   const [width, height] = saveSize();
   const spp = saveSpp();
   pendingSave = { seq: seq + 1000000, width, height, spp };
@@ -1237,8 +1274,11 @@ function readUrl() {
   }
   if (q.has("camera")) {
     const nums = q.get("camera").split(",").map(Number);
-    const camera = { eye: nums.slice(0, 3), look: nums.slice(3, 6), up: nums.slice(6, 9), fov: nums[9] };
-    const ok = nums.length === 10 && nums.every(Number.isFinite) && camera.fov > 0 && camera.fov < 180 &&
+    // The projection is the scene text's (its CAMERA line); the link holds the view. An
+    // orthographic camera's last number is its view's height, not an angle.
+    const orthographic = state.mode === "scene" && Boolean(cameraFromText(state.sceneText)?.orthographic);
+    const camera = { eye: nums.slice(0, 3), look: nums.slice(3, 6), up: nums.slice(6, 9), fov: nums[9], orthographic };
+    const ok = nums.length === 10 && nums.every(Number.isFinite) && camera.fov > 0 && (orthographic || camera.fov < 180) &&
       len(sub(camera.eye, camera.look)) > 0 && len(cross(sub(camera.look, camera.eye), camera.up)) > 0;
     if (ok) {
       state.camera = camera;
