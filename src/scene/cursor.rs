@@ -4,7 +4,7 @@
 use std::fmt::Display;
 use std::ops::Range;
 
-use super::expr::{self, Fail, LetFail, Line, Names};
+use super::expr::{self, Fail, LetFail, Line, Names, Tapes};
 use super::lexer::{Token, TokenKind};
 use super::limits::{self, Limits};
 use super::words::shorten;
@@ -86,6 +86,9 @@ pub(super) struct Cursor<'a> {
     pub(super) names: &'a Names,
     /// True once a value of this statement depended on the time: errors then name the frame.
     pub(super) uses_time: bool,
+    /// Inside a `REPEAT`: the expressions of its body read so far, to compute again instead
+    /// of reading their text at each iteration.
+    pub(super) tapes: Option<&'a mut Tapes>,
 }
 
 impl<'a> Cursor<'a> {
@@ -232,11 +235,24 @@ impl<'a> Cursor<'a> {
             }
             _ => {}
         }
+        let start = t.span.start;
+        if let Some(tapes) = self.tapes.as_deref_mut() {
+            if let Some((value, uses_time, span, next_token)) =
+                tapes.eval(start, self.src.text, self.names)
+            {
+                self.uses_time |= uses_time;
+                self.pos = next_token;
+                return Ok((value, span));
+            }
+        }
         let (read, uses_time) = expr::read(&self.line());
         self.uses_time |= uses_time;
         match read {
             Ok(Some(read)) => {
                 self.pos = read.next_token;
+                if let Some(tapes) = self.tapes.as_deref_mut() {
+                    tapes.keep(start, read.tape);
+                }
                 Ok((read.value, read.span))
             }
             Ok(None) => Err(self.unexpected(&format!("{what} (a number)"))),

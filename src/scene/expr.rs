@@ -378,6 +378,8 @@ struct Reader<'r> {
     /// In a list of values (the space rule for `+` and `-` applies at the outer level).
     list: bool,
     uses_time: bool,
+    /// The steps of the value computed so far, in the order they were taken.
+    tape: Vec<Op>,
 }
 
 type Value = (f64, Span);
@@ -435,6 +437,7 @@ impl<'r> Reader<'r> {
             let (y, ys) = self.product()?;
             span = span.start..ys.end;
             x = self.finite(if minus { x - y } else { x + y }, &span, "the sum")?;
+            self.tape.push(if minus { Op::Subtract } else { Op::Add });
         }
         Ok((x, span))
     }
@@ -456,6 +459,8 @@ impl<'r> Reader<'r> {
             }
             span = span.start..ys.end;
             x = self.finite(if divide { x / y } else { x * y }, &span, "the product")?;
+            self.tape
+                .push(if divide { Op::Divide } else { Op::Multiply });
         }
         Ok((x, span))
     }
@@ -472,7 +477,9 @@ impl<'r> Reader<'r> {
         let r = match self.peek().map(|p| (p.tk, p.span.clone())) {
             Some((Tk::Minus, s)) => {
                 self.at += 1;
-                self.unary().map(|(x, e)| (-x, s.start..e.end))
+                let r = self.unary().map(|(x, e)| (-x, s.start..e.end));
+                self.tape.push(Op::Negate);
+                r
             }
             Some((Tk::Plus, s)) => {
                 self.at += 1;
@@ -508,7 +515,9 @@ impl<'r> Reader<'r> {
                 ),
             });
         }
-        Ok((self.finite(x, &span, "the power")?, span))
+        let x = self.finite(x, &span, "the power")?;
+        self.tape.push(Op::Power);
+        Ok((x, span))
     }
 
     fn primary(&mut self) -> Result<Value, Fail> {
@@ -525,7 +534,10 @@ impl<'r> Reader<'r> {
             Tk::Num => {
                 self.at += 1;
                 match text.parse::<f64>() {
-                    Ok(x) if x.is_finite() => Ok((x, p.span)),
+                    Ok(x) if x.is_finite() => {
+                        self.tape.push(Op::Number(x));
+                        Ok((x, p.span))
+                    }
                     Ok(_) => Err(Fail::Value {
                         span: p.span,
                         message: format!(
@@ -548,6 +560,7 @@ impl<'r> Reader<'r> {
                 match self.names.value(text) {
                     Some((x, uses_time)) => {
                         self.uses_time |= uses_time;
+                        self.tape.push(Op::Name(p.span.clone()));
                         Ok((x, p.span))
                     }
                     None => Err(self.unknown_name(text, p.span)),
@@ -588,7 +601,13 @@ impl<'r> Reader<'r> {
         }
     }
 
-    fn call(&mut self, name: &str, lo: usize, hi: usize, span: Span) -> Result<Value, Fail> {
+    fn call(
+        &mut self,
+        name: &'static str,
+        lo: usize,
+        hi: usize,
+        span: Span,
+    ) -> Result<Value, Fail> {
         if self.peek_tk() != Some(Tk::Open) {
             return Err(syntax(
                 span,
@@ -628,37 +647,14 @@ impl<'r> Reader<'r> {
                 "wrong number of arguments",
             ));
         }
-        let (a, a_span) = args[0].clone();
-        let x = match name {
-            "sin" => a.sin(),
-            "cos" => a.cos(),
-            "tan" => a.tan(),
-            "abs" => a.abs(),
-            "cbrt" => a.cbrt(),
-            "exp" => a.exp(),
-            "log" => {
-                if a <= 0.0 {
-                    return Err(Fail::Value {
-                        span: a_span,
-                        message: format!("log of a number that is not positive ({a})"),
-                    });
-                }
-                a.ln()
-            }
-            "sqrt" => {
-                if a < 0.0 {
-                    return Err(Fail::Value {
-                        span: a_span,
-                        message: format!("sqrt of a negative number ({a})"),
-                    });
-                }
-                a.sqrt()
-            }
-            "min" => args.iter().map(|v| v.0).fold(f64::INFINITY, f64::min),
-            "max" => args.iter().map(|v| v.0).fold(f64::NEG_INFINITY, f64::max),
-            _ => unreachable!("every function is evaluated"),
-        };
-        Ok((self.finite(x, &whole, "the result")?, whole))
+        let values: Vec<f64> = args.iter().map(|v| v.0).collect();
+        let x = apply(name, &values).map_err(|message| Fail::Value {
+            span: args[0].1.clone(),
+            message,
+        })?;
+        let x = self.finite(x, &whole, "the result")?;
+        self.tape.push(Op::Call(name, values.len()));
+        Ok((x, whole))
     }
 
     fn unknown_name(&self, name: &str, span: Span) -> Fail {
@@ -683,6 +679,152 @@ impl<'r> Reader<'r> {
             label: "not defined before this line".into(),
             help,
         }
+    }
+}
+
+/// The function `name` (one of [`FUNCTIONS`]) of `args` (as many as it takes), or why it
+/// has no value (said of its first argument).
+fn apply(name: &str, args: &[f64]) -> Result<f64, String> {
+    let a = args[0];
+    Ok(match name {
+        "sin" => a.sin(),
+        "cos" => a.cos(),
+        "tan" => a.tan(),
+        "abs" => a.abs(),
+        "cbrt" => a.cbrt(),
+        "exp" => a.exp(),
+        "log" => {
+            if a <= 0.0 {
+                return Err(format!("log of a number that is not positive ({a})"));
+            }
+            a.ln()
+        }
+        "sqrt" => {
+            if a < 0.0 {
+                return Err(format!("sqrt of a negative number ({a})"));
+            }
+            a.sqrt()
+        }
+        "min" => args.iter().copied().fold(f64::INFINITY, f64::min),
+        "max" => args.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        _ => unreachable!("every function is evaluated"),
+    })
+}
+
+/// One step of an expression's computation, as [`Tape`] keeps it.
+#[derive(Debug, Clone)]
+enum Op {
+    /// A number as written.
+    Number(f64),
+    /// The value of the name written at this span of the scene text.
+    Name(Span),
+    /// The negation of the last value.
+    Negate,
+    /// The last two values added (the earlier one first).
+    Add,
+    /// The earlier of the last two values minus the later.
+    Subtract,
+    /// The last two values multiplied.
+    Multiply,
+    /// The earlier of the last two values divided by the later.
+    Divide,
+    /// The earlier of the last two values to the power of the later.
+    Power,
+    /// The function of the last values (this many of them, in the order written).
+    Call(&'static str, usize),
+}
+
+/// An expression read once, kept so that a `REPEAT` computes it again at each iteration
+/// without reading its text: the reader's steps in the order it took them (postfix), its
+/// span and the token after it, which do not depend on the names' values.
+#[derive(Debug, Clone)]
+pub(super) struct Tape {
+    ops: Vec<Op>,
+    /// Where the expression is written.
+    pub(super) span: Span,
+    /// The token after it.
+    pub(super) next_token: usize,
+}
+
+impl Tape {
+    /// The expression's value with the names' current values, and whether it depended on the
+    /// time; computed by the reader's operations in the reader's order, so the same value to
+    /// the bit. `None` wherever the reader would fail (a name not defined, a division by zero,
+    /// a value not finite or not real): the caller then reads the text again for the error.
+    /// `stack` is scratch space (left empty).
+    pub(super) fn eval(
+        &self,
+        text: &str,
+        names: &Names,
+        stack: &mut Vec<f64>,
+    ) -> Option<(f64, bool)> {
+        stack.clear();
+        let mut uses_time = false;
+        let finite = |x: f64| x.is_finite().then_some(x);
+        for op in &self.ops {
+            let x = match op {
+                Op::Number(x) => *x,
+                Op::Name(span) => {
+                    let (x, time) = names.value(&text[span.clone()])?;
+                    uses_time |= time;
+                    x
+                }
+                Op::Negate => -stack.pop()?,
+                Op::Call(name, count) => {
+                    let args = stack.split_off(stack.len().checked_sub(*count)?);
+                    finite(apply(name, &args).ok()?)?
+                }
+                binary => {
+                    let y = stack.pop()?;
+                    let x = stack.pop()?;
+                    match binary {
+                        Op::Add => finite(x + y)?,
+                        Op::Subtract => finite(x - y)?,
+                        Op::Multiply => finite(x * y)?,
+                        Op::Divide if y == 0.0 => return None,
+                        Op::Divide => finite(x / y)?,
+                        Op::Power if x == 0.0 && y < 0.0 => return None,
+                        Op::Power => finite(x.powf(y))?,
+                        _ => unreachable!("the other steps are matched above"),
+                    }
+                }
+            };
+            stack.push(x);
+        }
+        let value = stack.pop()?;
+        stack.is_empty().then_some((value, uses_time))
+    }
+}
+
+/// The expressions of a `REPEAT`'s body read so far, each by where its first token starts in
+/// the scene text, so that each is read from its text once and computed again at each
+/// iteration. Only what does not depend on the names' values is kept: a name's value is looked
+/// up at each computation (a `LET` of the body, the loop variable), and a computation that
+/// fails is read again from the text, so errors are the reader's own.
+#[derive(Debug, Default)]
+pub(super) struct Tapes {
+    by_start: HashMap<usize, Tape, std::hash::BuildHasherDefault<NameHasher>>,
+    stack: Vec<f64>,
+}
+
+impl Tapes {
+    /// The value of the expression whose first token starts at byte `start`, if it was kept
+    /// and computes without failing: its value, whether it depended on the time, its span and
+    /// the token after it.
+    pub(super) fn eval(
+        &mut self,
+        start: usize,
+        text: &str,
+        names: &Names,
+    ) -> Option<(f64, bool, Span, usize)> {
+        let tape = self.by_start.get(&start)?;
+        let (value, uses_time) = tape.eval(text, names, &mut self.stack)?;
+        Some((value, uses_time, tape.span.clone(), tape.next_token))
+    }
+
+    /// Keeps the steps of the expression whose first token starts at byte `start`.
+    pub(super) fn keep(&mut self, start: usize, tape: Tape) {
+        self.by_start.insert(start, tape);
     }
 }
 
@@ -720,6 +862,8 @@ pub(super) struct Read {
     pub(super) span: Span,
     /// The token after it.
     pub(super) next_token: usize,
+    /// Its steps, to compute it again with other values of its names.
+    pub(super) tape: Tape,
 }
 
 /// Reads the expression at `line.pos` in a list of values. `Ok(None)` when the line is not at
@@ -735,19 +879,28 @@ pub(super) fn read(line: &Line) -> (Result<Option<Read>, Fail>, bool) {
         depth: 0,
         list: true,
         uses_time: false,
+        tape: Vec::new(),
     };
     if !looks_like_expression(&reader) {
         return (Ok(None), false);
     }
     match finish(&mut reader) {
-        Ok((value, span, next_token)) => (
-            Ok(Some(Read {
-                value,
-                span,
+        Ok((value, span, next_token)) => {
+            let tape = Tape {
+                ops: std::mem::take(&mut reader.tape),
+                span: span.clone(),
                 next_token,
-            })),
-            reader.uses_time,
-        ),
+            };
+            (
+                Ok(Some(Read {
+                    value,
+                    span,
+                    next_token,
+                    tape,
+                })),
+                reader.uses_time,
+            )
+        }
         Err(Fail::NotAnExpression) => (Ok(None), false),
         Err(fail) => (Err(fail), reader.uses_time),
     }
@@ -913,6 +1066,7 @@ pub(super) fn read_let(line: &Line) -> (Result<LetDefinition, LetFail>, bool) {
         depth: 0,
         list: false,
         uses_time: false,
+        tape: Vec::new(),
     };
     let what = format!("the value of {name}");
     let result = match finish(&mut reader) {

@@ -9,7 +9,7 @@
 use std::ops::Range;
 
 use super::cursor::{Cursor, Source};
-use super::expr::{self, Names};
+use super::expr::{self, Names, Tapes};
 use super::lexer::{lex_line, LexError, Token, TokenKind};
 use super::parser::Builder;
 use super::words::shorten;
@@ -211,6 +211,7 @@ pub(super) fn read_lines(src: Source, builder: &mut Builder, names: &mut Names) 
         lines: &lines,
         iterations: Vec::new(),
         statements: 0,
+        tapes: Tapes::default(),
     };
     reader.run(0..lines.len(), builder, names)?;
     Ok(last_token_end)
@@ -224,6 +225,8 @@ struct Reader<'a> {
     iterations: Vec<(String, f64)>,
     /// Statements read inside loops so far.
     statements: u64,
+    /// The expressions read inside loops, kept to compute again at the next iterations.
+    tapes: Tapes,
 }
 
 impl Reader<'_> {
@@ -270,6 +273,7 @@ impl Reader<'_> {
                 part_usage: None,
                 names,
                 uses_time: false,
+                tapes: (!self.iterations.is_empty()).then_some(&mut self.tapes),
             };
             let read = builder.statement(&mut cur);
             let keyword_span = cur.tokens[0].span.clone();
@@ -402,6 +406,45 @@ mod tests {
         assert_eq!(c, vec![(0.0, 0.0, 0.1), (0.0, 0.0, 0.2), (5.0, 0.0, 0.0)]);
         let e = load("REPEAT i FROM 1 TO 2\nEND\nSPHERE (i, 0, 0) 1 (1, 1, 1)\n").unwrap_err();
         assert!(e.contains("t.scene:4:"), "{e}");
+    }
+
+    #[test]
+    fn expressions_kept_from_an_earlier_iteration_use_the_names_values_of_this_one() {
+        // A LET of the body, redefined at each iteration, used by the next line; an inner
+        // loop whose bounds depend on the outer variable; the inner variable's name then
+        // defined by a LET of the outer body.
+        let c = centres(
+            "REPEAT i FROM 1 TO 2\n\
+               LET r = i * i\n\
+               SPHERE (r, 2 * r, 0) 0.1 (1, 1, 1)\n\
+               REPEAT k FROM i TO 2\n\
+                 SPHERE (i, k, 10*i + k) 0.1 (1, 1, 1)\n\
+               END\n\
+               LET k = 100 * i\n\
+               SPHERE (0, 0, k + r) 0.1 (1, 1, 1)\n\
+             END\n",
+        );
+        assert_eq!(
+            c,
+            vec![
+                (1.0, 2.0, 0.0),
+                (1.0, 1.0, 11.0),
+                (1.0, 2.0, 12.0),
+                (0.0, 0.0, 101.0),
+                (4.0, 8.0, 0.0),
+                (2.0, 2.0, 22.0),
+                (0.0, 0.0, 204.0)
+            ]
+        );
+        // An expression that computed at the first iterations fails at a later one with the
+        // reader's own error, and a name that a kept expression uses must still be defined.
+        let e = load("REPEAT i FROM 0 TO 3\nSPHERE (0, 0, 0) 0.5 + sqrt(2 - i) (1, 1, 1)\nEND\n")
+            .unwrap_err();
+        assert!(e.contains("t.scene:3:"), "{e}");
+        assert!(
+            e.contains("sqrt of a negative number (-1) (in iteration i = 3)"),
+            "{e}"
+        );
     }
 
     #[test]
