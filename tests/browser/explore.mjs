@@ -947,6 +947,22 @@ for (const [width, height] of [[390, 844], [768, 1024], [1280, 800]]) {
       for (let i = 1; i <= 6; i++) await touch("touchMove", [[cx - 20 - 10 * i, cy], [cx + 20 + 10 * i, cy]]);
       await touch("touchEnd", []);
       assert.ok((await distance()) < before * 0.8, `a pinch zooms in: ${before} → ${await distance()}`);
+      // A typing error's sentence is whole on a phone (it wraps in its reserved space, never
+      // cut short), and nothing below moves when it comes.
+      const below = () => screen.evaluate(() => document.getElementById("bound").getBoundingClientRect().top);
+      const top = await below();
+      await screen.fill("#equation", "x^2+y^2+z^2-1+(");
+      await screen.waitForFunction(() => document.getElementById("equation-problem").classList.contains("shown"),
+        null, { timeout: 10000 });
+      const sentence = await screen.evaluate(() => {
+        const el = document.getElementById("equation-sentence");
+        return { text: el.textContent, scrollW: el.scrollWidth, clientW: el.clientWidth,
+          scrollH: el.scrollHeight, clientH: el.clientHeight };
+      });
+      assert.ok(sentence.text.length > 40, `a sentence: ${sentence.text}`);
+      assert.ok(sentence.scrollW <= sentence.clientW && sentence.scrollH <= sentence.clientH,
+        `the sentence is cut short on a phone: ${JSON.stringify(sentence)}`);
+      assert.equal(await below(), top, "nothing moves when the error comes");
       await screen.screenshot({ path: join(tmpdir(), "kardia-phone.png") });
     }
     await screen.close();
