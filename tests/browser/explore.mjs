@@ -185,6 +185,31 @@ await check("an invalid equation: one plain sentence, the part marked, the last 
   assert.deepEqual(await boxes(layout), before, "nothing moved when the error went");
 });
 
+await check("an equation with no real points says there is nothing to draw, and the sentence goes with it", async () => {
+  const layout = ["#sliders", "#bound", "#gallery", "#view", "#status", "#view-controls"];
+  const before = await boxes(layout);
+  const seq = await sentSeq();
+  await page.fill("#equation", "x^2 + y^2 + z^2 + 1");
+  await page.press("#equation", "Enter");
+  await fullFrameAfter(seq);
+  await page.waitForSelector("#equation-problem.shown.notice", { timeout: 10000 });
+  assert.match(await page.textContent("#equation-sentence"), /^Nothing to draw: no real points inside the clip radius \d/);
+  assert.ok(!(await page.evaluate(() => document.getElementById("equation").classList.contains("bad"))), "not an error");
+  assert.deepEqual(await boxes(layout), before, "nothing moved when the sentence came");
+  // A camera change keeps it (the surface is the same); a surface with points clears it.
+  await page.focus("#view");
+  await page.keyboard.press("ArrowLeft");
+  await fullFrameAfter((await sentSeq()) - 1);
+  assert.match(await page.textContent("#equation-sentence"), /^Nothing to draw/, "kept while the surface is the same");
+  const again = await sentSeq();
+  await page.fill("#equation", "x^2 + y^2 + z^2 - 1");
+  await page.press("#equation", "Enter");
+  await fullFrameAfter(again);
+  assert.ok(!(await page.evaluate(() => document.getElementById("equation-problem").classList.contains("shown"))),
+    "the sentence goes with a surface that has points");
+  assert.deepEqual(await boxes(layout), before, "nothing moved when it went");
+});
+
 await check("a free letter gets a slider with editable bounds, kept in the URL", async () => {
   await page.fill("#equation", "x^2 + y^2 + z^2 - a");
   await page.press("#equation", "Enter");

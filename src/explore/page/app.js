@@ -303,7 +303,10 @@ function onBinary(buffer) {
   if (header.type === "png") return onPng(header, payload);
   if (header.type === "mesh") return onMesh(header, payload);
   if (header.seq < drawnSeq) return;
-  if (header.seq > drawnSeq) clearProblem();
+  if (header.seq > drawnSeq) {
+    clearProblem();
+    if (emptyFrom !== null && header.seq >= emptyFrom && state.mode === "equation") showNothingToDraw();
+  }
   drawnSeq = header.seq;
   const image = new ImageData(new Uint8ClampedArray(payload.buffer, payload.byteOffset, payload.length),
     header.width, header.height);
@@ -563,9 +566,13 @@ for (const id of ["outside", "inside"]) {
 }
 
 // ---------- framing ----------
+// The request from which the surface has nothing to draw (its load-time extent, certified by
+// the server, holds no point bigger than a speck), until an extent with something arrives.
+let emptyFrom = null;
 function onExtent(m) {
   if (m.seq !== seq) return;
   window.kardia.extent = { min: m.min, max: m.max };
+  emptyFrom = len(sub(m.max, m.min)) / 2 > 1e-3 ? null : m.seq;
   if (frameNext && state.mode === "equation") {
     frameNext = false;
     fit();
@@ -742,7 +749,7 @@ $("mode-scene").onclick = () => setMode("scene");
 function clearProblem() {
   $("problem").classList.remove("shown");
   $("problem").textContent = "";
-  $("equation-problem").classList.remove("shown");
+  $("equation-problem").classList.remove("shown", "notice");
   $("equation-sentence").textContent = "";
   $("equation-marked").replaceChildren();
   $("equation").classList.remove("bad");
@@ -752,6 +759,14 @@ function clearProblem() {
   canvas.classList.remove("stale");
   showLineNumbers();
   window.kardia.lastProblem = null;
+}
+
+// Says why the image is only the background: a surface with no real points inside its clip
+// radius (the server's load-time extent is certified, so this is never a guess).
+function showNothingToDraw() {
+  $("equation-sentence").textContent =
+    `Nothing to draw: no real points inside the clip radius ${fmt(state.bound)} (a single point is too small to see).`;
+  $("equation-problem").classList.add("shown", "notice");
 }
 
 // The problem in one plain sentence: the parser's message without its place (file:line:
