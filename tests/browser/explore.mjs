@@ -193,7 +193,7 @@ await check("an equation with no real points says there is nothing to draw, and 
   await page.press("#equation", "Enter");
   await fullFrameAfter(seq);
   await page.waitForSelector("#equation-problem.shown.notice", { timeout: 10000 });
-  assert.match(await page.textContent("#equation-sentence"), /^Nothing to draw: no real points inside the clip radius \d/);
+  assert.match(await page.textContent("#equation-sentence"), /^Nothing to draw: this surface has no real points inside the clip radius \d/);
   assert.ok(!(await page.evaluate(() => document.getElementById("equation").classList.contains("bad"))), "not an error");
   assert.deepEqual(await boxes(layout), before, "nothing moved when the sentence came");
   // A camera change keeps it (the surface is the same); a surface with points clears it.

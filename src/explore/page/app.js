@@ -567,7 +567,7 @@ for (const id of ["outside", "inside"]) {
 
 // ---------- framing ----------
 // The request from which the surface has nothing to draw (its load-time extent, certified by
-// the server, holds no point bigger than a speck), until an extent with something arrives.
+// the server, is empty: a box of no size), until an extent with something arrives.
 let emptyFrom = null;
 function onExtent(m) {
   if (m.seq !== seq) return;
@@ -765,7 +765,7 @@ function clearProblem() {
 // radius (the server's load-time extent is certified, so this is never a guess).
 function showNothingToDraw() {
   $("equation-sentence").textContent =
-    `Nothing to draw: no real points inside the clip radius ${fmt(state.bound)} (a single point is too small to see).`;
+    `Nothing to draw: this surface has no real points inside the clip radius ${fmt(state.bound)}.`;
   $("equation-problem").classList.add("shown", "notice");
 }
 
