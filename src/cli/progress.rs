@@ -89,8 +89,16 @@ impl Progress {
 }
 
 impl Lines {
+    /// The count is read and the line printed while the lock is held, so lines come in the
+    /// order of their counts: two threads finishing tiles together never print 95 % after
+    /// 100 %.
     fn inc(&self, pixels: u64) {
-        let done = self.done.fetch_add(pixels, Ordering::Relaxed) + pixels;
+        self.inc_with(pixels, |line| eprintln!("{line}"));
+    }
+
+    /// As `inc`, handing the line (if one is due) to `print` while the lock is held.
+    fn inc_with(&self, pixels: u64, mut print: impl FnMut(String)) {
+        self.done.fetch_add(pixels, Ordering::Relaxed);
         let now = Instant::now();
         let Ok(mut state) = self.state.lock() else {
             return;
@@ -99,9 +107,13 @@ impl Lines {
             return;
         }
         state.0 = now;
-        let line = progress_line(&state.1, done, self.total, now - self.started);
-        drop(state);
-        eprintln!("{line}");
+        let done = self.done.load(Ordering::Relaxed);
+        print(progress_line(
+            &state.1,
+            done,
+            self.total,
+            now - self.started,
+        ));
     }
 }
 
@@ -149,5 +161,39 @@ mod tests {
         let long = progress_line("rendering", 1, 1000, Duration::from_secs(10));
         assert!(long.ends_with("eta 2 h 46 min"), "{long}");
         assert_eq!(seconds(185.0), "3 min 05 s");
+    }
+
+    #[test]
+    fn lines_from_many_threads_come_in_the_order_of_their_counts() {
+        let now = Instant::now();
+        let lines = Lines {
+            total: 64_000,
+            done: AtomicU64::new(0),
+            started: now,
+            interval: Duration::ZERO,
+            state: Mutex::new((now, String::from("rendering"))),
+        };
+        let printed = Mutex::new(Vec::new());
+        std::thread::scope(|scope| {
+            for _ in 0..4 {
+                scope.spawn(|| {
+                    for _ in 0..1000 {
+                        lines.inc_with(16, |line| printed.lock().unwrap().push(line));
+                    }
+                });
+            }
+        });
+        let percents: Vec<f64> = printed
+            .into_inner()
+            .unwrap()
+            .iter()
+            .map(|l| {
+                let p = l.split(": ").nth(2).unwrap().split('%').next().unwrap();
+                p.parse().unwrap()
+            })
+            .collect();
+        assert_eq!(percents.len(), 4000);
+        assert!(percents.windows(2).all(|w| w[0] <= w[1]), "out of order");
+        assert_eq!(percents.last(), Some(&100.0));
     }
 }
