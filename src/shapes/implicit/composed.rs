@@ -18,6 +18,7 @@
 use super::dd::Dd;
 use super::equation::{Expr, Node};
 use super::poly::Poly;
+use super::tree::has_variable;
 
 /// A recognised composition `f = a·Pⁿ + c` with the real roots of `a·sⁿ + c`.
 #[derive(Clone, Debug)]
@@ -68,17 +69,6 @@ fn same(a: &Expr, b: &Expr) -> bool {
             x.len() == y.len() && x.iter().zip(y).all(|((p, u), (q, v))| p == q && same(u, v))
         }
         _ => false,
-    }
-}
-
-/// Whether `e` holds x, y or z.
-fn has_variable(e: &Expr) -> bool {
-    match &e.node {
-        Node::Num(_) => false,
-        Node::Var(_) => true,
-        Node::Neg(a) | Node::Call(_, a) => has_variable(a),
-        Node::Pow(a, b) => has_variable(a) || has_variable(b),
-        Node::Sum(terms) | Node::Product(terms) => terms.iter().any(|(_, t)| has_variable(t)),
     }
 }
 

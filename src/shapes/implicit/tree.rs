@@ -62,7 +62,7 @@ pub struct Tree {
 }
 
 /// Whether `e` holds x, y or z.
-fn has_variable(e: &Expr) -> bool {
+pub(super) fn has_variable(e: &Expr) -> bool {
     match &e.node {
         Node::Num(_) => false,
         Node::Var(_) => true,
