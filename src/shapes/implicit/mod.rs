@@ -1491,6 +1491,28 @@ impl ImplicitShape {
     /// queries put to `first_root` (the solver's, plain or recorded); `recentred` is set when
     /// a root was re-solved in double-double arithmetic.
     #[inline(always)]
+    /// The nearest hit in `(t_min, t_max)` over `surfaces` (one surface, or a composition's
+    /// level sets), each searched below the nearest hit so far.
+    fn nearest_over<'a>(
+        &self,
+        surfaces: impl IntoIterator<Item = &'a Surface>,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+        first_root: &mut impl FnMut(&[f64], f64, f64) -> Option<f64>,
+        recentred: &mut bool,
+    ) -> Option<f64> {
+        let mut nearest = None;
+        let mut far = t_max;
+        for s in surfaces {
+            if let Some(t) = self.intersect_generic(s, ray, t_min, far, first_root, recentred) {
+                nearest = Some(t);
+                far = t;
+            }
+        }
+        nearest
+    }
+
     fn intersect_generic(
         &self,
         s: &Surface,
@@ -2163,24 +2185,15 @@ impl ObjectShape for ImplicitShape {
                 )
             }
             Kind::Composed(c) => {
-                // The nearest hit over the level sets: each searched below the nearest so far.
                 let solver = self.solver;
-                let mut nearest = None;
-                let mut far = t_max;
-                for (s, _) in &c.levels {
-                    if let Some(t) = self.intersect_generic(
-                        s,
-                        local,
-                        t_min,
-                        far,
-                        &mut |c, lo, hi| solver.first_root(c, lo, hi),
-                        &mut false,
-                    ) {
-                        nearest = Some(t);
-                        far = t;
-                    }
-                }
-                nearest
+                self.nearest_over(
+                    c.levels.iter().map(|(s, _)| s),
+                    local,
+                    t_min,
+                    t_max,
+                    &mut |c, lo, hi| solver.first_root(c, lo, hi),
+                    &mut false,
+                )
             }
             Kind::Heart(h) => {
                 let (lo, hi) = self.heart_span(presets::HEART_RADIUS, local, t_min, t_max)?;
@@ -2264,7 +2277,7 @@ impl ObjectShape for ImplicitShape {
         t_min: f64,
         t_max: f64,
     ) -> Option<SolverReport> {
-        let s = match &self.kind {
+        let surfaces: Vec<&Surface> = match &self.kind {
             Kind::Heart(h) => {
                 let (lo, hi) = self.heart_span(presets::HEART_RADIUS, local, t_min, t_max)?;
                 return h.solver_report(at, world, local, lo, hi);
@@ -2274,27 +2287,20 @@ impl ObjectShape for ImplicitShape {
                 let heart_local = m.at.ray_to_object(world);
                 return m.heart.solver_report(&m.at, world, &heart_local, lo, hi);
             }
-            Kind::Generic(s) => std::slice::from_ref(s.as_ref()),
+            Kind::Generic(s) => vec![s.as_ref()],
             // Every level set's queries in turn, each below the nearest hit so far.
-            Kind::Composed(c) => &c.levels.iter().map(|(s, _)| s.clone()).collect::<Vec<_>>(),
+            Kind::Composed(c) => c.levels.iter().map(|(s, _)| s).collect(),
         };
         let mut recorder = Recorder::new(self.solver);
         let mut recentred = false;
-        let mut hit = None;
-        let mut far = t_max;
-        for s in s {
-            if let Some(t) = self.intersect_generic(
-                s,
-                local,
-                t_min,
-                far,
-                &mut |c, lo, hi| recorder.first_root(c, lo, hi),
-                &mut recentred,
-            ) {
-                hit = Some(t);
-                far = t;
-            }
-        }
+        let hit = self.nearest_over(
+            surfaces.iter().copied(),
+            local,
+            t_min,
+            t_max,
+            &mut |c, lo, hi| recorder.first_root(c, lo, hi),
+            &mut recentred,
+        );
         if recentred {
             recorder.recentred();
         }
@@ -2302,7 +2308,7 @@ impl ObjectShape for ImplicitShape {
             let p = local.at(t);
             match &self.kind {
                 Kind::Composed(c) => c.gradient(p).length(),
-                _ => s[0].gradient(p).length(),
+                _ => surfaces[0].gradient(p).length(),
             }
         });
         recorder.finish(hit, false, gradient)
