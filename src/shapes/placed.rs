@@ -196,6 +196,26 @@ pub trait ObjectShape: Send + Sync + std::fmt::Debug {
             self.intersect(at, &world[i], &local[i], t_min[i], t_max[i])
         })
     }
+    /// [`ObjectShape::intersect_lanes`] of the world rays `world`, each lane's object-space ray
+    /// made by `at`'s frame ([`Frame::ray_to_object`]), for a placement that is not the
+    /// identity: the same answers. A shape may map the rays its own way if each lane's
+    /// object-space ray is the same bits (the heart maps them in vector registers).
+    #[inline]
+    fn intersect_lanes_mapped(
+        &self,
+        at: &Placement,
+        world: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [Option<f64>; LANES] {
+        // Made fresh from the world rays, not updated in place: an in-place update reads
+        // each ray back in wide loads while the copy's narrower stores are pending. By the
+        // frame itself: the caller has ruled out the identity, once for the group (asked
+        // again in each lane's mapping, it cost Barth's sextic 1.9 %).
+        let frame = at.frame();
+        let local: [Ray; LANES] = std::array::from_fn(|i| frame.ray_to_object(&world[i]));
+        self.intersect_lanes(at, world, &local, t_min, t_max)
+    }
     /// Unit outward world normal at the object-space point `q` on the surface.
     fn normal(&self, at: &Placement, q: DVec3) -> DVec3;
     /// [`ObjectShape::normal`] at the [`LANES`] object-space points `q` where `live` is set:
@@ -320,14 +340,8 @@ impl<S: ObjectShape> Shape for Placed<S> {
                 .shape
                 .intersect_lanes(&self.at, rays, rays, t_min, t_max);
         }
-        // Made fresh from the world rays, not updated in place: an in-place update reads
-        // each ray back in wide loads while the copy's narrower stores are pending. By the
-        // frame itself: the identity is ruled out above, once for the group (asked again in
-        // each lane's mapping, it cost Barth's sextic 1.9 %).
-        let frame = self.at.frame();
-        let local: [Ray; LANES] = std::array::from_fn(|i| frame.ray_to_object(&rays[i]));
         self.shape
-            .intersect_lanes(&self.at, rays, &local, t_min, t_max)
+            .intersect_lanes_mapped(&self.at, rays, t_min, t_max)
     }
 
     #[inline]

@@ -205,6 +205,44 @@ impl HeartShape {
         })
     }
 
+    /// Steps 4–6 of the module doc for the lanes' chords from [`lanes::chords`] (`alive`,
+    /// `chords`, `by_power` as it wrote them): each live lane's first hit before `t_max[i]`.
+    #[inline(always)]
+    fn hits_on_chords(
+        &self,
+        alive: [bool; LANES],
+        chords: &std::mem::MaybeUninit<[Chord; LANES]>,
+        by_power: &lanes::ByPower,
+        t_max: [f64; LANES],
+    ) -> [Option<f64>; LANES] {
+        if alive == [false; LANES] {
+            return [None; LANES];
+        }
+        // SAFETY: `lanes::chords` writes every chord when a lane is alive; borrowed, not
+        // copied out.
+        let chords = unsafe { chords.assume_init_ref() };
+        let solver = self.solver;
+        // Every chord's first query, `(0, 1]`, for the lanes at once (the sextics already laid
+        // out by power); a lane's later queries (past a root the checks skipped) one at a time.
+        let first = solver.first_root_lanes_by_power(&by_power, [0.0; LANES], [1.0; LANES], alive);
+        let mut hits = [None; LANES];
+        for (i, hit) in hits.iter_mut().enumerate() {
+            if alive[i] {
+                let mut first = Some(first[i]);
+                *hit = Self::hit_on_chord(
+                    &chords[i],
+                    t_max[i],
+                    |c, lo, hi| match first.take() {
+                        Some(answer) => answer,
+                        None => solver.first_root(c, lo, hi),
+                    },
+                    &mut false,
+                );
+            }
+        }
+        hits
+    }
+
     /// Steps 4–6 of the module doc on a chord from [`HeartShape::chord`]: the first hit
     /// before `t_max`, with `polished` as for [`HeartShape::intersect_with`]. Its first query
     /// is always `first_root(&chord.coeffs, 0.0, 1.0)` (the lanes answer it ahead).
@@ -423,34 +461,23 @@ impl ObjectShape for HeartShape {
         t_min: [f64; LANES],
         t_max: [f64; LANES],
     ) -> [Option<f64>; LANES] {
-        let solver = self.solver;
         let mut chords = std::mem::MaybeUninit::uninit();
-        let alive = lanes::chords(at, local, t_min, t_max, &mut chords);
-        // SAFETY: `lanes::chords` writes every chord; borrowed, not copied out.
-        let chords = unsafe { chords.assume_init_ref() };
-        // Every chord's first query, `(0, 1]`, for the lanes at once; a lane's later queries
-        // (past a root the checks skipped) one at a time.
-        let mut coeffs = [[0.0; 7]; LANES];
-        for (c, chord) in coeffs.iter_mut().zip(chords) {
-            *c = chord.coeffs;
-        }
-        let first = solver.first_root_lanes(&coeffs, [0.0; LANES], [1.0; LANES], alive);
-        let mut hits = [None; LANES];
-        for (i, hit) in hits.iter_mut().enumerate() {
-            if alive[i] {
-                let mut first = Some(first[i]);
-                *hit = Self::hit_on_chord(
-                    &chords[i],
-                    t_max[i],
-                    |c, lo, hi| match first.take() {
-                        Some(answer) => answer,
-                        None => solver.first_root(c, lo, hi),
-                    },
-                    &mut false,
-                );
-            }
-        }
-        hits
+        let mut by_power = [[0.0; LANES]; 7];
+        let alive = lanes::chords(at, local, t_min, t_max, &mut chords, &mut by_power);
+        self.hits_on_chords(alive, &chords, &by_power, t_max)
+    }
+
+    fn intersect_lanes_mapped(
+        &self,
+        at: &Placement,
+        world: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+    ) -> [Option<f64>; LANES] {
+        let mut chords = std::mem::MaybeUninit::uninit();
+        let mut by_power = [[0.0; LANES]; 7];
+        let alive = lanes::chords_of_world(at, world, t_min, t_max, &mut chords, &mut by_power);
+        self.hits_on_chords(alive, &chords, &by_power, t_max)
     }
 
     fn solver_report(
