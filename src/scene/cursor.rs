@@ -53,6 +53,12 @@ pub(super) enum NumberError {
 /// A finite f64 written in any notation Rust's `f64::from_str` accepts, other than NaN and
 /// infinities (which are rejected with a reason).
 pub(super) fn parse_number(s: &str) -> std::result::Result<f64, NumberError> {
+    // A whole number of at most 15 digits (the `0` of a basis vector, a count) is below 2⁵³,
+    // so its f64 is exact: the same value `f64::from_str` rounds to, without its parser.
+    if (1..=15).contains(&s.len()) && s.bytes().all(|b| b.is_ascii_digit()) {
+        let whole = s.bytes().fold(0u64, |n, b| n * 10 + u64::from(b - b'0'));
+        return Ok(whole as f64);
+    }
     match s.parse::<f64>() {
         Ok(x) if x.is_finite() => Ok(x),
         Ok(x) if x.is_nan() => Err(NumberError::NotFinite("is not a number (NaN)")),
@@ -533,6 +539,34 @@ mod tests {
         }
         for s in ["abc", "1.2.3", "0x10", "", "1e"] {
             assert_eq!(parse_number(s), Err(NumberError::NotANumber), "{s}");
+        }
+    }
+
+    #[test]
+    fn whole_numbers_read_as_the_standard_parser_reads_them() {
+        // Every length up to and beyond the shortcut's 15 digits, leading zeros, the
+        // largest of each length and the neighbours of 2⁵³.
+        let mut words: Vec<String> = vec!["0".into(), "000".into(), "0009".into()];
+        let mut x: u64 = 0x2545_f491_4f6c_dd1d;
+        for len in 1..=20 {
+            words.push("9".repeat(len));
+            words.push(format!("1{}", "0".repeat(len - 1)));
+            for _ in 0..200 {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                let digits: String = (0..len)
+                    .map(|k| char::from(b'0' + ((x >> (3 * (k % 20))) % 10) as u8))
+                    .collect();
+                words.push(digits);
+            }
+        }
+        for n in [(1u64 << 53) - 1, 1 << 53, (1 << 53) + 1] {
+            words.push(n.to_string());
+        }
+        for w in &words {
+            let want = w.parse::<f64>().unwrap();
+            assert_eq!(parse_number(w).map(f64::to_bits), Ok(want.to_bits()), "{w}");
         }
     }
 }

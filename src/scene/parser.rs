@@ -487,35 +487,39 @@ impl Builder {
         cur: &mut Cursor,
         origin: &str,
         names: [&str; 3],
-    ) -> Result<([DVec3; 4], Span, Material)> {
+    ) -> Result<([DVec3; 4], Span, Material, Frame)> {
         let p = cur.point(origin)?;
         let (u, v, w) = basis(cur, names)?;
         let m = surface(cur, &self.materials)?;
         end_after_surface(cur)?;
-        check_frame(cur, &p, [&u, &v, &w], names)?;
-        Ok(([p.v, u.v, v.v, w.v], Cursor::join(&u.span, &w.span), m))
+        let frame = check_frame(cur, &p, [&u, &v, &w], names)?;
+        Ok((
+            [p.v, u.v, v.v, w.v],
+            Cursor::join(&u.span, &w.span),
+            m,
+            frame,
+        ))
     }
 
     fn parallelepiped(&mut self, cur: &mut Cursor) -> Result<()> {
         let names = ["edge1", "edge2", "edge3"];
-        let ([p, u, v, w], span, m) = self.placed(cur, "the box's corner", names)?;
+        let ([p, u, v, w], span, m, _) = self.placed(cur, "the box's corner", names)?;
         let s = Parallelepiped::new(p, u, v, w).map_err(|e| shape_error(cur, span, e))?;
         self.add(cur, Box::new(s), m)
     }
 
     fn ellipsoid(&mut self, cur: &mut Cursor) -> Result<()> {
         let names = ["u", "v", "w"];
-        let ([p, u, v, w], span, m) = self.placed(cur, "the ellipsoid's centre", names)?;
+        let ([p, u, v, w], span, m, _) = self.placed(cur, "the ellipsoid's centre", names)?;
         let s = Ellipsoid::new(p, u, v, w).map_err(|e| shape_error(cur, span, e))?;
         self.add(cur, Box::new(s), m)
     }
 
     fn heart(&mut self, cur: &mut Cursor) -> Result<()> {
         let names = ["u", "v", "w"];
-        let ([p, u, v, w], span, m) = self.placed(cur, "the heart's position", names)?;
-        let s = Heart::new(p, u, v, w)
-            .map_err(|e| shape_error(cur, span, e))?
-            .with_solver(self.options.solver);
+        // The frame checked with the numbers, not made again from them.
+        let (_, _, m, frame) = self.placed(cur, "the heart's position", names)?;
+        let s = Heart::from_frame(frame).with_solver(self.options.solver);
         self.add(cur, Box::new(s), m)
     }
 
