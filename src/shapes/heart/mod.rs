@@ -224,7 +224,7 @@ impl HeartShape {
         let solver = self.solver;
         // Every chord's first query, `(0, 1]`, for the lanes at once (the sextics already laid
         // out by power); a lane's later queries (past a root the checks skipped) one at a time.
-        let first = solver.first_root_lanes_by_power(&by_power, [0.0; LANES], [1.0; LANES], alive);
+        let first = solver.first_root_lanes_by_power(by_power, [0.0; LANES], [1.0; LANES], alive);
         let mut hits = [None; LANES];
         for (i, hit) in hits.iter_mut().enumerate() {
             if alive[i] {
