@@ -304,14 +304,14 @@ pub fn encode_png_streaming_tagged<R>(
     tag: Option<FileTag>,
     produce: impl FnOnce(&RowSink) -> R,
 ) -> (R, Result<(), OutputError>) {
-    let (sender, receiver) = std::sync::mpsc::channel();
+    let queue = std::sync::Arc::new(RowQueue::default());
     std::thread::scope(|scope| {
-        let encoder =
-            scope.spawn(move || encode_png_rows(out, width, height, alpha, tag, receiver));
+        let runs = RunsInOrder(queue.clone());
+        let encoder = scope.spawn(move || encode_png_rows(out, width, height, alpha, tag, runs));
         let sink = RowSink {
             width: width as usize,
             alpha,
-            sender,
+            queue,
         };
         let result = produce(&sink);
         drop(sink); // ends the encoder's input
@@ -328,7 +328,7 @@ pub struct RowSink {
     width: usize,
     /// Whether the PNG is RGBA.
     alpha: bool,
-    sender: std::sync::mpsc::Sender<(u32, Vec<u8>)>,
+    queue: std::sync::Arc<RowQueue>,
 }
 
 impl RowSink {
@@ -348,7 +348,92 @@ impl RowSink {
             srgb8_into(pixels, &mut bytes);
             bytes
         };
-        let _ = self.sender.send((first_row, bytes));
+        self.queue.push(first_row, bytes);
+    }
+}
+
+impl Drop for RowSink {
+    /// No more rows: the encoder finishes the file with what it has (also when the producer
+    /// panicked, so that the encoder's thread ends).
+    fn drop(&mut self) {
+        self.queue.lock().closed = true;
+        self.queue.arrived.notify_one();
+    }
+}
+
+/// The runs of rows handed over and not yet taken by the encoder, shared by the producer's
+/// threads and the encoder's.
+#[derive(Default)]
+struct RowQueue {
+    state: std::sync::Mutex<QueueState>,
+    /// Told when the run the encoder needs next has arrived, and when the input ends.
+    arrived: std::sync::Condvar,
+}
+
+#[derive(Default)]
+struct QueueState {
+    /// Runs handed over since the encoder last looked: (first row, sRGB bytes).
+    runs: Vec<(u32, Vec<u8>)>,
+    /// The first row the encoder has not compressed nor holds: a run starting here wakes it.
+    /// Runs arriving out of order do not: the encoder could not use them yet, and on two
+    /// cores waking it only takes a core from a render thread.
+    wanted: u32,
+    /// The producer is done.
+    closed: bool,
+    /// The encoder has stopped (finished or failed): rows are dropped.
+    stopped: bool,
+}
+
+impl RowQueue {
+    fn lock(&self) -> std::sync::MutexGuard<'_, QueueState> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Queues a run, waking the encoder if it is the one it waits for; returns whether it
+    /// did (a run handed over after the encoder stopped is dropped and wakes nothing).
+    fn push(&self, first_row: u32, bytes: Vec<u8>) -> bool {
+        let mut state = self.lock();
+        if state.stopped {
+            return false;
+        }
+        let wanted = first_row == state.wanted;
+        state.runs.push((first_row, bytes));
+        drop(state);
+        if wanted {
+            self.arrived.notify_one();
+        }
+        wanted
+    }
+}
+
+/// The encoder's side of a [`RowQueue`]: runs in the order they arrived, handed over once the
+/// encoder can use one (or the input has ended); marks the queue stopped when dropped.
+struct RunsInOrder(std::sync::Arc<RowQueue>);
+
+impl RunsInOrder {
+    /// Waits until a run starting at `wanted` has arrived or the input has ended; returns the
+    /// runs that arrived meanwhile (in arrival order) and whether the input has ended.
+    fn next_batch(&self, wanted: u32) -> (Vec<(u32, Vec<u8>)>, bool) {
+        let mut state = self.0.lock();
+        state.wanted = wanted;
+        loop {
+            if state.closed || state.runs.iter().any(|run| run.0 == wanted) {
+                return (std::mem::take(&mut state.runs), state.closed);
+            }
+            state = self
+                .0
+                .arrived
+                .wait(state)
+                .unwrap_or_else(|e| e.into_inner());
+        }
+    }
+}
+
+impl Drop for RunsInOrder {
+    fn drop(&mut self) {
+        let mut state = self.0.lock();
+        state.stopped = true;
+        state.runs.clear();
     }
 }
 
@@ -360,7 +445,7 @@ fn encode_png_rows(
     height: u32,
     alpha: bool,
     tag: Option<FileTag>,
-    runs: std::sync::mpsc::Receiver<(u32, Vec<u8>)>,
+    runs: RunsInOrder,
 ) -> Result<(), String> {
     if width == 0 || height == 0 {
         return Err(format!("the image is {width}×{height}"));
@@ -385,17 +470,26 @@ fn encode_png_rows(
     let row_bytes = channels * width as usize;
     let mut waiting = std::collections::BTreeMap::new();
     let mut next_row = 0u32;
-    for (first_row, bytes) in runs {
-        if bytes.len() % row_bytes != 0 || first_row < next_row || waiting.contains_key(&first_row)
-        {
-            return Err(format!("rows from {first_row} handed over twice or cut"));
+    loop {
+        let (arrived, closed) = runs.next_batch(next_row);
+        for (first_row, bytes) in arrived {
+            if bytes.len() % row_bytes != 0
+                || first_row < next_row
+                || waiting.contains_key(&first_row)
+            {
+                return Err(format!("rows from {first_row} handed over twice or cut"));
+            }
+            waiting.insert(first_row, bytes);
         }
-        waiting.insert(first_row, bytes);
         while let Some(bytes) = waiting.remove(&next_row) {
             stream.write_all(&bytes).map_err(|e| e.to_string())?;
             next_row += (bytes.len() / row_bytes) as u32;
         }
+        if closed {
+            break;
+        }
     }
+    drop(runs);
     if next_row != height || !waiting.is_empty() {
         return Err(format!("only rows 0..{next_row} of {height} were made"));
     }
@@ -587,6 +681,54 @@ mod tests {
             assert_eq!(a.to_rgba8(), b.to_rgba8());
             assert_eq!(listing_len(dir.path()), 2, "a temporary file was left");
         }
+    }
+
+    #[test]
+    fn only_the_run_the_encoder_waits_for_wakes_it() {
+        let queue = std::sync::Arc::new(RowQueue::default());
+        let runs = RunsInOrder(queue.clone());
+        // Bands finishing out of order (two render threads): the encoder, waiting for row 0,
+        // is woken by row 0's run alone, and then takes both.
+        assert!(!queue.push(16, vec![1; 3]));
+        assert!(queue.push(0, vec![0; 3]));
+        let (batch, closed) = runs.next_batch(0);
+        assert_eq!(batch.iter().map(|run| run.0).collect::<Vec<_>>(), [16, 0]);
+        assert!(!closed);
+        // Now waiting for row 32 (it returns at once when that run is already there).
+        let waiter = std::thread::spawn(move || {
+            let batch = runs.next_batch(32);
+            (batch, runs)
+        });
+        while queue.lock().wanted != 32 {
+            std::thread::yield_now();
+        }
+        assert!(!queue.push(48, vec![3; 3]));
+        assert!(queue.push(32, vec![2; 3]));
+        let ((batch, closed), runs) = waiter.join().unwrap();
+        assert_eq!(batch.iter().map(|run| run.0).collect::<Vec<_>>(), [48, 32]);
+        assert!(!closed);
+        drop(runs); // the encoder stopped: later rows are dropped
+        assert!(!queue.push(64, vec![4; 3]));
+        assert!(queue.lock().runs.is_empty());
+    }
+
+    #[test]
+    fn a_producer_that_panics_does_not_leave_the_encoder_waiting() {
+        let (done, finished) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let img = Image::new(4, 3);
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                encode_png_streaming(Vec::new(), 4, 3, false, |sink| {
+                    sink.rows(1, &img.pixels[4..8], None); // not the row the encoder waits for
+                    panic!("the render failed");
+                })
+            }));
+            let _ = done.send(result.is_err());
+        });
+        let panicked = finished
+            .recv_timeout(std::time::Duration::from_secs(20))
+            .expect("the encoder thread was left waiting for rows");
+        assert!(panicked);
     }
 
     #[test]
