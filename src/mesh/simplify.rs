@@ -135,7 +135,8 @@ struct TriangleGrid {
 
 impl TriangleGrid {
     /// An empty hierarchy over the cube `[−radius, radius]³`, the finest cells of side about
-    /// `cell`, each next level's twice as large, the last one cell.
+    /// `cell`, each next level's four times as large (fewer levels to look in), the last one
+    /// cell.
     fn new(radius: f64, cell: f64) -> Self {
         let mut levels = Vec::new();
         let mut dims = ((2.0 * radius / cell).ceil() as u64).clamp(1, 1 << 20);
@@ -145,7 +146,7 @@ impl TriangleGrid {
             if dims == 1 {
                 break;
             }
-            dims = dims.div_ceil(2);
+            dims = dims.div_ceil(4);
         }
         Self {
             lo: -radius,
@@ -273,8 +274,8 @@ impl Work<'_> {
     /// The first-order distance estimate of `p` from the part `surface` (φ = 0) or the sphere.
     fn off(&self, p: DVec3, surface: bool) -> f64 {
         if surface {
-            let g = self.field.gradient(p, self.h).length();
-            let v = self.field.value(p).abs();
+            let (v, g) = self.field.value_and_gradient(p, self.h);
+            let (v, g) = (v.abs(), g.length());
             if g > 0.0 {
                 v / g
             } else if v == 0.0 {
@@ -613,7 +614,7 @@ pub fn coarsen(
         .zip(kinds.par_iter())
         .map(|(&p, k)| {
             if k.on_surface() {
-                field.gradient(p, h).normalize_or_zero()
+                field.value_and_gradient(p, h).1.normalize_or_zero()
             } else {
                 DVec3::ZERO
             }
