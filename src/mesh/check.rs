@@ -246,13 +246,27 @@ pub fn crossing_triangles(mesh: &TriangleMesh) -> Vec<(usize, usize)> {
 /// Whether triangles `i` and `j` meet anywhere but in what they share (see
 /// [`crossing_triangles`]).
 fn triangles_cross(mesh: &TriangleMesh, i: usize, j: usize) -> bool {
-    let (ti, tj) = (mesh.triangles[i], mesh.triangles[j]);
+    triangles_meet(mesh.triangles[i], mesh.triangles[j], &mesh.vertices)
+}
+
+/// Whether the triangles `ti` and `tj` (indices into `vertices`) meet anywhere but in the
+/// corners and sides they share: the exact test [`verify`] makes on every candidate pair,
+/// for callers that keep their own triangles (the coarsening's test of each new fan).
+pub fn triangles_meet(ti: [u32; 3], tj: [u32; 3], vertices: &[DVec3]) -> bool {
     let (pi, pj) = (
-        ti.map(|v| mesh.vertices[v as usize]),
-        tj.map(|v| mesh.vertices[v as usize]),
+        ti.map(|v| vertices[v as usize]),
+        tj.map(|v| vertices[v as usize]),
     );
-    let shared: Vec<u32> = ti.iter().filter(|v| tj.contains(v)).copied().collect();
-    match shared.len() {
+    let mut shared = [u32::MAX; 3];
+    let mut count = 0;
+    for &v in &ti {
+        if tj.contains(&v) {
+            shared[count] = v;
+            count += 1;
+        }
+    }
+    let shared = &shared[..count];
+    match count {
         0 => (0..3).any(|k| {
             segment_crosses(pi[k], pi[(k + 1) % 3], pj)
                 || segment_crosses(pj[k], pj[(k + 1) % 3], pi)
@@ -269,11 +283,10 @@ fn triangles_cross(mesh: &TriangleMesh, i: usize, j: usize) -> bool {
         }
         2 => {
             // Sharing an edge u v: they overlap only when folded flat onto the same side.
-            let u = mesh.vertices[shared[0] as usize];
-            let v = mesh.vertices[shared[1] as usize];
-            let other = |t: [u32; 3]| {
-                mesh.vertices[*t.iter().find(|w| !shared.contains(w)).unwrap() as usize]
-            };
+            let u = vertices[shared[0] as usize];
+            let v = vertices[shared[1] as usize];
+            let other =
+                |t: [u32; 3]| vertices[*t.iter().find(|w| !shared.contains(w)).unwrap() as usize];
             let (a, b) = (other(ti), other(tj));
             let na = (v - u).cross(a - u);
             let nb = (v - u).cross(b - u);

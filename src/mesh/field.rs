@@ -383,6 +383,31 @@ impl Field {
         })
     }
 
+    /// `φ` and its gradient at `p` (object space): the gradient by the exact partial
+    /// derivatives of `f` for the inside and outside (4 evaluations), by central differences
+    /// of step `h` for a shell ([`Field::gradient`]).
+    pub fn value_and_gradient(&self, p: DVec3, h: f64) -> (f64, DVec3) {
+        let q = p.to_array();
+        let exact = || {
+            (
+                self.f.eval(q),
+                DVec3::new(
+                    self.gradient[0].eval(q),
+                    self.gradient[1].eval(q),
+                    self.gradient[2].eval(q),
+                ),
+            )
+        };
+        match self.kind {
+            SolidKind::Inside => exact(),
+            SolidKind::Outside => {
+                let (f, g) = exact();
+                (-f, -g)
+            }
+            SolidKind::Shell { .. } => (self.value(p), self.gradient(p, h)),
+        }
+    }
+
     /// The gradient of `φ` at `p` (object space), by central differences of step `h`.
     pub fn gradient(&self, p: DVec3, h: f64) -> DVec3 {
         let d = |e: DVec3| (self.value(p + e * h) - self.value(p - e * h)) / (2.0 * h);
@@ -438,6 +463,22 @@ mod tests {
 
     fn sphere(kind: SolidKind, clip: f64) -> Field {
         Field::new(&expand("x^2 + y^2 + z^2 = 1").unwrap(), clip, kind)
+    }
+
+    #[test]
+    fn the_exact_gradient_agrees_with_central_differences() {
+        let poly = expand("x^3 + 2*y^2*z - z^2 = 1").unwrap();
+        let p = DVec3::new(0.3, -0.7, 0.4);
+        for kind in [
+            SolidKind::Inside,
+            SolidKind::Outside,
+            SolidKind::Shell { thickness: 0.1 },
+        ] {
+            let field = Field::new(&poly, 2.0, kind);
+            let (v, g) = field.value_and_gradient(p, 1e-6);
+            assert_eq!(v, field.value(p));
+            assert!((g - field.gradient(p, 1e-6)).length() < 1e-7, "{kind:?}");
+        }
     }
 
     #[test]

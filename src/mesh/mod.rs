@@ -300,9 +300,10 @@ pub fn mesh_solid_cancellable(
         return Err(MeshError::Empty);
     }
     let extracted_triangles = extracted.triangles.len();
-    // The collapses keep every guarantee but whether two triangles cross, which the check
-    // decides: where it finds a crossing, the coarsening is redone within half the budget
-    // (twice), and failing that the extracted mesh (which keeps them all) is used.
+    // The collapses keep every guarantee, testing each new fan against the triangles near
+    // it; the check of the whole stays the guarantee: where it finds a fault, the coarsening
+    // is redone within half the budget (twice), and failing that the extracted mesh (which
+    // keeps them all) is used.
     let mut coarsened = None;
     let (mut object_mesh, mut kinds) = (extracted.clone(), extracted_kinds.clone());
     for attempt in 0..COARSEN_ATTEMPTS {
@@ -696,7 +697,9 @@ mod tests {
             &|_, _, _| {},
             &AtomicBool::new(false),
         );
-        assert!(whole.unwrap().mesh.triangles.len() > 1000);
+        // (The sphere's chord error allows a few hundred triangles within half of 0.02.)
+        let triangles = whole.unwrap().mesh.triangles.len();
+        assert!(triangles > 200, "{triangles}");
     }
 
     #[test]

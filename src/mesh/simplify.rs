@@ -14,32 +14,58 @@
 //!   the edge, and neither of them nor `u` has only three neighbours (so the mesh stays a
 //!   closed 2-manifold, one fan about every vertex);
 //! - no new triangle turns by more than [`MAX_TURN_COS`] from the triangle it replaces (no
-//!   normal flips), none is thinner than [`MIN_QUALITY`] unless the one it replaces already
-//!   was, and none has zero area;
+//!   normal flips), none has zero area, and none is thinner than [`MIN_QUALITY`] unless the
+//!   one it replaces already was or it lies along the surface: a thin triangle (down to
+//!   [`THIN_QUALITY`]) is made only where its normal is within [`THIN_NORMAL_COS`] of the
+//!   surface's at each corner, which holds where its long side runs along the direction in
+//!   which the surface curves least (the length of a torus's tube, not around it);
 //! - the accuracy: each new triangle's centroid and edge midpoints are within `budget` of the
 //!   surface by the first-order estimate `|φ|/|∇φ|` (of the sphere: `R − |x|` for a cap
-//!   triangle), and so is the removed vertex of the nearest new triangle (the surface side).
+//!   triangle), and so is the removed vertex of the nearest new triangle (the surface side);
+//! - no new triangle meets a triangle near it (or another new one) other than in the corners
+//!   and sides they share, by the exact test of [`super::check`]; the triangles' boxes are
+//!   kept in a hierarchy of loose grids, updated as triangles change, so each new fan is
+//!   tested only against the triangles whose boxes overlap it.
 //!
 //! Edges are tried shortest first, in passes until a pass removes few vertices; after each
 //! pass, edges are flipped to the other diagonal of their two triangles where that makes
 //! the thinner of the two clearly thicker (which frees further collapses), under the same
 //! conditions for the new triangles and with neither end of the edge left with three
-//! neighbours or fewer. Whether two
-//! triangles cross is decided by [`super::check`] on the finished mesh (the caller falls back
-//! to the uncoarsened mesh if it ever finds one).
+//! neighbours or fewer. The check of the finished mesh ([`super::check::verify`]) stays the
+//! guarantee: the caller falls back to a smaller budget, then to the uncoarsened mesh, if it
+//! ever finds a crossing.
 
 use super::field::{Field, VertexKind};
-use super::TriangleMesh;
+use super::{check, TriangleMesh};
 use crate::geometry::DVec3;
 use crate::shapes::triangles::closest_on_triangle;
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// A new triangle's unit normal must be within this cosine of the replaced triangle's (60°).
 pub const MAX_TURN_COS: f64 = 0.5;
 
 /// The least quality `4√3·area / Σ edge²` (1 for an equilateral triangle, 0 for a flat one)
-/// of a new triangle, unless the triangle it replaces was already thinner.
+/// of a new triangle that need not lie along the surface (see [`THIN_QUALITY`]), unless the
+/// triangle it replaces was already thinner.
 pub const MIN_QUALITY: f64 = 0.2;
+
+/// The least quality of any new triangle: one thinner than [`MIN_QUALITY`] (and than the
+/// one it replaces) is made only if it lies along the surface, its unit normal within
+/// [`THIN_NORMAL_COS`] of the surface's at each of its corners, which holds where its long
+/// side runs along the direction in which the surface curves least.
+pub const THIN_QUALITY: f64 = 0.02;
+
+/// The cosine of the largest angle (about 20°) between a thin new triangle's normal and the
+/// surface's unit normal (`∇φ/|∇φ|`, or the sphere's) at each of its corners.
+pub const THIN_NORMAL_COS: f64 = 0.94;
+
+/// The least height of a thin new triangle over its longest side, as a share of the clip
+/// radius: far above the rounding of the files' `f32` coordinates (about `6e-8` of the
+/// largest coordinate), so no triangle becomes flat or flips when written.
+pub const THIN_HEIGHT_SHARE: f64 = 1e-5;
 
 /// Passes over the edges at most.
 pub const MAX_PASSES: usize = 12;
@@ -66,6 +92,159 @@ pub struct Coarsened {
     pub passes: usize,
 }
 
+/// A triangle in a cell of [`TriangleGrid`], with its bounding box.
+#[derive(Clone, Copy)]
+struct Boxed {
+    triangle: u32,
+    lo: DVec3,
+    hi: DVec3,
+}
+
+/// A hasher for cell indices (a multiply and a fold: the keys are already well spread).
+#[derive(Default)]
+struct CellHasher(u64);
+
+impl std::hash::Hasher for CellHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0 ^ x).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+    fn finish(&self) -> u64 {
+        self.0 ^ (self.0 >> 29)
+    }
+}
+
+/// The occupied cells of one level of [`TriangleGrid`].
+type Cells = HashMap<u64, Vec<Boxed>, BuildHasherDefault<CellHasher>>;
+
+/// The triangles' bounding boxes in a hierarchy of uniform grids over the clip ball (a loose
+/// grid per size), kept up to date as triangles change, so that a new fan is tested only
+/// against the triangles near it. A triangle is kept in one cell: that of its box's centre
+/// in the finest level whose cells are at least as large as its box, so a box query at a
+/// level need only look half a cell beyond the box. Only occupied cells are stored, and a
+/// query that spans more cells of a level than it has occupied ones reads those instead.
+struct TriangleGrid {
+    lo: f64,
+    /// Per level, finest first: the cell side, the cells a side and the occupied cells.
+    levels: Vec<(f64, u64, Cells)>,
+}
+
+impl TriangleGrid {
+    /// An empty hierarchy over the cube `[−radius, radius]³`, the finest cells of side about
+    /// `cell`, each next level's four times as large (fewer levels to look in), the last one
+    /// cell.
+    fn new(radius: f64, cell: f64) -> Self {
+        let mut levels = Vec::new();
+        let mut dims = ((2.0 * radius / cell).ceil() as u64).clamp(1, 1 << 20);
+        loop {
+            let side = 2.0 * radius / dims as f64;
+            levels.push((side, dims, Cells::default()));
+            if dims == 1 {
+                break;
+            }
+            dims = dims.div_ceil(4);
+        }
+        Self {
+            lo: -radius,
+            levels,
+        }
+    }
+
+    /// The index a side of the cell holding coordinate `x` at a level.
+    fn index(&self, x: f64, side: f64, dims: u64) -> u64 {
+        let i = ((x - self.lo) / side).floor();
+        (i.max(0.0) as u64).min(dims - 1)
+    }
+
+    /// The level and the cell that keep a triangle with the box `lo..hi`.
+    fn home(&self, lo: DVec3, hi: DVec3) -> (usize, u64) {
+        let extent = (hi - lo).max_element();
+        let level = self
+            .levels
+            .iter()
+            .position(|l| l.0 >= extent)
+            .unwrap_or(self.levels.len() - 1);
+        let (side, dims, _) = self.levels[level];
+        let c = 0.5 * (lo + hi);
+        let [x, y, z] = [c.x, c.y, c.z].map(|v| self.index(v, side, dims));
+        (level, (x * dims + y) * dims + z)
+    }
+
+    fn insert(&mut self, triangle: u32, c: [DVec3; 3]) {
+        let (lo, hi) = bounds(&c);
+        let (level, cell) = self.home(lo, hi);
+        self.levels[level]
+            .2
+            .entry(cell)
+            .or_default()
+            .push(Boxed { triangle, lo, hi });
+    }
+
+    fn remove(&mut self, triangle: u32, c: [DVec3; 3]) {
+        let (lo, hi) = bounds(&c);
+        let (level, cell) = self.home(lo, hi);
+        let cells = &mut self.levels[level].2;
+        if let Some(list) = cells.get_mut(&cell) {
+            if let Some(k) = list.iter().position(|b| b.triangle == triangle) {
+                list.swap_remove(k);
+            }
+            if list.is_empty() {
+                cells.remove(&cell);
+            }
+        }
+    }
+
+    /// Calls `visit` with every triangle whose box may overlap `lo..hi` (each once), until
+    /// it returns true; whether it did.
+    fn any_near(&self, lo: DVec3, hi: DVec3, mut visit: impl FnMut(&Boxed) -> bool) -> bool {
+        for &(side, dims, ref cells) in &self.levels {
+            if cells.is_empty() {
+                continue;
+            }
+            let reach = DVec3::splat(0.5 * side);
+            let (a, b) = (lo - reach, hi + reach);
+            let [x0, y0, z0] = [a.x, a.y, a.z].map(|v| self.index(v, side, dims));
+            let [x1, y1, z1] = [b.x, b.y, b.z].map(|v| self.index(v, side, dims));
+            let spanned = (x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1);
+            if spanned as usize > cells.len() {
+                if cells.values().flatten().any(&mut visit) {
+                    return true;
+                }
+                continue;
+            }
+            for x in x0..=x1 {
+                for y in y0..=y1 {
+                    for z in z0..=z1 {
+                        if let Some(list) = cells.get(&((x * dims + y) * dims + z)) {
+                            if list.iter().any(&mut visit) {
+                                return true;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+}
+
+/// The bounding box of some points.
+fn bounds(points: &[DVec3]) -> (DVec3, DVec3) {
+    points.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+    )
+}
+
+/// Whether two boxes overlap (closed).
+fn boxes_overlap(a: (DVec3, DVec3), b: (DVec3, DVec3)) -> bool {
+    a.0.cmple(b.1).all() && b.0.cmple(a.1).all()
+}
+
 /// The mesh being coarsened: triangles with a live flag and the triangles about each vertex.
 struct Work<'a> {
     field: &'a Field,
@@ -80,6 +259,11 @@ struct Work<'a> {
     stamp: u32,
     budget: f64,
     h: f64,
+    /// Every live triangle's box, for the local crossing test.
+    grid: TriangleGrid,
+    /// The unit normal of `φ = 0` (`∇φ/|∇φ|`, zero where `∇φ` vanishes) at each vertex on the
+    /// surface; zero at the others.
+    surface_normals: Vec<DVec3>,
 }
 
 impl Work<'_> {
@@ -90,8 +274,8 @@ impl Work<'_> {
     /// The first-order distance estimate of `p` from the part `surface` (φ = 0) or the sphere.
     fn off(&self, p: DVec3, surface: bool) -> f64 {
         if surface {
-            let g = self.field.gradient(p, self.h).length();
-            let v = self.field.value(p).abs();
+            let (v, g) = self.field.value_and_gradient(p, self.h);
+            let (v, g) = (v.abs(), g.length());
             if g > 0.0 {
                 v / g
             } else if v == 0.0 {
@@ -102,6 +286,76 @@ impl Work<'_> {
         } else {
             (self.field.radius() - p.length()).abs()
         }
+    }
+
+    /// The unit normal of the part (`surface` or the sphere) at vertex `w`.
+    fn part_normal(&self, w: u32, surface: bool) -> DVec3 {
+        if surface {
+            self.surface_normals[w as usize]
+        } else {
+            self.vertices[w as usize].normalize_or_zero()
+        }
+    }
+
+    /// Whether a new triangle `tri` may be as thin as it is: of quality at least
+    /// [`MIN_QUALITY`] (or of `old_quality`, that of the one it replaces, if lower), or else of
+    /// at least [`THIN_QUALITY`], [`THIN_HEIGHT_SHARE`] of the radius high, and lying along the
+    /// part (its normal within [`THIN_NORMAL_COS`] of the part's at every corner).
+    fn thin_enough(&self, tri: [u32; 3], old_quality: f64, surface: bool) -> bool {
+        let p = self.corners(tri);
+        let q = quality(p);
+        if q >= MIN_QUALITY.min(old_quality) {
+            return true;
+        }
+        if q < THIN_QUALITY {
+            return false;
+        }
+        let normal = (p[1] - p[0]).cross(p[2] - p[0]);
+        let longest = (p[1] - p[0])
+            .length()
+            .max((p[2] - p[1]).length())
+            .max((p[0] - p[2]).length());
+        if normal.length() < THIN_HEIGHT_SHARE * self.field.radius() * longest {
+            return false;
+        }
+        let n = normal.normalize_or_zero();
+        tri.iter()
+            .all(|&w| n.dot(self.part_normal(w, surface)) >= THIN_NORMAL_COS)
+    }
+
+    /// Whether any of the triangles `new` (replacing the triangles `replaced`, which are
+    /// left out) would meet a live triangle near it, or another of `new`, other than in the
+    /// corners and sides they share.
+    fn would_cross(&self, new: &[[u32; 3]], replaced: &[u32]) -> bool {
+        let boxes: Vec<(DVec3, DVec3)> = new.iter().map(|&t| bounds(&self.corners(t))).collect();
+        let all = boxes
+            .iter()
+            .fold(boxes[0], |(lo, hi), b| (lo.min(b.0), hi.max(b.1)));
+        let near = self.grid.any_near(all.0, all.1, |b| {
+            boxes_overlap(all, (b.lo, b.hi))
+                && !replaced.contains(&b.triangle)
+                && new.iter().zip(&boxes).any(|(&t, &tb)| {
+                    boxes_overlap(tb, (b.lo, b.hi))
+                        && check::triangles_meet(
+                            t,
+                            self.triangles[b.triangle as usize],
+                            self.vertices,
+                        )
+                })
+        });
+        if near {
+            return true;
+        }
+        for i in 0..new.len() {
+            for j in i + 1..new.len() {
+                if boxes_overlap(boxes[i], boxes[j])
+                    && check::triangles_meet(new[i], new[j], self.vertices)
+                {
+                    return true;
+                }
+            }
+        }
+        false
     }
 
     /// Flips the edge `a b` of live triangle `t` (its `k`-th side) to the other diagonal of
@@ -166,6 +420,13 @@ impl Work<'_> {
                 return false;
             }
         }
+        if self.would_cross(&[new1, new2], &[t, t2]) {
+            return false;
+        }
+        self.grid.remove(t, o1);
+        self.grid.remove(t2, o2);
+        self.grid.insert(t, n1);
+        self.grid.insert(t2, n2);
         self.triangles[t as usize] = new1;
         self.triangles[t2 as usize] = new2;
         self.around[a as usize].retain(|&x| x != t2);
@@ -244,6 +505,7 @@ impl Work<'_> {
         let target = self.vertices[v as usize];
         let removed_at = self.vertices[u as usize];
         let mut nearest_to_removed = f64::INFINITY;
+        let mut new_triangles = Vec::with_capacity(self.around[u as usize].len());
         for &t in &self.around[u as usize] {
             if shared.contains(&t) {
                 continue;
@@ -257,9 +519,10 @@ impl Work<'_> {
             if !(l_new > 0.0 && l_old > 0.0) || n_old.dot(n_new) < MAX_TURN_COS * l_old * l_new {
                 return false;
             }
-            if quality(new) < MIN_QUALITY.min(quality(old)) {
+            if !self.thin_enough(new_tri, quality(old), surface) {
                 return false;
             }
+            new_triangles.push(new_tri);
             let centroid = (new[0] + new[1] + new[2]) / 3.0;
             let k = new_tri.iter().position(|&w| w == v).unwrap();
             let (b, c) = (new[(k + 1) % 3], new[(k + 2) % 3]);
@@ -274,7 +537,17 @@ impl Work<'_> {
         if nearest_to_removed > self.budget {
             return false;
         }
+        let fan = std::mem::take(&mut self.around[u as usize]);
+        let crossed = self.would_cross(&new_triangles, &fan);
+        self.around[u as usize] = fan;
+        if crossed {
+            return false;
+        }
         // Made: the two triangles on the edge go, the rest of u's fan turns to v.
+        for &t in &self.around[u as usize] {
+            let corners = self.corners(self.triangles[t as usize]);
+            self.grid.remove(t, corners);
+        }
         for &t in &shared {
             self.alive[t as usize] = false;
             let tri = self.triangles[t as usize];
@@ -294,6 +567,8 @@ impl Work<'_> {
                     *w = v;
                 }
             }
+            let corners = self.corners(self.triangles[t as usize]);
+            self.grid.insert(t, corners);
             self.around[v as usize].push(t);
         }
         self.removed[u as usize] = true;
@@ -321,6 +596,30 @@ pub fn coarsen(
             around[v as usize].push(t as u32);
         }
     }
+    // The finest cells about twice the triangles' mean longest side at the start.
+    let mut longest = 0.0;
+    for t in 0..mesh.triangles.len() {
+        let [a, b, c] = mesh.corners(t);
+        longest += (b - a).length().max((c - b).length()).max((a - c).length());
+    }
+    let cell = 2.0 * longest / mesh.triangles.len().max(1) as f64;
+    let mut grid = TriangleGrid::new(field.radius() * (1.0 + 1e-9), cell.max(1e-12));
+    for t in 0..mesh.triangles.len() {
+        grid.insert(t as u32, mesh.corners(t));
+    }
+    let h = 1e-7 * field.radius();
+    let surface_normals: Vec<DVec3> = mesh
+        .vertices
+        .par_iter()
+        .zip(kinds.par_iter())
+        .map(|(&p, k)| {
+            if k.on_surface() {
+                field.value_and_gradient(p, h).1.normalize_or_zero()
+            } else {
+                DVec3::ZERO
+            }
+        })
+        .collect();
     let mut work = Work {
         field,
         vertices: &mesh.vertices,
@@ -332,7 +631,9 @@ pub fn coarsen(
         mark: vec![0; n],
         stamp: 0,
         budget,
-        h: 1e-7 * field.radius(),
+        h,
+        grid,
+        surface_normals,
     };
     let mut done = Coarsened::default();
     let i_cancelled = |i: usize| i.is_multiple_of(4096) && cancel.load(Ordering::Relaxed);
@@ -414,6 +715,115 @@ mod tests {
         let equilateral = [DVec3::ZERO, DVec3::X, DVec3::new(0.5, 0.75f64.sqrt(), 0.0)];
         assert!((quality(equilateral) - 1.0).abs() < 1e-12);
         assert_eq!(quality([DVec3::ZERO, DVec3::X, DVec3::X * 2.0]), 0.0);
+    }
+
+    #[test]
+    fn the_triangle_grid_finds_every_box_that_overlaps_a_query_as_triangles_change() {
+        // Triangles of many sizes (a few much larger than the finest cells) in a ball of
+        // radius 2; some moved, some removed; every query must see every overlapping box.
+        let mut seed = 12345u64;
+        let mut random = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut point = |scale: f64, at: DVec3| {
+            at + scale * DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5)
+        };
+        let mut grid = TriangleGrid::new(2.0, 0.05);
+        let mut triangles: Vec<Option<[DVec3; 3]>> = Vec::new();
+        for i in 0..3000 {
+            let at = point(2.2, DVec3::ZERO);
+            let size = [0.02, 0.1, 0.5, 2.0][i % 4];
+            let t = [point(size, at), point(size, at), point(size, at)]
+                .map(|p| p.clamp(DVec3::splat(-2.0), DVec3::splat(2.0)));
+            grid.insert(i as u32, t);
+            triangles.push(Some(t));
+        }
+        for i in (0..3000).step_by(3) {
+            let old = triangles[i].unwrap();
+            grid.remove(i as u32, old);
+            if i % 2 == 0 {
+                triangles[i] = None;
+            } else {
+                let moved = old.map(|p| (p * 0.5).clamp(DVec3::splat(-2.0), DVec3::splat(2.0)));
+                grid.insert(i as u32, moved);
+                triangles[i] = Some(moved);
+            }
+        }
+        for _ in 0..200 {
+            let (a, b) = (point(2.0, DVec3::ZERO), point(0.3, DVec3::ZERO));
+            let query = (a.min(a + b), a.max(a + b));
+            let mut seen = Vec::new();
+            grid.any_near(query.0, query.1, |b| {
+                seen.push(b.triangle);
+                false
+            });
+            seen.sort_unstable();
+            let count = seen.len();
+            seen.dedup();
+            assert_eq!(seen.len(), count, "a triangle visited twice");
+            for (i, t) in triangles.iter().enumerate() {
+                let Some(t) = t else {
+                    assert!(seen.binary_search(&(i as u32)).is_err(), "removed {i} seen");
+                    continue;
+                };
+                if boxes_overlap(bounds(t), query) {
+                    assert!(seen.binary_search(&(i as u32)).is_ok(), "{i} missed");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_thin_triangle_is_made_only_along_the_surface() {
+        // On the cylinder x² + y² = 1, a thin triangle along the axis lies along the surface;
+        // the same triangle turned across it (around the cylinder) does not.
+        let poly = expand("x^2 + y^2 = 1").unwrap();
+        let field = Field::new(&poly, 3.0, SolidKind::Inside);
+        let at = |angle: f64, z: f64| DVec3::new(angle.cos(), angle.sin(), z);
+        let vertices = vec![
+            at(0.0, 0.0),
+            at(0.05, 0.0),
+            at(0.0, 1.0),
+            at(0.0, 0.0),
+            at(0.3, 0.01),
+            at(0.6, 0.0),
+        ];
+        let kinds = vec![VertexKind::Surface; vertices.len()];
+        let mesh = TriangleMesh {
+            vertices: vertices.clone(),
+            triangles: vec![[0, 1, 2], [3, 4, 5]],
+        };
+        let h = 1e-7;
+        let work = Work {
+            field: &field,
+            vertices: &vertices,
+            kinds: &kinds,
+            triangles: mesh.triangles.clone(),
+            alive: vec![true; 2],
+            around: vec![Vec::new(); vertices.len()],
+            removed: vec![false; vertices.len()],
+            mark: vec![0; vertices.len()],
+            stamp: 0,
+            budget: 1.0,
+            h,
+            grid: TriangleGrid::new(3.0, 0.5),
+            surface_normals: vertices
+                .iter()
+                .map(|&p| field.gradient(p, h).normalize())
+                .collect(),
+        };
+        let (along, across) = (mesh.corners(0), mesh.corners(1));
+        assert!(quality(along) < MIN_QUALITY && quality(along) > THIN_QUALITY);
+        assert!(quality(across) < MIN_QUALITY && quality(across) > THIN_QUALITY);
+        // Outward winding: the normal of [0, 1, 2] points away from the axis.
+        assert!(work.thin_enough([0, 1, 2], 1.0, true));
+        assert!(!work.thin_enough([3, 4, 5], 1.0, true));
+        // Inward (reversed) is refused, and so is either one when only quality counts.
+        assert!(!work.thin_enough([0, 2, 1], 1.0, true));
+        assert!(work.thin_enough([3, 4, 5], 0.01, true));
     }
 
     #[test]
