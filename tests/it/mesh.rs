@@ -485,7 +485,7 @@ fn the_mesh_is_coarser_where_the_surface_is_flatter() {
         clip_radius: 1.5,
         frame: Frame::identity(),
     };
-    let tolerance = 0.02;
+    let tolerance = 0.01;
     let part =
         mesh::mesh_solid(&solid, &request(SolidKind::Inside, tolerance), &|_, _| {}).unwrap();
     check::verify(&part.mesh).unwrap();
