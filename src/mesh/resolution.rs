@@ -140,7 +140,7 @@ pub fn choose(
         let (mesh, kinds) = extract::march_cancellable(field, grid, progress, cancel)?;
         if !last {
             let worst = worst_deviation(field, &mesh, &kinds);
-            if !(worst <= EXTRACT_SHARE * tolerance) {
+            if worst.is_nan() || worst > EXTRACT_SHARE * tolerance {
                 levels.push(Level {
                     grid,
                     rejected: Some(Rejection::Deviation(worst)),
@@ -372,7 +372,7 @@ impl Quiet<'_> {
         for (i, v) in values.iter_mut().enumerate() {
             let (a, b, c) = (i % 3, (i / 3) % 3, i / 9);
             *v = match (a % 2, b % 2, c % 2) {
-                (0, 0, 0) => corners[a / 2 | (b / 2) << 1 | (c / 2) << 2],
+                (0, 0, 0) => corners[(a / 2) | ((b / 2) << 1) | ((c / 2) << 2)],
                 _ => field.value(lo + DVec3::new(a as f64, b as f64, c as f64) * r),
             };
         }
@@ -423,7 +423,7 @@ fn crossed_twice(field: &Field, p: DVec3, q: DVec3, shallow: f64) -> bool {
             let g = field.gradient(mid, 1e-7 * field.radius()).length();
             let depth = field.value(mid).abs() / g;
             let apart = (s1 - s0) * e.length();
-            !(depth <= shallow && depth <= GRAZE * apart)
+            depth.is_nan() || depth > shallow || depth > GRAZE * apart
         }
         ref roots => roots.len() >= 2,
     }
