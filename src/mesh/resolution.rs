@@ -25,13 +25,17 @@
 //!    remainder past the linear part is at most `Q = Σ_{|α|≥2} |a_α| r^{|α|}` on the cube of
 //!    half-side `r`, and the linear part is least at a corner, so `s·φ ≥ min_corners s·φ − 2Q`
 //!    there (`s` the corners' sign; or `s·φ(c) − Σ_{|α|≥1} |a_α| r^{|α|}`, whichever is
-//!    larger). A cell this does not prove is cut in eight, up to [`PROOF_DEPTH`] times (parts
-//!    wholly outside the ball are skipped); a part whose corners differ in sign, or one still
-//!    unproven at the last depth, rejects the step.
+//!    larger). A cell this does not prove is cut in eight, and its parts likewise, down to
+//!    parts no larger than the floor step (parts wholly outside the ball are skipped): a part
+//!    whose corners differ in sign rejects the step; a part of the floor's size whose corners
+//!    agree is accepted unproven (the floor grid would see nothing there either). Blocks of
+//!    4³ cells whose centre bound proves them empty skip their cells' own bounds.
 //!
-//! What this proves: within the ball, no piece of the surface lies wholly inside a cell
-//! whose corners agree (a small component, a bubble), and no grid edge of a crossed cell
-//! passes through the surface twice. What it does not: a second piece of surface wholly
+//! What this proves: within the ball, no piece of the surface that sampling at the floor
+//! step would see lies inside a cell whose corners agree (a small component, a bubble, a
+//! bulge through a face), and no grid edge of a crossed cell passes through the surface
+//! twice but for a shallow graze. What it does not: features smaller than the floor step
+//! (as at the floor itself); a second piece of surface wholly
 //! inside a crossed cell that meets none of its edges (its corners already differ, so the
 //! Taylor bound cannot help); the acute wedge at the crease that binary labels cannot see
 //! (as at every step); and the first-order estimate of 1. is an estimate, not a bound, which
