@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # `kardia mesh` against scikit-image's marching_cubes (Lewiner) at the same distance from the
 # exact surface (issue 34, item 4; docs/mesh.md, "Against marching cubes"): torus, heart,
-# Kummer's quartic and Barth's sextic (clipped to their balls). For each: kardia's whole run
-# (release build, default tolerance) with its triangles, peak memory and its two-sided
-# Hausdorff estimate; then scikit-image on an n³ grid refined by 1.25× until its mesh is as
-# close (both measured by `kardia mesh --measure`), with the time of sampling plus marching.
+# Kummer's quartic and Barth's sextic (clipped to their balls). For each: kardia's meshing time
+# (extraction + coarsening, from its summary; the time column compared) beside its whole run
+# (release build, default tolerance: with its accuracy measurement, check and file), with its
+# triangles, peak memory and its two-sided Hausdorff estimate; then scikit-image on an n³ grid
+# refined by 1.25× until its mesh is as close (both measured by `kardia mesh --measure`), with
+# the time of sampling plus marching (without the interpreter's start or the file).
 # See bench/mesh_vs_skimage.py. Usage:
 #
 #   bench/mesh-vs-skimage.sh [BINARY]

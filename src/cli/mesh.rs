@@ -141,7 +141,9 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
     .map_err(|e| e.to_string())?;
     bar.finish_and_clear();
     let meta = MeshMetadata::of_solids(&solids, args.size.is_some());
+    let writing = Instant::now();
     write_file(&printable.mesh, &meta, format, output).map_err(|e| e.to_string())?;
+    let write_time = writing.elapsed();
     let v = printable.verified;
     outln!(
         "kardia mesh: wrote {} ({} triangles, {} vertices, {} component{}, volume {:.6}{})",
@@ -162,12 +164,23 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
     for (s, part) in solids.iter().zip(&printable.parts) {
         let d = &part.deviation;
         outln!(
-            "  {}: tolerance {:.3e}, grid {}³ (step {:.3e} in object units)",
+            "  {}: tolerance {:.3e}, grid {}³ (step {:.3e} in object units; the finest allowed \
+             {:.3e})",
             s.name,
             part.tolerance,
             part.grid.cells,
-            part.grid.step()
+            part.grid.step(),
+            part.floor.step()
         );
+        let tried: Vec<String> = part
+            .levels
+            .iter()
+            .map(|l| match l.rejected {
+                Some(why) => format!("{}³ rejected ({why})", l.grid.cells),
+                None => format!("{}³ accepted", l.grid.cells),
+            })
+            .collect();
+        outln!("    grid steps tried, coarse to fine: {}", tried.join(", "));
         match part.coarsened {
             Some(c) => outln!(
                 "    coarsened where flat: {} triangles from marching tetrahedra's {} ({} \
@@ -228,7 +241,25 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
             args.size.unwrap_or(0.0)
         );
     }
-    outln!("  time {:.2} s", started.elapsed().as_secs_f64());
+    let sum = |stage: fn(&crate::mesh::StageTimes) -> std::time::Duration| {
+        printable
+            .parts
+            .iter()
+            .map(|p| stage(&p.times))
+            .sum::<std::time::Duration>()
+            .as_secs_f64()
+    };
+    outln!(
+        "  time {:.2} s: meshing {:.2} s (extraction {:.2} s, coarsening {:.2} s), measurement \
+         {:.2} s, check {:.2} s, write {:.2} s",
+        started.elapsed().as_secs_f64(),
+        sum(|t| t.meshing()),
+        sum(|t| t.extraction),
+        sum(|t| t.coarsening),
+        sum(|t| t.measurement),
+        printable.check_time.as_secs_f64(),
+        write_time.as_secs_f64()
+    );
     Ok(())
 }
 

@@ -98,7 +98,7 @@ fn marching_table() -> Vec<Option<TablePolygon>> {
 }
 
 /// The grid: `cells + 1` vertices a side over the cube `[−half, half]³`.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Grid {
     /// Cubes along each axis.
     pub cells: usize,

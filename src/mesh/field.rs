@@ -84,6 +84,12 @@ impl Field {
         }
     }
 
+    /// The surface's polynomial `f` (object space; `φ` is `f`, `−f` or the shell's
+    /// polynomial of it).
+    pub fn surface_polynomial(&self) -> &Compiled {
+        &self.f
+    }
+
     /// The clip radius (object space).
     pub fn radius(&self) -> f64 {
         self.radius

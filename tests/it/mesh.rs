@@ -474,7 +474,8 @@ fn triangles_per_area(
 /// points on the axes and curved along the rounded edges between them, the coarsened mesh
 /// has far fewer triangles per area on the flat parts than on the curved ones, while the
 /// uniform grid's marching tetrahedra (the mesh before coarsening) has about as many; and
-/// the torus at the default tolerance needs a small fraction of the uniform mesh's triangles.
+/// the torus at the default tolerance is extracted on a grid 4 times coarser than the floor
+/// step and coarsened, within its tolerance.
 #[test]
 fn the_mesh_is_coarser_where_the_surface_is_flatter() {
     use kardia::geometry::DVec3;
@@ -484,7 +485,7 @@ fn the_mesh_is_coarser_where_the_surface_is_flatter() {
         clip_radius: 1.5,
         frame: Frame::identity(),
     };
-    let tolerance = 0.02;
+    let tolerance = 0.01;
     let part =
         mesh::mesh_solid(&solid, &request(SolidKind::Inside, tolerance), &|_, _| {}).unwrap();
     check::verify(&part.mesh).unwrap();
@@ -534,6 +535,18 @@ fn the_mesh_is_coarser_where_the_surface_is_flatter() {
         part.mesh.triangles.len()
     );
     assert!(part.deviation.hausdorff() <= part.tolerance);
+    // The grid step is chosen by measurement (mesh::resolution): the torus is extracted at
+    // 4 times the floor step of 2 × the tolerance (at which it was 154 336 triangles).
+    assert!(
+        part.grid.step() >= 3.9 * part.floor.step(),
+        "{:?}",
+        part.levels
+    );
+    assert!(
+        part.extracted_triangles <= 20_000,
+        "{}",
+        part.extracted_triangles
+    );
 }
 
 /// The coarsening tests each new fan against the triangles near it, so the check of the
