@@ -766,7 +766,13 @@ mod tests {
             &|_, _, _| {},
             &AtomicBool::new(false),
         );
-        assert!(whole.unwrap().mesh.triangles.len() > 100);
+        // (Chosen by measurement, the grid and the coarsening leave a few hundred triangles:
+        // the count alone says little, so the solid's volume is asked for too.)
+        let mesh = whole.unwrap().mesh;
+        assert!(mesh.triangles.len() > 100);
+        let volume = check::verify(&mesh).unwrap().volume;
+        let ball = 4.0 / 3.0 * std::f64::consts::PI;
+        assert!((volume - ball).abs() < 0.02 * ball, "{volume}");
     }
 
     #[test]

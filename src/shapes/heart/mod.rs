@@ -11,7 +11,7 @@
 //!    sextic's coefficients are built from a point near the heart and are well scaled whatever
 //!    the distance, length of `d` or size of the heart;
 //! 4. the coefficients in closed form ([`sextic_coefficients`]) and the first root in `(0, 1]`
-//!    from the scene's [`Solver`] (four rays' chords at once by [`Solver::first_root_lanes`]
+//!    from the scene's [`Solver`] (four rays' chords at once by [`Solver::first_root_lanes_by_power`], the sextics laid out by power,
 //!    where they come in lanes, the same answers);
 //! 5. that root polished by a few safeguarded Newton steps on the well-conditioned factor
 //!    `g = A − ∛B·Z` ([`factor_g`]): where `f` has a triple root (the equator curve) its root

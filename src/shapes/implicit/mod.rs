@@ -1487,12 +1487,9 @@ impl ImplicitShape {
         )
     }
 
-    /// The generic path of [`ObjectShape::intersect`], `ray` in object space, its first-root
-    /// queries put to `first_root` (the solver's, plain or recorded); `recentred` is set when
-    /// a root was re-solved in double-double arithmetic.
-    #[inline(always)]
     /// The nearest hit in `(t_min, t_max)` over `surfaces` (one surface, or a composition's
     /// level sets), each searched below the nearest hit so far.
+    #[inline]
     fn nearest_over<'a>(
         &self,
         surfaces: impl IntoIterator<Item = &'a Surface>,
@@ -1513,6 +1510,10 @@ impl ImplicitShape {
         nearest
     }
 
+    /// The generic path of [`ObjectShape::intersect`], `ray` in object space, its first-root
+    /// queries put to `first_root` (the solver's, plain or recorded); `recentred` is set when
+    /// a root was re-solved in double-double arithmetic.
+    #[inline(always)]
     fn intersect_generic(
         &self,
         s: &Surface,
