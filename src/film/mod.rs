@@ -21,6 +21,7 @@
 
 mod atomic;
 mod encode;
+mod png_filter;
 mod srgb;
 
 pub use atomic::{check_output_path, remove_stale_temporaries, AtomicFile};
