@@ -478,6 +478,29 @@ fn encode_png_rows(
     png.finish()
 }
 
+/// Encodes `width × height` rows of 8-bit sRGB bytes (RGB, or straight-alpha RGBA when
+/// `alpha`; `rows.len()` = width · height · channels) into `out` as [`encode_png_streaming`]
+/// does: the same file bytes for the same bytes and `tag`, on this thread.
+pub fn encode_png_srgb8(
+    rows: &[u8],
+    width: u32,
+    height: u32,
+    alpha: bool,
+    tag: Option<FileTag>,
+    out: impl Write,
+) -> Result<(), OutputError> {
+    let channels = if alpha { 4 } else { 3 };
+    if rows.len() != width as usize * height as usize * channels {
+        return Err(OutputError::Encode(format!(
+            "{} bytes are not {width}×{height} pixels of {channels} bytes",
+            rows.len()
+        )));
+    }
+    let mut png = PngRows::start(out, width, height, alpha, tag).map_err(OutputError::Encode)?;
+    png.rows(rows).map_err(encode_error)?;
+    png.finish().map_err(OutputError::Encode)
+}
+
 /// The PNG settings kardia writes with: 8-bit RGB or RGBA, the png crate's `Compression::Fast`
 /// (its adaptive row filter, then fdeflate) and a text chunk `tag`. [`PngRows`] writes the
 /// image data itself, the same bytes as the png crate's `StreamWriter` with these settings.
@@ -719,6 +742,16 @@ mod tests {
             }
         }
         assert_eq!(cases, 2 * 7 * 5 * 2 * 4);
+    }
+
+    #[test]
+    fn the_srgb8_entry_writes_the_same_bytes_and_checks_the_length() {
+        let bytes: Vec<u8> = (0..5 * 4 * 4).map(|i| (i * 37 % 251) as u8).collect();
+        let mut out = Vec::new();
+        encode_png_srgb8(&bytes, 5, 4, true, None, &mut out).unwrap();
+        assert!(out == png_crates_own(&bytes, 5, 4, true, None));
+        assert!(encode_png_srgb8(&bytes, 5, 4, false, None, Vec::new()).is_err());
+        assert!(encode_png_srgb8(&[], 0, 4, false, None, Vec::new()).is_err());
     }
 
     #[test]
