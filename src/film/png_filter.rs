@@ -9,8 +9,9 @@
 //! cost zero, and otherwise keeps the last of the cheapest (a later filter wins a tie).
 //! [`AdaptiveRowFilter`] makes the same choice, so the filtered rows, and the file compressed
 //! from them, are the same bytes; it computes the four candidates in one pass over the row,
-//! 32 bytes at a time where the processor has AVX2 ([`crate::cpu::avx2`]), one byte at a time
-//! otherwise (the same bytes either way: tested).
+//! 32 bytes at a time where the processor has AVX2 ([`crate::cpu::avx2`]), otherwise in loops
+//! that the compiler vectorises with the baseline instructions (the same bytes either way:
+//! tested).
 
 /// The PNG filter type bytes, in the order the adaptive choice tries them.
 const TRIED: [u8; 4] = [UP, SUB, AVERAGE, PAETH];
@@ -22,7 +23,8 @@ const PAETH: u8 = 4;
 /// Which copy of the four-filter pass runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Kernel {
-    /// One byte at a time, on any processor.
+    /// Plain Rust, each filter in a loop of its own (vectorised by the compiler for the
+    /// baseline processor), on any processor.
     Scalar,
     /// 32 bytes at a time; only where the processor has AVX2.
     #[cfg(target_arch = "x86_64")]
@@ -49,7 +51,7 @@ impl AdaptiveRowFilter {
         Self::with_kernel(bytes_per_pixel, row_len, Kernel::Scalar)
     }
 
-    /// A filter that takes the one-byte-at-a-time copy on any processor (for tests of it).
+    /// A filter that takes the baseline copy on any processor (for tests of it).
     #[cfg(test)]
     pub(crate) fn scalar(bytes_per_pixel: usize, row_len: usize) -> Self {
         Self::with_kernel(bytes_per_pixel, row_len, Kernel::Scalar)
