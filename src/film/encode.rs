@@ -1,6 +1,7 @@
 //! Encoders: an [`Image`] to PNG (8-bit sRGB) or OpenEXR (linear float) on any writer; an
 //! image with alpha becomes an RGBA PNG (straight alpha) or an RGBA EXR (premultiplied).
 
+use super::png_filter::AdaptiveRowFilter;
 use super::{srgb8_into, srgba8_into, AtomicFile, Image, Vec3};
 use std::io::{Seek, Write};
 use std::path::Path;
@@ -440,34 +441,15 @@ impl Drop for RunsInOrder {
 /// The encoder thread of [`encode_png_streaming`]: puts the runs of rows in order as they
 /// come and compresses each contiguous stretch at once.
 fn encode_png_rows(
-    mut out: impl Write,
+    out: impl Write,
     width: u32,
     height: u32,
     alpha: bool,
     tag: Option<FileTag>,
     runs: RunsInOrder,
 ) -> Result<(), String> {
-    if width == 0 || height == 0 {
-        return Err(format!("the image is {width}×{height}"));
-    }
-    let mut encoder = png::Encoder::new(&mut out, width, height);
-    if let Some(tag) = tag {
-        encoder
-            .add_text_chunk(tag.name.into(), tag.text.into())
-            .map_err(|e| e.to_string())?;
-    }
-    let channels = if alpha { 4 } else { 3 };
-    encoder.set_color(if alpha {
-        png::ColorType::Rgba
-    } else {
-        png::ColorType::Rgb
-    });
-    encoder.set_depth(png::BitDepth::Eight);
-    encoder.set_compression(png::Compression::Fast);
-    encoder.set_filter(png::Filter::Adaptive);
-    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-    let mut stream = writer.stream_writer().map_err(|e| e.to_string())?;
-    let row_bytes = channels * width as usize;
+    let mut png = PngRows::start(out, width, height, alpha, tag)?;
+    let row_bytes = png.row_len();
     let mut waiting = std::collections::BTreeMap::new();
     let mut next_row = 0u32;
     loop {
@@ -482,7 +464,7 @@ fn encode_png_rows(
             waiting.insert(first_row, bytes);
         }
         while let Some(bytes) = waiting.remove(&next_row) {
-            stream.write_all(&bytes).map_err(|e| e.to_string())?;
+            png.rows(&bytes).map_err(|e| e.to_string())?;
             next_row += (bytes.len() / row_bytes) as u32;
         }
         if closed {
@@ -493,9 +475,161 @@ fn encode_png_rows(
     if next_row != height || !waiting.is_empty() {
         return Err(format!("only rows 0..{next_row} of {height} were made"));
     }
-    stream.finish().map_err(|e| e.to_string())?;
-    writer.finish().map_err(|e| e.to_string())?;
-    out.flush().map_err(|e| e.to_string())
+    png.finish()
+}
+
+/// Encodes `width × height` rows of 8-bit sRGB bytes (RGB, or straight-alpha RGBA when
+/// `alpha`; `rows.len()` = width · height · channels) into `out` as [`encode_png_streaming`]
+/// does: the same file bytes for the same bytes and `tag`, on this thread.
+pub fn encode_png_srgb8(
+    rows: &[u8],
+    width: u32,
+    height: u32,
+    alpha: bool,
+    tag: Option<FileTag>,
+    out: impl Write,
+) -> Result<(), OutputError> {
+    let channels = if alpha { 4 } else { 3 };
+    if rows.len() != width as usize * height as usize * channels {
+        return Err(OutputError::Encode(format!(
+            "{} bytes are not {width}×{height} pixels of {channels} bytes",
+            rows.len()
+        )));
+    }
+    let mut png = PngRows::start(out, width, height, alpha, tag).map_err(OutputError::Encode)?;
+    png.rows(rows).map_err(encode_error)?;
+    png.finish().map_err(OutputError::Encode)
+}
+
+/// The PNG settings kardia writes with: 8-bit RGB or RGBA, the png crate's `Compression::Fast`
+/// (its adaptive row filter, then fdeflate) and a text chunk `tag`. [`PngRows`] writes the
+/// image data itself, the same bytes as the png crate's `StreamWriter` with these settings.
+fn png_header<W: Write>(
+    out: W,
+    width: u32,
+    height: u32,
+    alpha: bool,
+    tag: Option<FileTag>,
+) -> Result<png::Writer<W>, String> {
+    if width == 0 || height == 0 {
+        return Err(format!("the image is {width}×{height}"));
+    }
+    let mut encoder = png::Encoder::new(out, width, height);
+    if let Some(tag) = tag {
+        encoder
+            .add_text_chunk(tag.name.into(), tag.text.into())
+            .map_err(|e| e.to_string())?;
+    }
+    encoder.set_color(if alpha {
+        png::ColorType::Rgba
+    } else {
+        png::ColorType::Rgb
+    });
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(png::Compression::Fast);
+    encoder.set_filter(png::Filter::Adaptive);
+    encoder.write_header().map_err(|e| e.to_string())
+}
+
+/// A PNG written row by row, top to bottom: the header by the png crate, each row filtered by
+/// [`AdaptiveRowFilter`] (the png crate's adaptive choice) and compressed by fdeflate as the
+/// png crate's `StreamWriter` does for `Compression::Fast` (the filter type byte and the
+/// filtered row as two pieces of input, which fdeflate's output depends on), in IDAT chunks of
+/// 4 KiB like its own. The same bytes as that writer's for every image (tested against it).
+struct PngRows<W: Write> {
+    deflate: fdeflate::Compressor<IdatChunks<W>>,
+    filter: AdaptiveRowFilter,
+    /// The last row handed over (zeros before the first): the row above the next one.
+    previous: Vec<u8>,
+}
+
+impl<W: Write> PngRows<W> {
+    /// Writes the signature, the header and the `tag` ([`png_header`]) and readies the rows.
+    fn start(
+        out: W,
+        width: u32,
+        height: u32,
+        alpha: bool,
+        tag: Option<FileTag>,
+    ) -> Result<Self, String> {
+        let header = png_header(out, width, height, alpha, tag)?;
+        let channels = if alpha { 4 } else { 3 };
+        let row_len = channels * width as usize;
+        let idat = IdatChunks {
+            png: header,
+            buffer: Vec::with_capacity(IDAT_CHUNK_LEN),
+        };
+        Ok(PngRows {
+            deflate: fdeflate::Compressor::new(idat).map_err(|e| e.to_string())?,
+            filter: AdaptiveRowFilter::new(channels, row_len),
+            previous: vec![0; row_len],
+        })
+    }
+
+    /// The bytes of one row.
+    fn row_len(&self) -> usize {
+        self.previous.len()
+    }
+
+    /// Filters and compresses whole rows (`rows.len()` a multiple of [`PngRows::row_len`]),
+    /// the next ones down.
+    fn rows(&mut self, rows: &[u8]) -> std::io::Result<()> {
+        let len = self.row_len();
+        let mut above: &[u8] = &self.previous;
+        for row in rows.chunks_exact(len) {
+            let (kind, filtered) = self.filter.filter(above, row);
+            self.deflate.write_data(&[kind])?;
+            self.deflate.write_data(filtered)?;
+            above = row;
+        }
+        if rows.len() >= len {
+            self.previous.copy_from_slice(&rows[rows.len() - len..]);
+        }
+        Ok(())
+    }
+
+    /// Ends the compressed stream, writes its last IDAT chunk and the IEND chunk, and flushes.
+    fn finish(self) -> Result<(), String> {
+        let idat = self.deflate.finish().map_err(|e| e.to_string())?;
+        let png = idat.finish().map_err(|e| e.to_string())?;
+        png.finish().map_err(|e| e.to_string())
+    }
+}
+
+/// The data length of each IDAT chunk but the last: the png crate's stream writer's default.
+const IDAT_CHUNK_LEN: usize = 4 * 1024;
+
+/// The compressed stream cut into IDAT chunks of [`IDAT_CHUNK_LEN`] bytes (the last shorter),
+/// written through the png crate's raw-chunk writer.
+struct IdatChunks<W: Write> {
+    png: png::Writer<W>,
+    buffer: Vec<u8>,
+}
+
+impl<W: Write> IdatChunks<W> {
+    /// Writes what is buffered as the last chunk (none when nothing is) and returns the writer.
+    fn finish(mut self) -> Result<png::Writer<W>, png::EncodingError> {
+        if !self.buffer.is_empty() {
+            self.png.write_chunk(png::chunk::IDAT, &self.buffer)?;
+        }
+        Ok(self.png)
+    }
+}
+
+impl<W: Write> Write for IdatChunks<W> {
+    fn write(&mut self, data: &[u8]) -> std::io::Result<usize> {
+        let taken = data.len().min(IDAT_CHUNK_LEN - self.buffer.len());
+        self.buffer.extend_from_slice(&data[..taken]);
+        if self.buffer.len() == IDAT_CHUNK_LEN {
+            self.png.write_chunk(png::chunk::IDAT, &self.buffer)?;
+            self.buffer.clear();
+        }
+        Ok(taken)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -505,6 +639,132 @@ mod tests {
 
     fn listing_len(dir: &Path) -> usize {
         std::fs::read_dir(dir).unwrap().count()
+    }
+
+    /// The PNG the png crate's own `StreamWriter` writes with kardia's settings
+    /// ([`png_header`]) from 8-bit rows: what [`PngRows`] must equal byte for byte.
+    pub(crate) fn png_crates_own(
+        bytes: &[u8],
+        width: u32,
+        height: u32,
+        alpha: bool,
+        tag: Option<FileTag>,
+    ) -> Vec<u8> {
+        let mut out = Vec::new();
+        let mut writer = png_header(&mut out, width, height, alpha, tag).unwrap();
+        let mut stream = writer.stream_writer().unwrap();
+        stream.write_all(bytes).unwrap();
+        stream.finish().unwrap();
+        writer.finish().unwrap();
+        out
+    }
+
+    /// [`PngRows`] fed `bytes` in runs of `run` rows, with the filter kernel `scalar` or the
+    /// dispatching one.
+    fn ours(
+        bytes: &[u8],
+        (width, height, alpha): (u32, u32, bool),
+        tag: Option<FileTag>,
+        run: usize,
+        scalar: bool,
+    ) -> Vec<u8> {
+        let mut out = Vec::new();
+        let mut png = PngRows::start(&mut out, width, height, alpha, tag).unwrap();
+        if scalar {
+            png.filter = AdaptiveRowFilter::scalar(if alpha { 4 } else { 3 }, png.row_len());
+        }
+        for rows in bytes.chunks(run * png.row_len()) {
+            png.rows(rows).unwrap();
+        }
+        png.finish().unwrap();
+        out
+    }
+
+    #[test]
+    fn our_filtered_png_is_the_png_crates_byte_for_byte() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+        let tag = FileTag {
+            name: "kardia-key",
+            text: "0123abcd",
+        };
+        let mut cases = 0;
+        for alpha in [false, true] {
+            let channels = if alpha { 4 } else { 3 };
+            for (width, height) in [
+                (1, 1),
+                (1, 7),
+                (2, 3),
+                (11, 5),
+                (37, 29),
+                (64, 16),
+                (133, 9),
+            ] {
+                // Noise of a few values (equal filter costs are common), full noise, smooth
+                // gradients with noise (every filter wins somewhere), a flat image (cost 0),
+                // and stretches of each in one image.
+                for pattern in 0..5 {
+                    let n = (width * height) as usize * channels;
+                    let bytes: Vec<u8> = (0..n)
+                        .map(|i| {
+                            let (x, y) =
+                                ((i / channels) as u32 % width, (i / channels) as u32 / width);
+                            let smooth = (x * 3 + y * 5 + (i % channels) as u32 * 40) as u8;
+                            match pattern {
+                                0 => [0, 1, 255][rng.random_range(0..3)],
+                                1 => rng.random(),
+                                2 => smooth.wrapping_add(rng.random_range(0..3)),
+                                3 => 77,
+                                _ => match (x / 8 + y) % 3 {
+                                    0 => smooth,
+                                    1 => rng.random(),
+                                    _ => 0,
+                                },
+                            }
+                        })
+                        .collect();
+                    let shape = (width, height, alpha);
+                    for tag in [None, Some(tag)] {
+                        let want = png_crates_own(&bytes, width, height, alpha, tag);
+                        for (run, scalar) in [(1, false), (3, false), (16, false), (5, true)] {
+                            let got = ours(&bytes, shape, tag, run, scalar);
+                            assert!(
+                                got == want,
+                                "{width}×{height} alpha {alpha} pattern {pattern} run {run} \
+                                 scalar {scalar}: {} bytes against png's {}",
+                                got.len(),
+                                want.len()
+                            );
+                            cases += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(cases, 2 * 7 * 5 * 2 * 4);
+    }
+
+    #[test]
+    fn the_srgb8_entry_writes_the_same_bytes_and_checks_the_length() {
+        let bytes: Vec<u8> = (0..5 * 4 * 4).map(|i| (i * 37 % 251) as u8).collect();
+        let mut out = Vec::new();
+        encode_png_srgb8(&bytes, 5, 4, true, None, &mut out).unwrap();
+        assert!(out == png_crates_own(&bytes, 5, 4, true, None));
+        assert!(encode_png_srgb8(&bytes, 5, 4, false, None, Vec::new()).is_err());
+        assert!(encode_png_srgb8(&[], 0, 4, false, None, Vec::new()).is_err());
+    }
+
+    #[test]
+    fn a_large_image_fills_several_idat_chunks_as_png_does() {
+        // 300×200 RGB of noise: about 180 KB compressed, 44 chunks of 4 KiB and a short one.
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(9);
+        let bytes: Vec<u8> = (0..300 * 200 * 3).map(|_| rng.random()).collect();
+        let want = png_crates_own(&bytes, 300, 200, false, None);
+        assert!(want.len() > 10 * IDAT_CHUNK_LEN);
+        for scalar in [false, true] {
+            assert!(ours(&bytes, (300, 200, false), None, 16, scalar) == want);
+        }
     }
 
     #[test]

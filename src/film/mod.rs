@@ -21,12 +21,13 @@
 
 mod atomic;
 mod encode;
+mod png_filter;
 mod srgb;
 
 pub use atomic::{check_output_path, remove_stale_temporaries, AtomicFile};
 pub(crate) use encode::read_png_tag;
 pub use encode::{
-    encode, encode_exr, encode_exr_tagged, encode_png, encode_png_streaming,
+    encode, encode_exr, encode_exr_tagged, encode_png, encode_png_srgb8, encode_png_streaming,
     encode_png_streaming_tagged, encode_tagged, read_tag, write_image, write_image_as, FileTag,
     ImageFormat, OutputError, RowSink,
 };

@@ -28,6 +28,7 @@ mod implicit_specks;
 mod mesh;
 mod mesh_render;
 mod pipeline;
+mod png_bytes;
 mod probe_cli;
 mod render_golden;
 mod render_shading;
