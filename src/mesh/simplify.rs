@@ -24,14 +24,18 @@
 //!   triangle), and so is the removed vertex of the nearest new triangle (the surface side);
 //! - no new triangle meets a triangle near it (or another new one) other than in the corners
 //!   and sides they share, by the exact test of [`super::check`]; the triangles' boxes are
-//!   kept in a hierarchy of loose grids, updated as triangles change, so each new fan is
-//!   tested only against the triangles whose boxes overlap it.
+//!   kept (as `f32` rounded outward) in a hierarchy of loose grids of dense arrays, updated
+//!   as triangles change, so each new fan is tested only against the triangles whose boxes
+//!   overlap it.
 //!
 //! Edges are tried shortest first, in passes until a pass removes few vertices; after each
 //! pass, edges are flipped to the other diagonal of their two triangles where that makes
 //! the thinner of the two clearly thicker (which frees further collapses), under the same
 //! conditions for the new triangles and with neither end of the edge left with three
-//! neighbours or fewer. The check of the finished mesh ([`super::check::verify`]) stays the
+//! neighbours or fewer. With more than one thread, the steps (collapses, then flips) are
+//! checked in parallel in batches against the mesh as each batch begins and made in order,
+//! a verdict that an earlier step of its batch could have changed being checked again: the
+//! result is the same as one step after another, for any number of threads. The check of the finished mesh ([`super::check::verify`]) stays the
 //! guarantee: the caller falls back to a smaller budget, then to the uncoarsened mesh, if it
 //! ever finds a crossing.
 
@@ -44,6 +48,7 @@ use crate::shapes::triangles::closest_on_triangle;
 use grid::{Box32, TriangleGrid};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
 
 /// A new triangle's unit normal must be within this cosine of the replaced triangle's (60°).
 pub const MAX_TURN_COS: f64 = 0.5;
@@ -98,6 +103,8 @@ pub struct Coarsened {
 struct Scratch {
     /// The new triangles of the check in hand.
     new: Vec<[u32; 3]>,
+    /// Their corners.
+    new_corners: Vec<[DVec3; 3]>,
     /// Their boxes.
     boxes: Vec<Box32>,
     /// The neighbours of a vertex.
@@ -130,6 +137,8 @@ struct Work<'a> {
     alive: Vec<bool>,
     around: Vec<Vec<u32>>,
     removed: Vec<bool>,
+    /// How many vertices are removed.
+    removed_count: usize,
     budget: f64,
     h: f64,
     /// Every live triangle's box, for the local crossing test.
@@ -212,24 +221,34 @@ impl Work<'_> {
     /// of them, other than in the corners and sides they share; with the box of the new
     /// triangles (every triangle whose box overlaps it was read).
     fn would_cross(&self, scratch: &mut Scratch, replaced: impl Fn(u32) -> bool) -> (bool, Box32) {
-        let Scratch { new, boxes, .. } = scratch;
+        let Scratch {
+            new,
+            new_corners,
+            boxes,
+            ..
+        } = scratch;
+        new_corners.clear();
+        new_corners.extend(new.iter().map(|&t| self.corners(t)));
         boxes.clear();
-        boxes.extend(new.iter().map(|&t| Box32::around(&self.corners(t))));
+        boxes.extend(new_corners.iter().map(Box32::around));
         let all = boxes.iter().fold(boxes[0], |a, &b| a.union(b));
         let near = self.grid.any_near(&all, |b| {
             if !b.bounds.overlaps(&all) {
                 return false;
             }
-            let mut other = None;
-            for (&t, nb) in new.iter().zip(boxes.iter()) {
+            let mut checked = false;
+            for ((&t, &p), nb) in new.iter().zip(new_corners.iter()).zip(boxes.iter()) {
                 if !nb.overlaps(&b.bounds) {
                     continue;
                 }
-                let o = *other.get_or_insert_with(|| self.triangles[b.triangle as usize]);
-                if replaced(b.triangle) {
-                    return false;
+                if !checked {
+                    if replaced(b.triangle) {
+                        return false;
+                    }
+                    checked = true;
                 }
-                if check::triangles_meet(t, o, self.vertices) {
+                let other = self.triangles[b.triangle as usize];
+                if check::corners_meet(t, p, other, self.corners(other)) {
                     return true;
                 }
             }
@@ -241,7 +260,7 @@ impl Work<'_> {
         for i in 0..new.len() {
             for j in i + 1..new.len() {
                 if boxes[i].overlaps(&boxes[j])
-                    && check::triangles_meet(new[i], new[j], self.vertices)
+                    && check::corners_meet(new[i], new_corners[i], new[j], new_corners[j])
                 {
                     return (true, all);
                 }
@@ -499,27 +518,172 @@ impl Work<'_> {
             self.around[v as usize].push(t);
         }
         self.removed[u as usize] = true;
+        self.removed_count += 1;
     }
 
-    /// Collapses `u` into `v` if every condition of the module doc holds; whether it did.
-    fn try_collapse(&mut self, u: u32, v: u32, scratch: &mut Scratch) -> bool {
-        let ok = self.check_collapse(u, v, scratch).ok;
-        if ok {
-            self.apply_collapse(u, v);
+    /// Whether `step` may be made on the mesh as it is.
+    fn check(&self, step: Step, scratch: &mut Scratch) -> Verdict {
+        match step {
+            Step::Collapse(u, v) => self.check_collapse(u, v, scratch),
+            Step::Flip(t, k) if self.alive[t as usize] => {
+                self.check_flip(t, usize::from(k), scratch)
+            }
+            Step::Flip(..) => Verdict::REFUSED,
         }
-        ok
     }
 
-    /// Flips the `k`-th side of live triangle `t` if [`Work::check_flip`] allows; whether
-    /// it did.
-    fn try_flip(&mut self, t: u32, k: usize, scratch: &mut Scratch) -> bool {
-        let ok = self.check_flip(t, k, scratch).ok;
-        if ok {
-            self.apply_flip(t, k);
+    /// Makes `step` (which [`Work::check`] must have allowed, on this mesh).
+    fn apply(&mut self, step: Step) {
+        match step {
+            Step::Collapse(u, v) => self.apply_collapse(u, v),
+            Step::Flip(t, k) => self.apply_flip(t, usize::from(k)),
         }
-        ok
+    }
+
+    /// The vertices whose fans a check of `step` reads and that making it changes, into
+    /// `out`: for a collapse of `u`, `u` and its neighbours; for a flip, the corners of the
+    /// two triangles. A check's verdict stands while none of them has changed (nor any
+    /// triangle whose box overlaps the verdict's `near`): every triangle or fan it reads is
+    /// about one of them.
+    fn footprint(&self, step: Step, out: &mut Vec<u32>) {
+        out.clear();
+        match step {
+            Step::Collapse(u, v) => {
+                out.push(v);
+                out.push(u);
+                for &t in &self.around[u as usize] {
+                    out.extend(self.triangles[t as usize]);
+                }
+            }
+            Step::Flip(t, k) => {
+                out.extend(self.triangles[t as usize]);
+                if let Some((.., d)) = self.flip_quad(t, usize::from(k)) {
+                    out.push(d);
+                }
+            }
+        }
+    }
+
+    /// Makes each of `steps` that every condition allows, in order, as if one by one;
+    /// how many were made, or `None` if `cancel` stopped it. The steps go in batches; a
+    /// batch is checked either one step after another, or (with more than one thread) in
+    /// parallel against the mesh as the batch begins and then made in order, a verdict whose
+    /// footprint ([`Work::footprint`]) an earlier step of the batch changed, or whose new
+    /// triangles' box a changed triangle overlaps, being checked again on the mesh as it is
+    /// then. Either way the result is the same as one by one, for any number of threads;
+    /// `checking` says which way is taken.
+    fn make(&mut self, steps: &[Step], cancel: &AtomicBool, checking: Checking) -> Option<usize> {
+        let mut scratch = Scratch::default();
+        let mut made = 0;
+        let parallel_possible = rayon::current_num_threads() > 1 && checking != Checking::Serial;
+        let mut changed_at = vec![0u32; self.vertices.len()];
+        let mut changed_boxes: Vec<Box32> = Vec::new();
+        let mut footprint = Vec::new();
+        // Seconds per step of the last batch checked one by one, and in parallel.
+        let mut rate = [f64::INFINITY; 2];
+        let mut begun = 0;
+        let mut stamp = 0;
+        while begun < steps.len() {
+            if cancel.load(Ordering::Relaxed) {
+                return None;
+            }
+            // Batches a sixty-fourth of the live vertices long: each step made marks a
+            // handful of vertices changed, so about as few verdicts go stale whatever the
+            // size of the mesh.
+            let live = self.vertices.len() - self.removed_count;
+            let length = (live / 64).max(BATCH);
+            let batch = &steps[begun..(begun + length).min(steps.len())];
+            begun += batch.len();
+            stamp += 1;
+            let parallel = parallel_possible
+                && match checking {
+                    Checking::Fastest => match stamp % PROBE_EVERY {
+                        0 => false,
+                        1 => true,
+                        _ => rate[1] < rate[0],
+                    },
+                    _ => true,
+                };
+            let started = Instant::now();
+            if !parallel {
+                for &step in batch {
+                    if self.check(step, &mut scratch).ok {
+                        self.apply(step);
+                        made += 1;
+                    }
+                }
+                rate[0] = started.elapsed().as_secs_f64() / batch.len() as f64;
+                continue;
+            }
+            changed_boxes.clear();
+            let this = &*self;
+            let verdicts: Vec<Verdict> = batch
+                .par_iter()
+                .with_min_len(BATCH / 16)
+                .map_init(Scratch::default, |scratch, &step| this.check(step, scratch))
+                .collect();
+            for (&step, verdict) in batch.iter().zip(verdicts) {
+                self.footprint(step, &mut footprint);
+                let stale = footprint.iter().any(|&w| changed_at[w as usize] == stamp)
+                    || verdict
+                        .near
+                        .is_some_and(|near| changed_boxes.iter().any(|b| b.overlaps(&near)));
+                let ok = if stale {
+                    self.check(step, &mut scratch).ok
+                } else {
+                    verdict.ok
+                };
+                if ok {
+                    let mut changed = Box32::around(&[self.vertices[footprint[0] as usize]; 3]);
+                    for &w in &footprint {
+                        changed_at[w as usize] = stamp;
+                        changed = changed.union(Box32::around(&[self.vertices[w as usize]; 3]));
+                    }
+                    changed_boxes.push(changed);
+                    self.apply(step);
+                    made += 1;
+                }
+            }
+            rate[1] = started.elapsed().as_secs_f64() / batch.len() as f64;
+        }
+        Some(made)
     }
 }
+
+/// How [`Work::make`] checks a batch of steps (the mesh made is the same every way).
+#[derive(Clone, Copy, Debug, PartialEq)]
+// `coarsen` takes the fastest way; the tests ask for each way.
+#[cfg_attr(not(test), allow(dead_code))]
+pub(crate) enum Checking {
+    /// One step after another.
+    Serial,
+    /// In parallel, when the pool has more than one thread.
+    Parallel,
+    /// Whichever of the two took less time a step in the last batch timed each way: every
+    /// [`PROBE_EVERY`] batches one is checked each way, and the faster way is kept until the
+    /// next (a machine busy with other work makes the parallel checks wait for each other).
+    Fastest,
+}
+
+/// How often [`Checking::Fastest`] times both ways again, in batches.
+const PROBE_EVERY: u32 = 16;
+
+/// One step of a pass: `u` collapsed into `v`, or side `k` of triangle `t` flipped.
+#[derive(Clone, Copy, Debug)]
+enum Step {
+    Collapse(u32, u32),
+    Flip(u32, u8),
+}
+
+/// [`Work::make`] on a thread of the pool (so each batch's parallel checks are split there,
+/// not handed over from outside it and waited for).
+fn make(work: &mut Work, steps: &[Step], cancel: &AtomicBool, checking: Checking) -> Option<usize> {
+    rayon::scope(|_| work.make(steps, cancel, checking))
+}
+
+/// The fewest steps checked together by [`Work::make`].
+const BATCH: usize = 1024;
+
 /// Coarsens `mesh` (object space, with each vertex's kind) by half-edge collapses within
 /// `budget` of the exact boundary (object units; see the module doc), in place: removed
 /// vertices are dropped and the kinds kept in step. Gives up (`None`, the mesh untouched)
@@ -532,6 +696,28 @@ pub fn coarsen(
     budget: f64,
     cancel: &AtomicBool,
     pass_done: &dyn Fn(usize),
+) -> Option<Coarsened> {
+    coarsen_checking(
+        field,
+        mesh,
+        kinds,
+        budget,
+        cancel,
+        pass_done,
+        Checking::Fastest,
+    )
+}
+
+/// [`coarsen`], checking the steps of each batch as `checking` says (the result is the same
+/// every way).
+pub(crate) fn coarsen_checking(
+    field: &Field,
+    mesh: &mut TriangleMesh,
+    kinds: &mut Vec<VertexKind>,
+    budget: f64,
+    cancel: &AtomicBool,
+    pass_done: &dyn Fn(usize),
+    checking: Checking,
 ) -> Option<Coarsened> {
     let n = mesh.vertices.len();
     let mut around: Vec<Vec<u32>> = vec![Vec::new(); n];
@@ -576,14 +762,13 @@ pub fn coarsen(
         alive: vec![true; mesh.triangles.len()],
         around,
         removed: vec![false; n],
+        removed_count: 0,
         budget,
         h,
         grid,
         surface_normals,
     };
     let mut done = Coarsened::default();
-    let mut scratch = Scratch::default();
-    let i_cancelled = |i: usize| i.is_multiple_of(4096) && cancel.load(Ordering::Relaxed);
     for _ in 0..MAX_PASSES {
         // Every live edge in both directions, shortest first.
         let mut edges: Vec<(f64, u32, u32)> = Vec::new();
@@ -598,30 +783,22 @@ pub fn coarsen(
             }
         }
         edges.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
-        let before = done.collapses;
-        for (i, &(_, a, b)) in edges.iter().enumerate() {
-            if i_cancelled(i) {
-                return None;
-            }
-            if work.try_collapse(a, b, &mut scratch) {
-                done.collapses += 1;
-            }
-        }
+        let steps: Vec<Step> = edges
+            .iter()
+            .map(|&(_, a, b)| Step::Collapse(a, b))
+            .collect();
+        let collapsed = make(&mut work, &steps, cancel, checking)?;
+        done.collapses += collapsed;
         // Flips toward thicker triangles, which free further collapses.
-        for t in 0..work.triangles.len() {
-            if i_cancelled(t) {
-                return None;
-            }
-            for k in 0..3 {
-                if work.alive[t] && work.try_flip(t as u32, k, &mut scratch) {
-                    done.flips += 1;
-                }
-            }
-        }
+        let steps: Vec<Step> = (0..work.triangles.len() as u32)
+            .filter(|&t| work.alive[t as usize])
+            .flat_map(|t| (0..3).map(move |k| Step::Flip(t, k)))
+            .collect();
+        done.flips += make(&mut work, &steps, cancel, checking)?;
         done.passes += 1;
         pass_done(done.passes);
         let alive_vertices = n - done.collapses;
-        if (done.collapses - before) * 50 < alive_vertices {
+        if collapsed * 50 < alive_vertices {
             break;
         }
     }
@@ -693,6 +870,7 @@ mod tests {
             alive: vec![true; 2],
             around: vec![Vec::new(); vertices.len()],
             removed: vec![false; vertices.len()],
+            removed_count: 0,
             budget: 1.0,
             h,
             grid: TriangleGrid::new(3.0, 0.5, 2),
@@ -710,6 +888,53 @@ mod tests {
         // Inward (reversed) is refused, and so is either one when only quality counts.
         assert!(!work.thin_enough([0, 2, 1], 1.0, true));
         assert!(work.thin_enough([3, 4, 5], 0.01, true));
+    }
+
+    #[test]
+    fn the_coarsening_is_the_same_for_one_thread_and_two() {
+        // One thread makes the steps one by one; two check them in batches in parallel and
+        // recheck the verdicts an earlier step of the batch made stale: the same mesh.
+        let poly = expand("x^4 + y^4 + z^4 - 0.5*(x^2 + y^2 + z^2) = 0.4").unwrap();
+        let field = Field::new(&poly, 1.5, SolidKind::Inside);
+        let grid = extract::Grid::covering(1.5, 0.03);
+        let (extracted, extracted_kinds) = extract::march(&field, grid, &|_, _| {});
+        let run = |threads: usize, checking: Checking| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let (mut mesh, mut kinds) = (extracted.clone(), extracted_kinds.clone());
+            let done = pool
+                .install(|| {
+                    coarsen_checking(
+                        &field,
+                        &mut mesh,
+                        &mut kinds,
+                        0.01,
+                        &AtomicBool::new(false),
+                        &|_| {},
+                        checking,
+                    )
+                })
+                .unwrap();
+            (mesh, kinds, done)
+        };
+        let one = run(1, Checking::Serial);
+        let two = run(2, Checking::Parallel);
+        let fastest = run(2, Checking::Fastest);
+        eprintln!(
+            "{} -> {} triangles, {:?}",
+            extracted.triangles.len(),
+            one.0.triangles.len(),
+            one.2
+        );
+        assert!(one.2.collapses > 1000 && one.2.flips > 0, "{:?}", one.2);
+        check::verify(&one.0).unwrap();
+        assert!(one == two, "the meshes differ between 1 and 2 threads");
+        assert!(
+            one == fastest,
+            "the meshes differ when the fastest way is chosen"
+        );
     }
 
     #[test]
