@@ -652,8 +652,6 @@ impl Work<'_> {
 
 /// How [`Work::make`] checks a batch of steps (the mesh made is the same every way).
 #[derive(Clone, Copy, Debug, PartialEq)]
-// `coarsen` takes the fastest way; the tests ask for each way.
-#[cfg_attr(not(test), allow(dead_code))]
 pub(crate) enum Checking {
     /// One step after another.
     Serial,
@@ -688,7 +686,10 @@ const BATCH: usize = 1024;
 /// `budget` of the exact boundary (object units; see the module doc), in place: removed
 /// vertices are dropped and the kinds kept in step. Gives up (`None`, the mesh untouched)
 /// once `cancel` is set (read between batches of collapses). `pass_done(k)` is called as
-/// pass `k` (1 to at most [`MAX_PASSES`]) ends.
+/// pass `k` (1 to at most [`MAX_PASSES`]) ends. The steps are checked one by one unless the
+/// environment variable `KARDIA_COARSEN_CHECKS` is `parallel` (batches checked in parallel)
+/// or `fastest` (whichever way was faster when last timed): the mesh is the same every way,
+/// for any number of threads (on a busy two-core machine one by one was the fastest).
 pub fn coarsen(
     field: &Field,
     mesh: &mut TriangleMesh,
@@ -697,15 +698,12 @@ pub fn coarsen(
     cancel: &AtomicBool,
     pass_done: &dyn Fn(usize),
 ) -> Option<Coarsened> {
-    coarsen_checking(
-        field,
-        mesh,
-        kinds,
-        budget,
-        cancel,
-        pass_done,
-        Checking::Fastest,
-    )
+    let checking = match std::env::var("KARDIA_COARSEN_CHECKS").as_deref() {
+        Ok("parallel") => Checking::Parallel,
+        Ok("fastest") => Checking::Fastest,
+        _ => Checking::Serial,
+    };
+    coarsen_checking(field, mesh, kinds, budget, cancel, pass_done, checking)
 }
 
 /// [`coarsen`], checking the steps of each batch as `checking` says (the result is the same
