@@ -257,6 +257,12 @@ pub fn triangles_meet(ti: [u32; 3], tj: [u32; 3], vertices: &[DVec3]) -> bool {
         ti.map(|v| vertices[v as usize]),
         tj.map(|v| vertices[v as usize]),
     );
+    corners_meet(ti, pi, tj, pj)
+}
+
+/// [`triangles_meet`] for callers that hold the corners already: `pi` must be the points of
+/// `ti`'s vertices and `pj` those of `tj`'s (the answer is then the same).
+pub fn corners_meet(ti: [u32; 3], pi: [DVec3; 3], tj: [u32; 3], pj: [DVec3; 3]) -> bool {
     let mut shared = [u32::MAX; 3];
     let mut count = 0;
     for &v in &ti {
@@ -283,11 +289,12 @@ pub fn triangles_meet(ti: [u32; 3], tj: [u32; 3], vertices: &[DVec3]) -> bool {
         }
         2 => {
             // Sharing an edge u v: they overlap only when folded flat onto the same side.
-            let u = vertices[shared[0] as usize];
-            let v = vertices[shared[1] as usize];
+            let at =
+                |t: [u32; 3], p: [DVec3; 3], w: u32| p[t.iter().position(|&x| x == w).unwrap()];
+            let (u, v) = (at(ti, pi, shared[0]), at(ti, pi, shared[1]));
             let other =
-                |t: [u32; 3]| vertices[*t.iter().find(|w| !shared.contains(w)).unwrap() as usize];
-            let (a, b) = (other(ti), other(tj));
+                |t: [u32; 3], p: [DVec3; 3]| p[t.iter().position(|w| !shared.contains(w)).unwrap()];
+            let (a, b) = (other(ti, pi), other(tj, pj));
             let na = (v - u).cross(a - u);
             let nb = (v - u).cross(b - u);
             orient(u, v, a, b) == 0.0 && na.dot(nb) > 0.0

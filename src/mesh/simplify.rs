@@ -24,25 +24,31 @@
 //!   triangle), and so is the removed vertex of the nearest new triangle (the surface side);
 //! - no new triangle meets a triangle near it (or another new one) other than in the corners
 //!   and sides they share, by the exact test of [`super::check`]; the triangles' boxes are
-//!   kept in a hierarchy of loose grids, updated as triangles change, so each new fan is
-//!   tested only against the triangles whose boxes overlap it.
+//!   kept (as `f32` rounded outward) in a hierarchy of loose grids of dense arrays, updated
+//!   as triangles change, so each new fan is tested only against the triangles whose boxes
+//!   overlap it.
 //!
 //! Edges are tried shortest first, in passes until a pass removes few vertices; after each
 //! pass, edges are flipped to the other diagonal of their two triangles where that makes
 //! the thinner of the two clearly thicker (which frees further collapses), under the same
 //! conditions for the new triangles and with neither end of the edge left with three
-//! neighbours or fewer. The check of the finished mesh ([`super::check::verify`]) stays the
+//! neighbours or fewer. With more than one thread, the steps (collapses, then flips) are
+//! checked in parallel in batches against the mesh as each batch begins and made in order,
+//! a verdict that an earlier step of its batch could have changed being checked again: the
+//! result is the same as one step after another, for any number of threads. The check of the finished mesh ([`super::check::verify`]) stays the
 //! guarantee: the caller falls back to a smaller budget, then to the uncoarsened mesh, if it
 //! ever finds a crossing.
+
+mod grid;
 
 use super::field::{Field, VertexKind};
 use super::{check, TriangleMesh};
 use crate::geometry::DVec3;
 use crate::shapes::triangles::closest_on_triangle;
+use grid::{Box32, TriangleGrid};
 use rayon::prelude::*;
-use std::collections::HashMap;
-use std::hash::BuildHasherDefault;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
 
 /// A new triangle's unit normal must be within this cosine of the replaced triangle's (60°).
 pub const MAX_TURN_COS: f64 = 0.5;
@@ -92,157 +98,34 @@ pub struct Coarsened {
     pub passes: usize,
 }
 
-/// A triangle in a cell of [`TriangleGrid`], with its bounding box.
-#[derive(Clone, Copy)]
-struct Boxed {
-    triangle: u32,
-    lo: DVec3,
-    hi: DVec3,
-}
-
-/// A hasher for cell indices (a multiply and a fold: the keys are already well spread).
+/// Space one checking thread reuses from check to check (no allocation per collapse).
 #[derive(Default)]
-struct CellHasher(u64);
-
-impl std::hash::Hasher for CellHasher {
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(u64::from(b));
-        }
-    }
-    fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0 ^ x).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    }
-    fn finish(&self) -> u64 {
-        self.0 ^ (self.0 >> 29)
-    }
+struct Scratch {
+    /// The new triangles of the check in hand.
+    new: Vec<[u32; 3]>,
+    /// Their corners.
+    new_corners: Vec<[DVec3; 3]>,
+    /// Their boxes.
+    boxes: Vec<Box32>,
+    /// The neighbours of a vertex.
+    ring: Vec<u32>,
 }
 
-/// The occupied cells of one level of [`TriangleGrid`].
-type Cells = HashMap<u64, Vec<Boxed>, BuildHasherDefault<CellHasher>>;
-
-/// The triangles' bounding boxes in a hierarchy of uniform grids over the clip ball (a loose
-/// grid per size), kept up to date as triangles change, so that a new fan is tested only
-/// against the triangles near it. A triangle is kept in one cell: that of its box's centre
-/// in the finest level whose cells are at least as large as its box, so a box query at a
-/// level need only look half a cell beyond the box. Only occupied cells are stored, and a
-/// query that spans more cells of a level than it has occupied ones reads those instead.
-struct TriangleGrid {
-    lo: f64,
-    /// Per level, finest first: the cell side, the cells a side and the occupied cells.
-    levels: Vec<(f64, u64, Cells)>,
+/// A check's answer, with the region whose triangles it read.
+#[derive(Clone, Copy, Debug)]
+struct Verdict {
+    /// Whether every condition holds.
+    ok: bool,
+    /// The box of the new triangles, when the crossing test was made (it read every
+    /// triangle whose box overlaps it).
+    near: Option<Box32>,
 }
 
-impl TriangleGrid {
-    /// An empty hierarchy over the cube `[−radius, radius]³`, the finest cells of side about
-    /// `cell`, each next level's four times as large (fewer levels to look in), the last one
-    /// cell.
-    fn new(radius: f64, cell: f64) -> Self {
-        let mut levels = Vec::new();
-        let mut dims = ((2.0 * radius / cell).ceil() as u64).clamp(1, 1 << 20);
-        loop {
-            let side = 2.0 * radius / dims as f64;
-            levels.push((side, dims, Cells::default()));
-            if dims == 1 {
-                break;
-            }
-            dims = dims.div_ceil(4);
-        }
-        Self {
-            lo: -radius,
-            levels,
-        }
-    }
-
-    /// The index a side of the cell holding coordinate `x` at a level.
-    fn index(&self, x: f64, side: f64, dims: u64) -> u64 {
-        let i = ((x - self.lo) / side).floor();
-        (i.max(0.0) as u64).min(dims - 1)
-    }
-
-    /// The level and the cell that keep a triangle with the box `lo..hi`.
-    fn home(&self, lo: DVec3, hi: DVec3) -> (usize, u64) {
-        let extent = (hi - lo).max_element();
-        let level = self
-            .levels
-            .iter()
-            .position(|l| l.0 >= extent)
-            .unwrap_or(self.levels.len() - 1);
-        let (side, dims, _) = self.levels[level];
-        let c = 0.5 * (lo + hi);
-        let [x, y, z] = [c.x, c.y, c.z].map(|v| self.index(v, side, dims));
-        (level, (x * dims + y) * dims + z)
-    }
-
-    fn insert(&mut self, triangle: u32, c: [DVec3; 3]) {
-        let (lo, hi) = bounds(&c);
-        let (level, cell) = self.home(lo, hi);
-        self.levels[level]
-            .2
-            .entry(cell)
-            .or_default()
-            .push(Boxed { triangle, lo, hi });
-    }
-
-    fn remove(&mut self, triangle: u32, c: [DVec3; 3]) {
-        let (lo, hi) = bounds(&c);
-        let (level, cell) = self.home(lo, hi);
-        let cells = &mut self.levels[level].2;
-        if let Some(list) = cells.get_mut(&cell) {
-            if let Some(k) = list.iter().position(|b| b.triangle == triangle) {
-                list.swap_remove(k);
-            }
-            if list.is_empty() {
-                cells.remove(&cell);
-            }
-        }
-    }
-
-    /// Calls `visit` with every triangle whose box may overlap `lo..hi` (each once), until
-    /// it returns true; whether it did.
-    fn any_near(&self, lo: DVec3, hi: DVec3, mut visit: impl FnMut(&Boxed) -> bool) -> bool {
-        for &(side, dims, ref cells) in &self.levels {
-            if cells.is_empty() {
-                continue;
-            }
-            let reach = DVec3::splat(0.5 * side);
-            let (a, b) = (lo - reach, hi + reach);
-            let [x0, y0, z0] = [a.x, a.y, a.z].map(|v| self.index(v, side, dims));
-            let [x1, y1, z1] = [b.x, b.y, b.z].map(|v| self.index(v, side, dims));
-            let spanned = (x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1);
-            if spanned as usize > cells.len() {
-                if cells.values().flatten().any(&mut visit) {
-                    return true;
-                }
-                continue;
-            }
-            for x in x0..=x1 {
-                for y in y0..=y1 {
-                    for z in z0..=z1 {
-                        if let Some(list) = cells.get(&((x * dims + y) * dims + z)) {
-                            if list.iter().any(&mut visit) {
-                                return true;
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        false
-    }
-}
-
-/// The bounding box of some points.
-fn bounds(points: &[DVec3]) -> (DVec3, DVec3) {
-    points.iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), &p| (lo.min(p), hi.max(p)),
-    )
-}
-
-/// Whether two boxes overlap (closed).
-fn boxes_overlap(a: (DVec3, DVec3), b: (DVec3, DVec3)) -> bool {
-    a.0.cmple(b.1).all() && b.0.cmple(a.1).all()
+impl Verdict {
+    const REFUSED: Verdict = Verdict {
+        ok: false,
+        near: None,
+    };
 }
 
 /// The mesh being coarsened: triangles with a live flag and the triangles about each vertex.
@@ -254,9 +137,8 @@ struct Work<'a> {
     alive: Vec<bool>,
     around: Vec<Vec<u32>>,
     removed: Vec<bool>,
-    /// Scratch marks for the link condition (a vertex is marked when it holds `stamp`).
-    mark: Vec<u32>,
-    stamp: u32,
+    /// How many vertices are removed.
+    removed_count: usize,
     budget: f64,
     h: f64,
     /// Every live triangle's box, for the local crossing test.
@@ -297,6 +179,17 @@ impl Work<'_> {
         }
     }
 
+    /// The neighbours of vertex `w`, each once (on a closed 2-manifold, the corner after `w`
+    /// in each of its triangles), into `ring`.
+    fn ring_of(&self, w: u32, ring: &mut Vec<u32>) {
+        ring.clear();
+        for &t in &self.around[w as usize] {
+            let tri = self.triangles[t as usize];
+            let k = tri.iter().position(|&x| x == w).unwrap();
+            ring.push(tri[(k + 1) % 3]);
+        }
+    }
+
     /// Whether a new triangle `tri` may be as thin as it is: of quality at least
     /// [`MIN_QUALITY`] (or of `old_quality`, that of the one it replaces, if lower), or else of
     /// at least [`THIN_QUALITY`], [`THIN_HEIGHT_SHARE`] of the radius high, and lying along the
@@ -323,56 +216,80 @@ impl Work<'_> {
             .all(|&w| n.dot(self.part_normal(w, surface)) >= THIN_NORMAL_COS)
     }
 
-    /// Whether any of the triangles `new` (replacing the triangles `replaced`, which are
-    /// left out) would meet a live triangle near it, or another of `new`, other than in the
-    /// corners and sides they share.
-    fn would_cross(&self, new: &[[u32; 3]], replaced: &[u32]) -> bool {
-        let boxes: Vec<(DVec3, DVec3)> = new.iter().map(|&t| bounds(&self.corners(t))).collect();
-        let all = boxes
-            .iter()
-            .fold(boxes[0], |(lo, hi), b| (lo.min(b.0), hi.max(b.1)));
-        let near = self.grid.any_near(all.0, all.1, |b| {
-            boxes_overlap(all, (b.lo, b.hi))
-                && !replaced.contains(&b.triangle)
-                && new.iter().zip(&boxes).any(|(&t, &tb)| {
-                    boxes_overlap(tb, (b.lo, b.hi))
-                        && check::triangles_meet(
-                            t,
-                            self.triangles[b.triangle as usize],
-                            self.vertices,
-                        )
-                })
-        });
-        if near {
-            return true;
-        }
-        for i in 0..new.len() {
-            for j in i + 1..new.len() {
-                if boxes_overlap(boxes[i], boxes[j])
-                    && check::triangles_meet(new[i], new[j], self.vertices)
-                {
+    /// Whether any of the triangles `scratch.new` (replacing the live triangles for which
+    /// `replaced` holds, which are left out) would meet a live triangle near it, or another
+    /// of them, other than in the corners and sides they share; with the box of the new
+    /// triangles (every triangle whose box overlaps it was read).
+    fn would_cross(&self, scratch: &mut Scratch, replaced: impl Fn(u32) -> bool) -> (bool, Box32) {
+        let Scratch {
+            new,
+            new_corners,
+            boxes,
+            ..
+        } = scratch;
+        new_corners.clear();
+        new_corners.extend(new.iter().map(|&t| self.corners(t)));
+        boxes.clear();
+        boxes.extend(new_corners.iter().map(Box32::around));
+        let all = boxes.iter().fold(boxes[0], |a, &b| a.union(b));
+        let near = self.grid.any_near(&all, |b| {
+            if !b.bounds.overlaps(&all) {
+                return false;
+            }
+            let mut checked = false;
+            for ((&t, &p), nb) in new.iter().zip(new_corners.iter()).zip(boxes.iter()) {
+                if !nb.overlaps(&b.bounds) {
+                    continue;
+                }
+                if !checked {
+                    if replaced(b.triangle) {
+                        return false;
+                    }
+                    checked = true;
+                }
+                let other = self.triangles[b.triangle as usize];
+                if check::corners_meet(t, p, other, self.corners(other)) {
                     return true;
                 }
             }
+            false
+        });
+        if near {
+            return (true, all);
         }
-        false
+        for i in 0..new.len() {
+            for j in i + 1..new.len() {
+                if boxes[i].overlaps(&boxes[j])
+                    && check::corners_meet(new[i], new_corners[i], new[j], new_corners[j])
+                {
+                    return (true, all);
+                }
+            }
+        }
+        (false, all)
     }
 
-    /// Flips the edge `a b` of live triangle `t` (its `k`-th side) to the other diagonal of
-    /// the two triangles on it, if the thinner of the two new triangles is thicker than the
-    /// thinner of the two old ones by a margin and every condition of the module doc holds
-    /// for the new ones (same part, no turn, within the budget).
-    fn try_flip(&mut self, t: u32, k: usize) -> bool {
+    /// The edge `a b` of live triangle `t` (its `k`-th side), with the triangle on its other
+    /// side and that one's corner off the edge: `(a, b, c, t2, d)`.
+    fn flip_quad(&self, t: u32, k: usize) -> Option<(u32, u32, u32, u32, u32)> {
         let t1 = self.triangles[t as usize];
         let (a, b, c) = (t1[k], t1[(k + 1) % 3], t1[(k + 2) % 3]);
-        let Some(&t2) = self.around[a as usize]
+        let &t2 = self.around[a as usize]
             .iter()
-            .find(|&&x| x != t && self.triangles[x as usize].contains(&b))
-        else {
-            return false;
-        };
+            .find(|&&x| x != t && self.triangles[x as usize].contains(&b))?;
         let other = self.triangles[t2 as usize];
         let d = *other.iter().find(|&&w| w != a && w != b).unwrap();
+        Some((a, b, c, t2, d))
+    }
+
+    /// Whether the edge `a b` of live triangle `t` (its `k`-th side) may be flipped to the
+    /// other diagonal of the two triangles on it: the thinner of the two new triangles
+    /// thicker than the thinner of the two old ones by a margin and every condition of the
+    /// module doc holding for the new ones (same part, no turn, within the budget).
+    fn check_flip(&self, t: u32, k: usize, scratch: &mut Scratch) -> Verdict {
+        let Some((a, b, c, t2, d)) = self.flip_quad(t, k) else {
+            return Verdict::REFUSED;
+        };
         if c == d
             || self.around[a as usize].len() <= 3
             || self.around[b as usize].len() <= 3
@@ -380,7 +297,7 @@ impl Work<'_> {
                 .iter()
                 .any(|&x| self.triangles[x as usize].contains(&d))
         {
-            return false;
+            return Verdict::REFUSED;
         }
         let kinds = [a, b, c, d].map(|w| self.kinds[w as usize]);
         let surface = if kinds.iter().all(|k| k.on_surface()) {
@@ -388,14 +305,17 @@ impl Work<'_> {
         } else if kinds.iter().all(|k| k.on_sphere()) {
             false
         } else {
-            return false;
+            return Verdict::REFUSED;
         };
         let (new1, new2) = ([a, d, c], [d, b, c]);
-        let (o1, o2) = (self.corners(t1), self.corners(other));
+        let (o1, o2) = (
+            self.corners(self.triangles[t as usize]),
+            self.corners(self.triangles[t2 as usize]),
+        );
         let (n1, n2) = (self.corners(new1), self.corners(new2));
         let before = quality(o1).min(quality(o2));
         if quality(n1).min(quality(n2)) <= 1.2 * before {
-            return false;
+            return Verdict::REFUSED;
         }
         let normal = |p: [DVec3; 3]| (p[1] - p[0]).cross(p[2] - p[0]);
         let unit = |p: [DVec3; 3]| normal(p).normalize_or_zero();
@@ -407,7 +327,7 @@ impl Work<'_> {
                 || m.dot(unit(o2)) < MAX_TURN_COS
                 || m.dot(old_mean) <= 0.0
             {
-                return false;
+                return Verdict::REFUSED;
             }
         }
         let (pc, pd) = (self.vertices[c as usize], self.vertices[d as usize]);
@@ -417,34 +337,64 @@ impl Work<'_> {
             (n2[0] + n2[1] + n2[2]) / 3.0,
         ] {
             if self.off(p, surface) > self.budget {
-                return false;
+                return Verdict::REFUSED;
             }
         }
-        if self.would_cross(&[new1, new2], &[t, t2]) {
-            return false;
+        scratch.new.clear();
+        scratch.new.extend([new1, new2]);
+        let (crossed, near) = self.would_cross(scratch, |x| x == t || x == t2);
+        Verdict {
+            ok: !crossed,
+            near: Some(near),
         }
-        self.grid.remove(t, o1);
-        self.grid.remove(t2, o2);
-        self.grid.insert(t, n1);
-        self.grid.insert(t2, n2);
+    }
+
+    /// Flips the edge of [`Work::check_flip`] (which must have allowed it, on this mesh).
+    fn apply_flip(&mut self, t: u32, k: usize) {
+        let (a, b, c, t2, d) = self.flip_quad(t, k).unwrap();
+        let (new1, new2) = ([a, d, c], [d, b, c]);
+        self.grid.remove(t);
+        self.grid.remove(t2);
+        self.grid.insert(t, &self.corners(new1));
+        self.grid.insert(t2, &self.corners(new2));
         self.triangles[t as usize] = new1;
         self.triangles[t2 as usize] = new2;
         self.around[a as usize].retain(|&x| x != t2);
         self.around[b as usize].retain(|&x| x != t);
         self.around[c as usize].push(t2);
         self.around[d as usize].push(t);
-        true
     }
 
-    /// Collapses `u` into `v` if every condition of the module doc holds.
-    fn try_collapse(&mut self, u: u32, v: u32) -> bool {
+    /// The two triangles on the edge `u v` (in `u`'s fan) and their corners off it, if there
+    /// are exactly two.
+    fn edge_wings(&self, u: u32, v: u32) -> Option<([u32; 2], [u32; 2])> {
+        let mut shared = [u32::MAX; 2];
+        let mut opposite = [u32::MAX; 2];
+        let mut count = 0;
+        for &t in &self.around[u as usize] {
+            let tri = self.triangles[t as usize];
+            if tri.contains(&v) {
+                if count == 2 {
+                    return None;
+                }
+                shared[count] = t;
+                opposite[count] = *tri.iter().find(|&&w| w != u && w != v).unwrap();
+                count += 1;
+            }
+        }
+        (count == 2).then_some((shared, opposite))
+    }
+
+    /// Whether `u` may be collapsed into `v`: every condition of the module doc.
+    fn check_collapse(&self, u: u32, v: u32, scratch: &mut Scratch) -> Verdict {
+        let refused = Verdict::REFUSED;
         if self.removed[u as usize] || self.removed[v as usize] {
-            return false;
+            return refused;
         }
         let surface = match self.kinds[u as usize] {
             VertexKind::Surface => true,
             VertexKind::Cap => false,
-            VertexKind::Crease => return false,
+            VertexKind::Crease => return refused,
         };
         let same_part = |w: u32| {
             let k = self.kinds[w as usize];
@@ -455,58 +405,41 @@ impl Work<'_> {
             }
         };
         // Valences (on a closed 2-manifold, a vertex has as many neighbours as triangles).
-        if self.around[u as usize].len() <= 3 || self.around[v as usize].len() <= 3 {
-            return false;
+        let fan = &self.around[u as usize];
+        if fan.len() <= 3 || self.around[v as usize].len() <= 3 {
+            return refused;
         }
-        if !self.around[u as usize]
+        if !fan
             .iter()
             .all(|&t| self.triangles[t as usize].iter().all(|&w| same_part(w)))
         {
-            return false;
+            return refused;
         }
         // The two triangles on the edge and their opposite vertices.
-        let mut shared = [u32::MAX; 2];
-        let mut opposite = [u32::MAX; 2];
-        let mut count = 0;
-        for &t in &self.around[u as usize] {
-            let tri = self.triangles[t as usize];
-            if tri.contains(&v) {
-                if count == 2 {
-                    return false;
-                }
-                shared[count] = t;
-                opposite[count] = *tri.iter().find(|&&w| w != u && w != v).unwrap();
-                count += 1;
-            }
-        }
-        if count != 2
-            || opposite[0] == opposite[1]
+        let Some((shared, opposite)) = self.edge_wings(u, v) else {
+            return refused;
+        };
+        if opposite[0] == opposite[1]
             || opposite.iter().any(|&o| self.around[o as usize].len() <= 3)
         {
-            return false;
+            return refused;
         }
-        // The link condition: v's neighbours marked, none of u's but v and the two opposite
-        // may be among them.
-        self.stamp += 1;
-        let stamp = self.stamp;
-        for &t in &self.around[v as usize] {
-            for w in self.triangles[t as usize] {
-                self.mark[w as usize] = stamp;
+        // The link condition: none of u's neighbours but v and the two opposite may be v's.
+        self.ring_of(v, &mut scratch.ring);
+        for &t in fan {
+            let tri = self.triangles[t as usize];
+            let k = tri.iter().position(|&x| x == u).unwrap();
+            let w = tri[(k + 1) % 3];
+            if w != v && !opposite.contains(&w) && scratch.ring.contains(&w) {
+                return refused;
             }
         }
-        for &t in &self.around[u as usize] {
-            for w in self.triangles[t as usize] {
-                if w != u && w != v && !opposite.contains(&w) && self.mark[w as usize] == stamp {
-                    return false;
-                }
-            }
-        }
-        // The new triangles, checked.
+        // The new triangles: no turn, not too thin, the removed vertex near one of them.
         let target = self.vertices[v as usize];
         let removed_at = self.vertices[u as usize];
         let mut nearest_to_removed = f64::INFINITY;
-        let mut new_triangles = Vec::with_capacity(self.around[u as usize].len());
-        for &t in &self.around[u as usize] {
+        scratch.new.clear();
+        for &t in fan {
             if shared.contains(&t) {
                 continue;
             }
@@ -517,36 +450,49 @@ impl Work<'_> {
             let n_new = (new[1] - new[0]).cross(new[2] - new[0]);
             let (l_old, l_new) = (n_old.length(), n_new.length());
             if !(l_new > 0.0 && l_old > 0.0) || n_old.dot(n_new) < MAX_TURN_COS * l_old * l_new {
-                return false;
+                return refused;
             }
             if !self.thin_enough(new_tri, quality(old), surface) {
-                return false;
+                return refused;
             }
-            new_triangles.push(new_tri);
-            let centroid = (new[0] + new[1] + new[2]) / 3.0;
-            let k = new_tri.iter().position(|&w| w == v).unwrap();
-            let (b, c) = (new[(k + 1) % 3], new[(k + 2) % 3]);
-            for p in [centroid, 0.5 * (target + b), 0.5 * (target + c)] {
-                if self.off(p, surface) > self.budget {
-                    return false;
-                }
-            }
+            scratch.new.push(new_tri);
             nearest_to_removed = nearest_to_removed
                 .min((closest_on_triangle(removed_at, new) - removed_at).length());
         }
         if nearest_to_removed > self.budget {
-            return false;
+            return refused;
         }
-        let fan = std::mem::take(&mut self.around[u as usize]);
-        let crossed = self.would_cross(&new_triangles, &fan);
-        self.around[u as usize] = fan;
-        if crossed {
-            return false;
+        // The accuracy: each new triangle's centroid, and the midpoint of each side from v
+        // (each once: the sides from v to u's other neighbours).
+        for &tri in &scratch.new {
+            let [a, b, c] = self.corners(tri);
+            if self.off((a + b + c) / 3.0, surface) > self.budget {
+                return refused;
+            }
         }
-        // Made: the two triangles on the edge go, the rest of u's fan turns to v.
+        for &t in fan {
+            let tri = self.triangles[t as usize];
+            let k = tri.iter().position(|&x| x == u).unwrap();
+            let w = tri[(k + 1) % 3];
+            if w != v && self.off(0.5 * (target + self.vertices[w as usize]), surface) > self.budget
+            {
+                return refused;
+            }
+        }
+        let (crossed, near) =
+            self.would_cross(scratch, |x| self.triangles[x as usize].contains(&u));
+        Verdict {
+            ok: !crossed,
+            near: Some(near),
+        }
+    }
+
+    /// Collapses `u` into `v` (which [`Work::check_collapse`] must have allowed, on this
+    /// mesh): the two triangles on the edge go, the rest of `u`'s fan turns to `v`.
+    fn apply_collapse(&mut self, u: u32, v: u32) {
+        let (shared, _) = self.edge_wings(u, v).unwrap();
         for &t in &self.around[u as usize] {
-            let corners = self.corners(self.triangles[t as usize]);
-            self.grid.remove(t, corners);
+            self.grid.remove(t);
         }
         for &t in &shared {
             self.alive[t as usize] = false;
@@ -568,19 +514,182 @@ impl Work<'_> {
                 }
             }
             let corners = self.corners(self.triangles[t as usize]);
-            self.grid.insert(t, corners);
+            self.grid.insert(t, &corners);
             self.around[v as usize].push(t);
         }
         self.removed[u as usize] = true;
-        true
+        self.removed_count += 1;
+    }
+
+    /// Whether `step` may be made on the mesh as it is.
+    fn check(&self, step: Step, scratch: &mut Scratch) -> Verdict {
+        match step {
+            Step::Collapse(u, v) => self.check_collapse(u, v, scratch),
+            Step::Flip(t, k) if self.alive[t as usize] => {
+                self.check_flip(t, usize::from(k), scratch)
+            }
+            Step::Flip(..) => Verdict::REFUSED,
+        }
+    }
+
+    /// Makes `step` (which [`Work::check`] must have allowed, on this mesh).
+    fn apply(&mut self, step: Step) {
+        match step {
+            Step::Collapse(u, v) => self.apply_collapse(u, v),
+            Step::Flip(t, k) => self.apply_flip(t, usize::from(k)),
+        }
+    }
+
+    /// The vertices whose fans a check of `step` reads and that making it changes, into
+    /// `out`: for a collapse of `u`, `u` and its neighbours; for a flip, the corners of the
+    /// two triangles. A check's verdict stands while none of them has changed (nor any
+    /// triangle whose box overlaps the verdict's `near`): every triangle or fan it reads is
+    /// about one of them.
+    fn footprint(&self, step: Step, out: &mut Vec<u32>) {
+        out.clear();
+        match step {
+            Step::Collapse(u, v) => {
+                out.push(v);
+                out.push(u);
+                for &t in &self.around[u as usize] {
+                    out.extend(self.triangles[t as usize]);
+                }
+            }
+            Step::Flip(t, k) => {
+                out.extend(self.triangles[t as usize]);
+                if let Some((.., d)) = self.flip_quad(t, usize::from(k)) {
+                    out.push(d);
+                }
+            }
+        }
+    }
+
+    /// Makes each of `steps` that every condition allows, in order, as if one by one;
+    /// how many were made, or `None` if `cancel` stopped it. The steps go in batches; a
+    /// batch is checked either one step after another, or (with more than one thread) in
+    /// parallel against the mesh as the batch begins and then made in order, a verdict whose
+    /// footprint ([`Work::footprint`]) an earlier step of the batch changed, or whose new
+    /// triangles' box a changed triangle overlaps, being checked again on the mesh as it is
+    /// then. Either way the result is the same as one by one, for any number of threads;
+    /// `checking` says which way is taken.
+    fn make(&mut self, steps: &[Step], cancel: &AtomicBool, checking: Checking) -> Option<usize> {
+        let mut scratch = Scratch::default();
+        let mut made = 0;
+        let parallel_possible = rayon::current_num_threads() > 1 && checking != Checking::Serial;
+        let mut changed_at = vec![0u32; self.vertices.len()];
+        let mut changed_boxes: Vec<Box32> = Vec::new();
+        let mut footprint = Vec::new();
+        // Seconds per step of the last batch checked one by one, and in parallel.
+        let mut rate = [f64::INFINITY; 2];
+        let mut begun = 0;
+        let mut stamp = 0;
+        while begun < steps.len() {
+            if cancel.load(Ordering::Relaxed) {
+                return None;
+            }
+            // Batches a sixty-fourth of the live vertices long: each step made marks a
+            // handful of vertices changed, so about as few verdicts go stale whatever the
+            // size of the mesh.
+            let live = self.vertices.len() - self.removed_count;
+            let length = (live / 64).max(BATCH);
+            let batch = &steps[begun..(begun + length).min(steps.len())];
+            begun += batch.len();
+            stamp += 1;
+            let parallel = parallel_possible
+                && match checking {
+                    Checking::Fastest => match stamp % PROBE_EVERY {
+                        0 => false,
+                        1 => true,
+                        _ => rate[1] < rate[0],
+                    },
+                    _ => true,
+                };
+            let started = Instant::now();
+            if !parallel {
+                for &step in batch {
+                    if self.check(step, &mut scratch).ok {
+                        self.apply(step);
+                        made += 1;
+                    }
+                }
+                rate[0] = started.elapsed().as_secs_f64() / batch.len() as f64;
+                continue;
+            }
+            changed_boxes.clear();
+            let this = &*self;
+            let verdicts: Vec<Verdict> = batch
+                .par_iter()
+                .with_min_len(BATCH / 16)
+                .map_init(Scratch::default, |scratch, &step| this.check(step, scratch))
+                .collect();
+            for (&step, verdict) in batch.iter().zip(verdicts) {
+                self.footprint(step, &mut footprint);
+                let stale = footprint.iter().any(|&w| changed_at[w as usize] == stamp)
+                    || verdict
+                        .near
+                        .is_some_and(|near| changed_boxes.iter().any(|b| b.overlaps(&near)));
+                let ok = if stale {
+                    self.check(step, &mut scratch).ok
+                } else {
+                    verdict.ok
+                };
+                if ok {
+                    let mut changed = Box32::around(&[self.vertices[footprint[0] as usize]; 3]);
+                    for &w in &footprint {
+                        changed_at[w as usize] = stamp;
+                        changed = changed.union(Box32::around(&[self.vertices[w as usize]; 3]));
+                    }
+                    changed_boxes.push(changed);
+                    self.apply(step);
+                    made += 1;
+                }
+            }
+            rate[1] = started.elapsed().as_secs_f64() / batch.len() as f64;
+        }
+        Some(made)
     }
 }
+
+/// How [`Work::make`] checks a batch of steps (the mesh made is the same every way).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Checking {
+    /// One step after another.
+    Serial,
+    /// In parallel, when the pool has more than one thread.
+    Parallel,
+    /// Whichever of the two took less time a step in the last batch timed each way: every
+    /// [`PROBE_EVERY`] batches one is checked each way, and the faster way is kept until the
+    /// next (a machine busy with other work makes the parallel checks wait for each other).
+    Fastest,
+}
+
+/// How often [`Checking::Fastest`] times both ways again, in batches.
+const PROBE_EVERY: u32 = 16;
+
+/// One step of a pass: `u` collapsed into `v`, or side `k` of triangle `t` flipped.
+#[derive(Clone, Copy, Debug)]
+enum Step {
+    Collapse(u32, u32),
+    Flip(u32, u8),
+}
+
+/// [`Work::make`] on a thread of the pool (so each batch's parallel checks are split there,
+/// not handed over from outside it and waited for).
+fn make(work: &mut Work, steps: &[Step], cancel: &AtomicBool, checking: Checking) -> Option<usize> {
+    rayon::scope(|_| work.make(steps, cancel, checking))
+}
+
+/// The fewest steps checked together by [`Work::make`].
+const BATCH: usize = 1024;
 
 /// Coarsens `mesh` (object space, with each vertex's kind) by half-edge collapses within
 /// `budget` of the exact boundary (object units; see the module doc), in place: removed
 /// vertices are dropped and the kinds kept in step. Gives up (`None`, the mesh untouched)
 /// once `cancel` is set (read between batches of collapses). `pass_done(k)` is called as
-/// pass `k` (1 to at most [`MAX_PASSES`]) ends.
+/// pass `k` (1 to at most [`MAX_PASSES`]) ends. The steps are checked one by one unless the
+/// environment variable `KARDIA_COARSEN_CHECKS` is `parallel` (batches checked in parallel)
+/// or `fastest` (whichever way was faster when last timed): the mesh is the same every way,
+/// for any number of threads (on a busy two-core machine one by one was the fastest).
 pub fn coarsen(
     field: &Field,
     mesh: &mut TriangleMesh,
@@ -588,6 +697,25 @@ pub fn coarsen(
     budget: f64,
     cancel: &AtomicBool,
     pass_done: &dyn Fn(usize),
+) -> Option<Coarsened> {
+    let checking = match std::env::var("KARDIA_COARSEN_CHECKS").as_deref() {
+        Ok("parallel") => Checking::Parallel,
+        Ok("fastest") => Checking::Fastest,
+        _ => Checking::Serial,
+    };
+    coarsen_checking(field, mesh, kinds, budget, cancel, pass_done, checking)
+}
+
+/// [`coarsen`], checking the steps of each batch as `checking` says (the result is the same
+/// every way).
+pub(crate) fn coarsen_checking(
+    field: &Field,
+    mesh: &mut TriangleMesh,
+    kinds: &mut Vec<VertexKind>,
+    budget: f64,
+    cancel: &AtomicBool,
+    pass_done: &dyn Fn(usize),
+    checking: Checking,
 ) -> Option<Coarsened> {
     let n = mesh.vertices.len();
     let mut around: Vec<Vec<u32>> = vec![Vec::new(); n];
@@ -603,9 +731,13 @@ pub fn coarsen(
         longest += (b - a).length().max((c - b).length()).max((a - c).length());
     }
     let cell = 2.0 * longest / mesh.triangles.len().max(1) as f64;
-    let mut grid = TriangleGrid::new(field.radius() * (1.0 + 1e-9), cell.max(1e-12));
+    let mut grid = TriangleGrid::new(
+        field.radius() * (1.0 + 1e-9),
+        cell.max(1e-12),
+        mesh.triangles.len(),
+    );
     for t in 0..mesh.triangles.len() {
-        grid.insert(t as u32, mesh.corners(t));
+        grid.insert(t as u32, &mesh.corners(t));
     }
     let h = 1e-7 * field.radius();
     let surface_normals: Vec<DVec3> = mesh
@@ -628,15 +760,13 @@ pub fn coarsen(
         alive: vec![true; mesh.triangles.len()],
         around,
         removed: vec![false; n],
-        mark: vec![0; n],
-        stamp: 0,
+        removed_count: 0,
         budget,
         h,
         grid,
         surface_normals,
     };
     let mut done = Coarsened::default();
-    let i_cancelled = |i: usize| i.is_multiple_of(4096) && cancel.load(Ordering::Relaxed);
     for _ in 0..MAX_PASSES {
         // Every live edge in both directions, shortest first.
         let mut edges: Vec<(f64, u32, u32)> = Vec::new();
@@ -651,30 +781,22 @@ pub fn coarsen(
             }
         }
         edges.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
-        let before = done.collapses;
-        for (i, &(_, a, b)) in edges.iter().enumerate() {
-            if i_cancelled(i) {
-                return None;
-            }
-            if work.try_collapse(a, b) {
-                done.collapses += 1;
-            }
-        }
+        let steps: Vec<Step> = edges
+            .iter()
+            .map(|&(_, a, b)| Step::Collapse(a, b))
+            .collect();
+        let collapsed = make(&mut work, &steps, cancel, checking)?;
+        done.collapses += collapsed;
         // Flips toward thicker triangles, which free further collapses.
-        for t in 0..work.triangles.len() {
-            if i_cancelled(t) {
-                return None;
-            }
-            for k in 0..3 {
-                if work.alive[t] && work.try_flip(t as u32, k) {
-                    done.flips += 1;
-                }
-            }
-        }
+        let steps: Vec<Step> = (0..work.triangles.len() as u32)
+            .filter(|&t| work.alive[t as usize])
+            .flat_map(|t| (0..3).map(move |k| Step::Flip(t, k)))
+            .collect();
+        done.flips += make(&mut work, &steps, cancel, checking)?;
         done.passes += 1;
         pass_done(done.passes);
         let alive_vertices = n - done.collapses;
-        if (done.collapses - before) * 50 < alive_vertices {
+        if collapsed * 50 < alive_vertices {
             break;
         }
     }
@@ -718,65 +840,6 @@ mod tests {
     }
 
     #[test]
-    fn the_triangle_grid_finds_every_box_that_overlaps_a_query_as_triangles_change() {
-        // Triangles of many sizes (a few much larger than the finest cells) in a ball of
-        // radius 2; some moved, some removed; every query must see every overlapping box.
-        let mut seed = 12345u64;
-        let mut random = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let mut point = |scale: f64, at: DVec3| {
-            at + scale * DVec3::new(random() - 0.5, random() - 0.5, random() - 0.5)
-        };
-        let mut grid = TriangleGrid::new(2.0, 0.05);
-        let mut triangles: Vec<Option<[DVec3; 3]>> = Vec::new();
-        for i in 0..3000 {
-            let at = point(2.2, DVec3::ZERO);
-            let size = [0.02, 0.1, 0.5, 2.0][i % 4];
-            let t = [point(size, at), point(size, at), point(size, at)]
-                .map(|p| p.clamp(DVec3::splat(-2.0), DVec3::splat(2.0)));
-            grid.insert(i as u32, t);
-            triangles.push(Some(t));
-        }
-        for i in (0..3000).step_by(3) {
-            let old = triangles[i].unwrap();
-            grid.remove(i as u32, old);
-            if i % 2 == 0 {
-                triangles[i] = None;
-            } else {
-                let moved = old.map(|p| (p * 0.5).clamp(DVec3::splat(-2.0), DVec3::splat(2.0)));
-                grid.insert(i as u32, moved);
-                triangles[i] = Some(moved);
-            }
-        }
-        for _ in 0..200 {
-            let (a, b) = (point(2.0, DVec3::ZERO), point(0.3, DVec3::ZERO));
-            let query = (a.min(a + b), a.max(a + b));
-            let mut seen = Vec::new();
-            grid.any_near(query.0, query.1, |b| {
-                seen.push(b.triangle);
-                false
-            });
-            seen.sort_unstable();
-            let count = seen.len();
-            seen.dedup();
-            assert_eq!(seen.len(), count, "a triangle visited twice");
-            for (i, t) in triangles.iter().enumerate() {
-                let Some(t) = t else {
-                    assert!(seen.binary_search(&(i as u32)).is_err(), "removed {i} seen");
-                    continue;
-                };
-                if boxes_overlap(bounds(t), query) {
-                    assert!(seen.binary_search(&(i as u32)).is_ok(), "{i} missed");
-                }
-            }
-        }
-    }
-
-    #[test]
     fn a_thin_triangle_is_made_only_along_the_surface() {
         // On the cylinder x² + y² = 1, a thin triangle along the axis lies along the surface;
         // the same triangle turned across it (around the cylinder) does not.
@@ -805,11 +868,10 @@ mod tests {
             alive: vec![true; 2],
             around: vec![Vec::new(); vertices.len()],
             removed: vec![false; vertices.len()],
-            mark: vec![0; vertices.len()],
-            stamp: 0,
+            removed_count: 0,
             budget: 1.0,
             h,
-            grid: TriangleGrid::new(3.0, 0.5),
+            grid: TriangleGrid::new(3.0, 0.5, 2),
             surface_normals: vertices
                 .iter()
                 .map(|&p| field.gradient(p, h).normalize())
@@ -824,6 +886,53 @@ mod tests {
         // Inward (reversed) is refused, and so is either one when only quality counts.
         assert!(!work.thin_enough([0, 2, 1], 1.0, true));
         assert!(work.thin_enough([3, 4, 5], 0.01, true));
+    }
+
+    #[test]
+    fn the_coarsening_is_the_same_for_one_thread_and_two() {
+        // One thread makes the steps one by one; two check them in batches in parallel and
+        // recheck the verdicts an earlier step of the batch made stale: the same mesh.
+        let poly = expand("x^4 + y^4 + z^4 - 0.5*(x^2 + y^2 + z^2) = 0.4").unwrap();
+        let field = Field::new(&poly, 1.5, SolidKind::Inside);
+        let grid = extract::Grid::covering(1.5, 0.03);
+        let (extracted, extracted_kinds) = extract::march(&field, grid, &|_, _| {});
+        let run = |threads: usize, checking: Checking| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let (mut mesh, mut kinds) = (extracted.clone(), extracted_kinds.clone());
+            let done = pool
+                .install(|| {
+                    coarsen_checking(
+                        &field,
+                        &mut mesh,
+                        &mut kinds,
+                        0.01,
+                        &AtomicBool::new(false),
+                        &|_| {},
+                        checking,
+                    )
+                })
+                .unwrap();
+            (mesh, kinds, done)
+        };
+        let one = run(1, Checking::Serial);
+        let two = run(2, Checking::Parallel);
+        let fastest = run(2, Checking::Fastest);
+        eprintln!(
+            "{} -> {} triangles, {:?}",
+            extracted.triangles.len(),
+            one.0.triangles.len(),
+            one.2
+        );
+        assert!(one.2.collapses > 1000 && one.2.flips > 0, "{:?}", one.2);
+        check::verify(&one.0).unwrap();
+        assert!(one == two, "the meshes differ between 1 and 2 threads");
+        assert!(
+            one == fastest,
+            "the meshes differ when the fastest way is chosen"
+        );
     }
 
     #[test]

@@ -577,17 +577,20 @@ fn the_coarsening_keeps_its_first_budget_on_the_nodal_surfaces_the_heart_and_the
     }
 }
 
-/// The same file, byte for byte, whatever the number of threads.
+/// The same file, byte for byte, whatever the number of threads: with two, the coarsening
+/// checks its steps in parallel batches (`KARDIA_COARSEN_CHECKS=parallel`), with one, one
+/// by one.
 #[test]
 fn the_file_is_the_same_for_one_thread_and_two() {
     let dir = tempfile::tempdir().unwrap();
     let mut files = Vec::new();
-    for threads in ["1", "2"] {
+    for (threads, checks) in [("1", "serial"), ("2", "parallel")] {
         let path = dir.path().join(format!("barth-{threads}.stl"));
         let o = Command::new(env!("CARGO_BIN_EXE_kardia"))
             .args(["mesh", "--preset", "barth_sextic", "--quiet", "-o"])
             .arg(&path)
             .env("RAYON_NUM_THREADS", threads)
+            .env("KARDIA_COARSEN_CHECKS", checks)
             .output()
             .unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
