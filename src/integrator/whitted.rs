@@ -195,6 +195,33 @@ impl Shader for Whitted<'_> {
         // The camera rays' first hits together (the shapes may share work across lanes),
         // then each lane shaded as `trace` shades it.
         let hits = self.scene.intersect_lanes(rays, 0.0, f64::INFINITY);
+        self.shade_camera_lanes(rays, hits, samples)
+    }
+
+    #[inline(always)]
+    fn radiance_lanes_among(
+        &self,
+        rays: &[Ray; LANES],
+        samples: &mut [Sample; LANES],
+        objects: &[u32],
+    ) -> [DVec3; LANES] {
+        // The same hits as `intersect_lanes` finds, asking only the objects the rays may meet.
+        let hits = self
+            .scene
+            .intersect_lanes_among(rays, 0.0, f64::INFINITY, objects);
+        self.shade_camera_lanes(rays, hits, samples)
+    }
+}
+
+impl<'a> Whitted<'a> {
+    /// The colours of camera rays `rays` from their first hits `hits` (each counted here).
+    #[inline(always)]
+    fn shade_camera_lanes(
+        &self,
+        rays: &[Ray; LANES],
+        hits: [Option<SceneHit>; LANES],
+        samples: &mut [Sample; LANES],
+    ) -> [DVec3; LANES] {
         for sample in samples.iter_mut() {
             sample.count_ray();
         }
@@ -207,9 +234,7 @@ impl Shader for Whitted<'_> {
         }
         out
     }
-}
 
-impl<'a> Whitted<'a> {
     /// The shader of `setup.scene` for `setup.spp` samples a pixel (which fixes the strata
     /// of spherical lights) and recursion to `setup.max_depth`.
     pub fn new(setup: &ShadeSetup<'a>) -> Self {

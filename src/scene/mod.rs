@@ -348,6 +348,37 @@ impl Scene {
         } else {
             self.nearest_lanes_in_order(rays, t_min, t_max)
         };
+        self.hits_lanes(rays, best)
+    }
+
+    /// [`Scene::intersect_lanes`] for rays that may meet only the objects `objects` (indices,
+    /// in any order, each at most once) and the unbounded ones: every other object's box is
+    /// missed by every lane's ray on `(t_min, t_max)`, or met only where the object has no
+    /// hit. The same answers, without walking the index (for the camera rays of a group of
+    /// pixels, whose objects the scheduler lists from their images).
+    pub fn intersect_lanes_among(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+        objects: &[u32],
+    ) -> [Option<SceneHit>; LANES] {
+        let best = match self.index.get(&self.objects) {
+            Some(built) if self.may_use_index() => {
+                self.nearest_lanes_among(built, rays, t_min, t_max, objects)
+            }
+            _ => return self.intersect_lanes(rays, t_min, t_max),
+        };
+        self.hits_lanes(rays, best)
+    }
+
+    /// The hit records of the lanes' nearest objects and `t`s, `best`.
+    #[inline(always)]
+    fn hits_lanes(
+        &self,
+        rays: &[Ray; LANES],
+        best: [Option<(usize, f64)>; LANES],
+    ) -> [Option<SceneHit>; LANES] {
         // Where every lane that hit met the same object, and that object's normals cost less
         // asked together, they are (the same answers as `hit` gives one at a time).
         let mut objects = best.iter().flatten().map(|&(object, _)| object);
@@ -457,38 +488,105 @@ impl Scene {
     ) -> [Option<(usize, f64)>; LANES] {
         let mut best: [Option<(usize, f64)>; LANES] = [None; LANES];
         let lanes = RayLanes::new(rays);
-        let ask_object = |i: usize, best: &mut [Option<(usize, f64)>; LANES]| {
-            let obj = &self.objects[i];
-            let limit: [f64; LANES] =
-                std::array::from_fn(|lane| nearer_limit(i, best[lane], t_max));
-            let met = lanes.meet(&obj.bounds, [t_min; LANES], limit);
-            if met == 0 {
-                return;
-            }
-            let ask = std::array::from_fn(|lane| {
-                if met & 1 << lane != 0 {
-                    limit[lane]
-                } else {
-                    f64::NEG_INFINITY
-                }
-            });
-            let hits = obj.shape.intersect_lanes(rays, [t_min; LANES], ask);
-            for lane in 0..LANES {
-                if let Some(t) = hits[lane] {
-                    best[lane] = Some((i, t));
-                }
-            }
-        };
         for &i in &built.unbounded {
-            ask_object(i as usize, &mut best);
+            self.ask_nearest_lanes(i as usize, rays, &lanes, t_min, t_max, &mut best);
         }
         let range = best.map(|hit| walk_limit(hit, t_max));
         built
             .bvh
             .walk_lanes(&lanes, [t_min; LANES], range, |i, range| {
-                ask_object(i as usize, &mut best);
+                self.ask_nearest_lanes(i as usize, rays, &lanes, t_min, t_max, &mut best);
                 *range = best.map(|hit| walk_limit(hit, t_max));
             });
+        best
+    }
+
+    /// Object `i` asked for the lanes whose rays (`lanes`: `rays` by coordinate) meet its box
+    /// before [`nearer_limit`] of the lane's nearest hit so far, `best`, which its hits
+    /// replace.
+    #[inline(always)]
+    fn ask_nearest_lanes(
+        &self,
+        i: usize,
+        rays: &[Ray; LANES],
+        lanes: &RayLanes,
+        t_min: f64,
+        t_max: f64,
+        best: &mut [Option<(usize, f64)>; LANES],
+    ) {
+        let obj = &self.objects[i];
+        let limit: [f64; LANES] = std::array::from_fn(|lane| nearer_limit(i, best[lane], t_max));
+        let met = lanes.meet(&obj.bounds, [t_min; LANES], limit);
+        if met == 0 {
+            return;
+        }
+        let ask = std::array::from_fn(|lane| {
+            if met & 1 << lane != 0 {
+                limit[lane]
+            } else {
+                f64::NEG_INFINITY
+            }
+        });
+        let hits = obj.shape.intersect_lanes(rays, [t_min; LANES], ask);
+        for lane in 0..LANES {
+            if let Some(t) = hits[lane] {
+                best[lane] = Some((i, t));
+            }
+        }
+    }
+
+    /// [`Scene::nearest_lanes_by_index`]'s answers asking the unbounded objects and
+    /// `objects` alone (see [`Scene::intersect_lanes_among`]). Compiled for AVX2 where the
+    /// processor has it.
+    #[inline(never)]
+    fn nearest_lanes_among(
+        &self,
+        built: &index::Built,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+        objects: &[u32],
+    ) -> [Option<(usize, f64)>; LANES] {
+        #[cfg(target_arch = "x86_64")]
+        if crate::cpu::avx2() {
+            // SAFETY: the processor has AVX2.
+            return unsafe { self.nearest_lanes_among_avx2(built, rays, t_min, t_max, objects) };
+        }
+        self.nearest_lanes_among_body(built, rays, t_min, t_max, objects)
+    }
+
+    /// [`Scene::nearest_lanes_among`] compiled for AVX2.
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn nearest_lanes_among_avx2(
+        &self,
+        built: &index::Built,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+        objects: &[u32],
+    ) -> [Option<(usize, f64)>; LANES] {
+        self.nearest_lanes_among_body(built, rays, t_min, t_max, objects)
+    }
+
+    /// The work of [`Scene::nearest_lanes_among`], inlined into each compiled form.
+    #[inline(always)]
+    fn nearest_lanes_among_body(
+        &self,
+        built: &index::Built,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+        objects: &[u32],
+    ) -> [Option<(usize, f64)>; LANES] {
+        let mut best: [Option<(usize, f64)>; LANES] = [None; LANES];
+        let lanes = RayLanes::new(rays);
+        for &i in built.unbounded.iter().chain(objects) {
+            self.ask_nearest_lanes(i as usize, rays, &lanes, t_min, t_max, &mut best);
+        }
         best
     }
 
@@ -594,7 +692,7 @@ impl Scene {
     /// Whether the scene has enough objects for the queries to use its index (they do where
     /// it was built from these objects).
     #[inline]
-    fn may_use_index(&self) -> bool {
+    pub(crate) fn may_use_index(&self) -> bool {
         self.objects.len() >= Self::INDEX_MIN_OBJECTS
     }
 
