@@ -306,7 +306,7 @@ impl<'a> Whitted<'a> {
     }
 
     /// [`Whitted::shade`] at depth 0 for each lane, the shadow rays of the lanes' hits asked
-    /// together ([`Scene::occluded_lanes`]), for an opaque scene (where a shadow ray is an
+    /// together ([`Scene::occluded_lanes_from`] the first lane's object), for an opaque scene (where a shadow ray is an
     /// any-hit query). Every lane draws its random numbers in the order `shade` draws them
     /// (all lanes walk the same lights and light samples), so the colours are the same.
     #[inline(always)]
@@ -327,10 +327,11 @@ impl<'a> Whitted<'a> {
                 points[lane] = Some(at);
             }
         }
-        if points.iter().all(Option::is_none) {
+        // The object of the first lane's hit, where the shadow rays' walk starts.
+        let Some(from) = hits.iter().flatten().map(|hit| hit.object).next() else {
             // Every lane saw the background: no light to walk, no random number drawn.
             return colours;
-        }
+        };
         for (index, light) in scene.lights.iter().enumerate() {
             let (count, grid) = self.light_grids[index];
             let mut lit = [DVec3::ZERO; LANES];
@@ -357,7 +358,7 @@ impl<'a> Whitted<'a> {
                         asked[lane] = true;
                     }
                 }
-                let blocked = scene.occluded_lanes(&shadow, near, far);
+                let blocked = scene.occluded_lanes_from(&shadow, near, far, from);
                 for lane in 0..LANES {
                     if let (Some(at), true, false) = (&points[lane], asked[lane], blocked[lane]) {
                         lit[lane] += DVec3::ONE * at.reflected_light(shadow[lane].dir);

@@ -26,6 +26,9 @@ pub(super) struct Built {
     pub(super) bvh: Bvh,
     /// The indices of the objects whose boxes are not finite, in order.
     pub(super) unbounded: Vec<u32>,
+    /// By object index, the leaf of `bvh` that holds the object ([`Bvh::item_leaves`]), or
+    /// `u32::MAX` for an unbounded one.
+    pub(super) leaf_of: Vec<u32>,
 }
 
 impl std::fmt::Debug for ObjectIndex {
@@ -78,10 +81,16 @@ impl Built {
                 unbounded.push(i);
             }
         }
+        let bvh = Bvh::new(&boxes);
+        let mut leaf_of = vec![u32::MAX; objects.len()];
+        for (id, leaf) in bvh.item_leaves() {
+            leaf_of[id as usize] = leaf;
+        }
         Self {
             key: key(objects),
-            bvh: Bvh::new(&boxes),
+            bvh,
             unbounded,
+            leaf_of,
         }
     }
 }

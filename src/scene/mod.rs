@@ -191,22 +191,39 @@ impl Scene {
         t_max: [f64; LANES],
     ) -> [bool; LANES] {
         if self.may_use_index() {
-            return self.occluded_lanes_many(rays, t_min, t_max);
+            return self.occluded_lanes_many(rays, t_min, t_max, None);
+        }
+        self.occluded_lanes_in_order(rays, t_min, t_max)
+    }
+
+    /// [`Scene::occluded_lanes`] for rays that start on or near object `from` (shadow rays
+    /// of hits on it): the same answers, for any `from`; with the index, its walk starts at
+    /// that object's leaf and climbs, which costs less for rays that meet little beyond it.
+    pub fn occluded_lanes_from(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+        from: usize,
+    ) -> [bool; LANES] {
+        if self.may_use_index() {
+            return self.occluded_lanes_many(rays, t_min, t_max, Some(from));
         }
         self.occluded_lanes_in_order(rays, t_min, t_max)
     }
 
     /// [`Scene::occluded_lanes`] of a scene that may use its index (see
-    /// [`Scene::occluded_many`]).
+    /// [`Scene::occluded_many`]), its walk started at object `from`'s leaf when given.
     #[inline(never)]
     fn occluded_lanes_many(
         &self,
         rays: &[Ray; LANES],
         t_min: [f64; LANES],
         t_max: [f64; LANES],
+        from: Option<usize>,
     ) -> [bool; LANES] {
         match self.index.get(&self.objects) {
-            Some(built) => self.occluded_lanes_by_index(built, rays, t_min, t_max),
+            Some(built) => self.occluded_lanes_by_index(built, rays, t_min, t_max, from),
             None => self.occluded_lanes_in_order(rays, t_min, t_max),
         }
     }
@@ -254,13 +271,14 @@ impl Scene {
         rays: &[Ray; LANES],
         t_min: [f64; LANES],
         t_max: [f64; LANES],
+        from: Option<usize>,
     ) -> [bool; LANES] {
         #[cfg(target_arch = "x86_64")]
         if crate::cpu::avx2() {
             // SAFETY: the processor has AVX2.
-            return unsafe { self.occluded_lanes_by_index_avx2(built, rays, t_min, t_max) };
+            return unsafe { self.occluded_lanes_by_index_avx2(built, rays, t_min, t_max, from) };
         }
-        self.occluded_lanes_by_index_body(built, rays, t_min, t_max)
+        self.occluded_lanes_by_index_body(built, rays, t_min, t_max, from)
     }
 
     /// [`Scene::occluded_lanes_by_index`] compiled for AVX2.
@@ -275,8 +293,9 @@ impl Scene {
         rays: &[Ray; LANES],
         t_min: [f64; LANES],
         t_max: [f64; LANES],
+        from: Option<usize>,
     ) -> [bool; LANES] {
-        self.occluded_lanes_by_index_body(built, rays, t_min, t_max)
+        self.occluded_lanes_by_index_body(built, rays, t_min, t_max, from)
     }
 
     /// The work of [`Scene::occluded_lanes_by_index`], inlined into each compiled form.
@@ -287,6 +306,7 @@ impl Scene {
         rays: &[Ray; LANES],
         t_min: [f64; LANES],
         t_max: [f64; LANES],
+        from: Option<usize>,
     ) -> [bool; LANES] {
         let mut blocked = [false; LANES];
         let lanes = RayLanes::new(rays);
@@ -322,14 +342,19 @@ impl Scene {
                 t_max[lane]
             }
         });
-        built.bvh.walk_lanes(&lanes, t_min, range, |i, range| {
+        let visit = |i: u32, range: &mut [f64; LANES]| {
             ask_object(i as usize, &mut blocked);
             for lane in 0..LANES {
                 if blocked[lane] {
                     range[lane] = f64::NEG_INFINITY;
                 }
             }
-        });
+        };
+        // Any object that blocks a lane blocks it, whatever the order the walk asks them in.
+        match from.and_then(|object| built.leaf_of.get(object)) {
+            Some(&leaf) => built.bvh.walk_lanes_from(&lanes, t_min, range, leaf, visit),
+            None => built.bvh.walk_lanes(&lanes, t_min, range, visit),
+        }
         blocked
     }
 
@@ -896,6 +921,12 @@ mod tests {
                 t_max[lane] > 0.0 && scene.occluded(&rs[lane], 0.0, t_max[lane])
             });
             assert_eq!(scene.occluded_lanes(&rs, [0.0; LANES], t_max), each);
+            // From any object's leaf (or an object out of range), the same answers.
+            let from = k * 7 % (scene.objects.len() + 1);
+            assert_eq!(
+                scene.occluded_lanes_from(&rs, [0.0; LANES], t_max, from),
+                each
+            );
         }
     }
 
