@@ -317,6 +317,44 @@ impl Bvh {
         self.walk_below(rays, t_min, &mut t_max, &mut awake, 0, &mut visit);
     }
 
+    /// Each item as `(id, ranks)`: `ranks[octant]` is its place in the order in which
+    /// [`Bvh::walk_lanes`] visits items for rays whose directions' components along the
+    /// three axes are all `≥ 0` or all not, as the bits of `octant` say (bit `a` set: not
+    /// `≥ 0` along axis `a`); the walk visits the items a group of such rays meets in that
+    /// order. Time O(n) for each octant.
+    pub fn walk_ranks(&self) -> Vec<(u32, [u32; 8])> {
+        let mut ranks = vec![[0u32; 8]; self.items.len()];
+        for (octant, _) in [(); 8].iter().enumerate() {
+            let mut next = 0u32;
+            let mut stack: Vec<usize> = Vec::with_capacity(MAX_DEPTH);
+            if !self.nodes.is_empty() {
+                stack.push(0);
+            }
+            while let Some(k) = stack.pop() {
+                let n = &self.nodes[k];
+                if n.count > 0 {
+                    let first = n.offset as usize;
+                    for rank in &mut ranks[first..first + n.count as usize] {
+                        rank[octant] = next;
+                        next += 1;
+                    }
+                } else {
+                    // As the walk: the first child (lower along the axis) first where the
+                    // direction's component is `≥ 0`.
+                    let (low, high) = (k + 1, n.offset as usize);
+                    let (near, far) = if octant >> n.axis & 1 == 0 {
+                        (low, high)
+                    } else {
+                        (high, low)
+                    };
+                    stack.push(far);
+                    stack.push(near);
+                }
+            }
+        }
+        self.items.iter().copied().zip(ranks).collect()
+    }
+
     /// [`Bvh::walk_lanes`] for rays that start in the box of leaf `leaf` (as
     /// [`Bvh::item_leaves`] gives it; any other node, or none, walks from the root): the same
     /// items visited, in another order, the leaf's items first (without its box test), then
@@ -648,6 +686,56 @@ mod tests {
         }
         // The walk skips the subtrees no lane meets.
         assert!(missed_boxes > 2000 * 400, "{missed_boxes}");
+    }
+
+    #[test]
+    fn the_walk_visits_items_in_the_order_of_their_ranks_for_its_octant() {
+        let mut rng = Uniform::new(19);
+        let items = boxes(&mut rng, 400);
+        let bvh = Bvh::new(&items);
+        let ranks: Vec<[u32; 8]> = {
+            let mut by_id = vec![[0; 8]; items.len()];
+            for (id, r) in bvh.walk_ranks() {
+                by_id[id as usize] = r;
+            }
+            by_id
+        };
+        // Each octant's ranks number the items 0 … n − 1.
+        for octant in 0..8 {
+            let mut seen: Vec<u32> = ranks.iter().map(|r| r[octant]).collect();
+            seen.sort_unstable();
+            assert_eq!(seen, (0..items.len() as u32).collect::<Vec<_>>());
+        }
+        let mut long_walks = 0;
+        for _ in 0..1000 {
+            // Four rays with the same direction signs, each lane's range shrinking as it
+            // meets boxes (as the nearest-hit queries shrink theirs).
+            let base = random_ray(&mut rng);
+            let rays: [Ray; LANES] = std::array::from_fn(|_| {
+                let o = base.origin + DVec3::splat(rng.range(-0.5, 0.5));
+                Ray::new(o, base.dir.abs() * base.dir.signum() * rng.range(0.5, 1.5))
+            });
+            let octant = (0..3).fold(0, |b, a| b | usize::from(base.dir[a] < 0.0) << a);
+            let mut order = Vec::new();
+            bvh.walk_lanes(
+                &RayLanes::new(&rays),
+                [0.0; LANES],
+                [100.0; LANES],
+                |id, t_max| {
+                    order.push(ranks[id as usize][octant]);
+                    for lane in 0..LANES {
+                        if let Some((t, _)) =
+                            items[id as usize].1.clip(&rays[lane], 0.0, t_max[lane])
+                        {
+                            t_max[lane] = t_max[lane].min(t + 1.0);
+                        }
+                    }
+                },
+            );
+            long_walks += usize::from(order.len() > 3);
+            assert!(order.windows(2).all(|w| w[0] < w[1]), "{order:?}");
+        }
+        assert!(long_walks > 30, "{long_walks}");
     }
 
     #[test]

@@ -379,8 +379,11 @@ impl Scene {
     /// [`Scene::intersect_lanes`] for rays that may meet only the objects `objects` (indices,
     /// in any order, each at most once) and the unbounded ones: every other object's box is
     /// missed by every lane's ray on `(t_min, t_max)`, or met only where the object has no
-    /// hit. The same answers, without walking the index (for the camera rays of a group of
-    /// pixels, whose objects the scheduler lists from their images).
+    /// hit. The same answers, bit for bit: where the lanes' directions lie in one octant
+    /// and there are at most [`Scene::MAX_LISTED`] objects, they are asked in the order the
+    /// index's walk would ask them (which decides the ranges each is asked on, and so the
+    /// last bits of a hit's `t`) without walking it; otherwise the index is walked. For the
+    /// camera rays of a group of pixels, whose objects the scheduler lists from their images.
     pub fn intersect_lanes_among(
         &self,
         rays: &[Ray; LANES],
@@ -388,14 +391,19 @@ impl Scene {
         t_max: f64,
         objects: &[u32],
     ) -> [Option<SceneHit>; LANES] {
-        let best = match self.index.get(&self.objects) {
-            Some(built) if self.may_use_index() => {
-                self.nearest_lanes_among(built, rays, t_min, t_max, objects)
+        let best = match (self.index.get(&self.objects), octant(rays)) {
+            (Some(built), Some(octant))
+                if self.may_use_index() && objects.len() <= Self::MAX_LISTED =>
+            {
+                self.nearest_lanes_among(built, rays, t_min, t_max, objects, octant)
             }
             _ => return self.intersect_lanes(rays, t_min, t_max),
         };
         self.hits_lanes(rays, best)
     }
+
+    /// The most objects [`Scene::intersect_lanes_among`] asks without the index.
+    pub const MAX_LISTED: usize = 16;
 
     /// The hit records of the lanes' nearest objects and `t`s, `best`.
     #[inline(always)]
@@ -561,8 +569,9 @@ impl Scene {
     }
 
     /// [`Scene::nearest_lanes_by_index`]'s answers asking the unbounded objects and
-    /// `objects` alone (see [`Scene::intersect_lanes_among`]). Compiled for AVX2 where the
-    /// processor has it.
+    /// `objects` (at most [`Scene::MAX_LISTED`]) alone, in the walk's order for rays whose
+    /// directions lie in `octant` (see [`crate::bvh::Bvh::walk_ranks`] and
+    /// [`Scene::intersect_lanes_among`]). Compiled for AVX2 where the processor has it.
     #[inline(never)]
     fn nearest_lanes_among(
         &self,
@@ -571,13 +580,26 @@ impl Scene {
         t_min: f64,
         t_max: f64,
         objects: &[u32],
+        octant: usize,
     ) -> [Option<(usize, f64)>; LANES] {
+        // The objects in the walk's order: a few, sorted by insertion.
+        let mut order = [0u32; Self::MAX_LISTED];
+        let order = &mut order[..objects.len()];
+        for (k, &object) in objects.iter().enumerate() {
+            let rank = built.walk_rank[object as usize][octant];
+            let mut at = k;
+            while at > 0 && built.walk_rank[order[at - 1] as usize][octant] > rank {
+                order[at] = order[at - 1];
+                at -= 1;
+            }
+            order[at] = object;
+        }
         #[cfg(target_arch = "x86_64")]
         if crate::cpu::avx2() {
             // SAFETY: the processor has AVX2.
-            return unsafe { self.nearest_lanes_among_avx2(built, rays, t_min, t_max, objects) };
+            return unsafe { self.nearest_lanes_among_avx2(built, rays, t_min, t_max, order) };
         }
-        self.nearest_lanes_among_body(built, rays, t_min, t_max, objects)
+        self.nearest_lanes_among_body(built, rays, t_min, t_max, order)
     }
 
     /// [`Scene::nearest_lanes_among`] compiled for AVX2.
@@ -805,6 +827,24 @@ fn nearer_limit(i: usize, best: Option<(usize, f64)>, t_max: f64) -> f64 {
     }
 }
 
+/// The octant of the lanes' directions, as [`crate::bvh::Bvh::walk_ranks`] numbers them (bit
+/// `a` set where the component along axis `a` is not `≥ 0`), or `None` when they do not all
+/// lie in one.
+#[inline(always)]
+fn octant(rays: &[Ray; LANES]) -> Option<usize> {
+    // The bits set in every lane and in any lane: the same where the lanes agree.
+    let (mut every, mut any) = (7, 0);
+    for ray in rays {
+        let d = ray.dir;
+        // A bit where the component is not `≥ 0` (negative or NaN), as the walk decides.
+        let bit = |c: f64| if c >= 0.0 { 0 } else { 1 };
+        let bits = bit(d.x) | bit(d.y) << 1 | bit(d.z) << 2;
+        every &= bits;
+        any |= bits;
+    }
+    (every == any).then_some(any)
+}
+
 /// The end of the range within which a hierarchy's walk still looks for objects, given the
 /// nearest hit so far: its `t` included (an earlier object may meet the ray there too).
 #[inline]
@@ -928,6 +968,49 @@ mod tests {
                 each
             );
         }
+    }
+
+    #[test]
+    fn a_groups_listed_objects_give_the_index_answers_bit_for_bit() {
+        // Every object whose box some lane meets, listed in any order: the index's answers,
+        // the same bits (the objects asked in the walk's order).
+        let scene = crowded_scene(21, 60);
+        let built = scene.indexed().expect("an indexed scene");
+        let mut ray = rays(23);
+        let mut u = uniform_stream(29);
+        let (mut several, mut among) = (0, 0);
+        for k in 0..3000 {
+            // Four rays close together (most in one octant), or four at random.
+            let base = ray();
+            let rs: [Ray; LANES] = std::array::from_fn(|_| {
+                if k % 5 == 0 {
+                    return ray();
+                }
+                let nudge = DVec3::new(u() - 0.5, u() - 0.5, u() - 0.5) * 0.05;
+                Ray::new(base.origin, base.dir + nudge * base.dir.length())
+            });
+            let mut listed: Vec<u32> = (0..scene.objects.len() as u32)
+                .filter(|&i| !built.unbounded.contains(&i))
+                .filter(|&i| {
+                    let b = scene.objects[i as usize].bounds;
+                    rs.iter().any(|r| b.clip(r, 0.0, f64::INFINITY).is_some())
+                })
+                .collect();
+            listed.reverse();
+            let walked = scene.intersect_lanes(&rs, 0.0, f64::INFINITY);
+            assert_eq!(
+                scene.intersect_lanes_among(&rs, 0.0, f64::INFINITY, &listed),
+                walked,
+                "{rs:?}"
+            );
+            if let Some(octant) = octant(&rs).filter(|_| listed.len() <= Scene::MAX_LISTED) {
+                among += 1;
+                several += usize::from(listed.len() > 1 && walked.iter().any(Option::is_some));
+                let asked = scene.nearest_lanes_among(built, &rs, 0.0, 1e300, &listed, octant);
+                assert_eq!(asked, scene.nearest_lanes_by_index(built, &rs, 0.0, 1e300));
+            }
+        }
+        assert!(among > 1500 && several > 500, "{among} {several}");
     }
 
     #[test]
