@@ -14,6 +14,7 @@
 
 pub mod conditioning;
 pub mod depth;
+mod group_objects;
 pub mod iterations;
 pub mod legend;
 pub mod normals;
@@ -60,6 +61,21 @@ pub trait Shader: Sync {
             *colour = self.radiance(ray, sample);
         }
         out
+    }
+
+    /// [`Shader::radiance_lanes`] for camera rays that may meet only the scene's objects
+    /// `objects` (indices in ascending order) and its unbounded ones: every other object's
+    /// box is missed by every ray, or met only where the object cannot be hit. The same
+    /// colours; a shader may ask only those objects for the rays' first hits (the default
+    /// asks the whole scene).
+    fn radiance_lanes_among(
+        &self,
+        rays: &[Ray; LANES],
+        samples: &mut [Sample; LANES],
+        objects: &[u32],
+    ) -> [DVec3; LANES] {
+        let _ = objects;
+        self.radiance_lanes(rays, samples)
     }
 
     /// The colour of every primary ray that meets no object's bounding box, when the shader

@@ -6,6 +6,7 @@
 //! each pixel also gets its coverage (the fraction of its samples whose camera ray hit an
 //! object) and its colour leaves out the samples that saw only the background.
 
+use super::group_objects::{GroupObjects, GroupObjectsBuilder};
 use super::sampling::{mix, pixel_key, point_in_grid, strata, Sample};
 use super::{Shader, TILE_SIZE};
 use crate::camera::Camera;
@@ -416,6 +417,9 @@ struct PixelSampler<'a> {
     /// Which pixels' camera rays may meet an object's bounds ([`seen_mask`]), and the stored
     /// value of a pixel whose rays meet none ([`unseen_pixel`]); `None`: every ray is traced.
     seen: Option<(SeenMask, Vec3)>,
+    /// Each group's objects ([`seen_pixels`]), for a scene whose queries use its index: a
+    /// group's camera rays ask those alone. `None`: they ask the whole scene.
+    groups: Option<GroupObjects>,
 }
 
 /// What the film stores for a pixel all `spp` samples of which are misses of colour
@@ -457,6 +461,7 @@ impl SeenMask {
     /// Marks the pixels of the region's `row` whose camera rays may pass through the
     /// full-image columns `(x0, x1)`: pixel `c` (full-image column, spanning `[c, c + 1]`)
     /// when `c + 1 ≥ x0` and `c ≤ x1`. Nothing when `x0 > x1`.
+    #[cfg(test)]
     fn mark(&mut self, row: usize, (x0, x1): (f64, f64)) {
         self.mark_columns(row, self.columns(pixel_bounds((x0, x1))));
     }
@@ -542,14 +547,31 @@ fn box_rows((y0, y1): (f64, f64), region: Region) -> (usize, usize) {
 /// The pixels of `job`'s region whose camera rays may meet an object: those that see its
 /// bounding box and, where the object gives them, one of its enclosing ellipsoids and one of
 /// its enclosing cells. `None` when the camera does not see every box from in front.
+#[cfg(test)]
 fn seen_mask(job: &Job) -> Option<SeenMask> {
+    seen_pixels(job, false).map(|(mask, _)| mask)
+}
+
+/// [`seen_mask`], and with `list_objects` each group's objects: those whose pixels the mask
+/// marks on the group (a camera ray of the group meets no other object's box, or meets it
+/// outside every region where the object can be hit).
+fn seen_pixels(job: &Job, list_objects: bool) -> Option<(SeenMask, Option<GroupObjects>)> {
     let (camera, w, h) = (job.camera, job.full_width, job.full_height);
     let nothing = (f64::INFINITY, f64::NEG_INFINITY);
     let hull = |a: (f64, f64), b: (f64, f64)| (a.0.min(b.0), a.1.max(b.1));
     let region = job.region;
     let mut mask = SeenMask::new(region);
+    let mut lists = if list_objects && u32::try_from(job.scene.objects.len()).is_ok() {
+        GroupObjectsBuilder::new(region.width, region.height)
+    } else {
+        None
+    };
     let row_y = |row: usize| f64::from(region.y) + row as f64;
-    for object in &job.scene.objects {
+    for (index, object) in job.scene.objects.iter().enumerate() {
+        if let Some(lists) = &mut lists {
+            // Fits: checked above.
+            lists.start_object(index as u32);
+        }
         let boxed = camera.image_rect(&object.bounds, w, h)?;
         // The ellipsoids' images, if the camera sees them all.
         let images: Option<Vec<_>> = object
@@ -595,7 +617,11 @@ fn seen_mask(job: &Job) -> Option<SeenMask> {
         match cells.filter(|c| !c.is_empty()) {
             None => {
                 for (k, &span) in spans.iter().enumerate() {
-                    mask.mark(first + k, span);
+                    let columns = mask.columns(pixel_bounds(span));
+                    mask.mark_columns(first + k, columns);
+                    if let Some(lists) = &mut lists {
+                        lists.mark(first + k, columns);
+                    }
                 }
             }
             Some(rects) => {
@@ -616,18 +642,31 @@ fn seen_mask(job: &Job) -> Option<SeenMask> {
                     }
                     let rows = rows.iter().enumerate().take(hi as usize - first + 1);
                     for (k, &(row_lo, row_hi)) in rows.skip(lo as usize - first) {
-                        mask.mark_columns(first + k, (row_lo.max(rect_lo), row_hi.min(rect_hi)));
+                        let columns = (row_lo.max(rect_lo), row_hi.min(rect_hi));
+                        mask.mark_columns(first + k, columns);
+                        if let Some(lists) = &mut lists {
+                            lists.mark(first + k, columns);
+                        }
                     }
                 }
             }
         }
     }
-    Some(mask)
+    Some((mask, lists.map(GroupObjectsBuilder::finish)))
 }
 
 impl<'a> PixelSampler<'a> {
     /// The sampler of `job`'s pixels for `shader`.
     fn new<S: Shader>(shader: &S, job: &Job<'a>) -> Self {
+        let seen = shader.miss_colour().and_then(|colour| {
+            let stored = unseen_pixel(colour, job.spp.max(1), job.alpha);
+            let (mask, groups) = seen_pixels(job, job.scene.may_use_index())?;
+            Some(((mask, stored), groups))
+        });
+        let (seen, groups) = match seen {
+            Some((seen, groups)) => (Some(seen), groups),
+            None => (None, None),
+        };
         PixelSampler {
             scene: job.scene,
             alpha: job.alpha,
@@ -636,10 +675,8 @@ impl<'a> PixelSampler<'a> {
             spp: job.spp.max(1),
             pixel_grid: strata(job.spp),
             seed: mix(job.seed),
-            seen: shader.miss_colour().and_then(|colour| {
-                let stored = unseen_pixel(colour, job.spp.max(1), job.alpha);
-                Some((seen_mask(job)?, stored))
-            }),
+            seen,
+            groups,
         }
     }
 
@@ -730,7 +767,8 @@ impl<'a> PixelSampler<'a> {
                     continue;
                 }
                 let (sums, hits, group_rays) = if lanes == LANES as u32 {
-                    self.pixels_together(shader, region.x + x, image_y)
+                    let among = self.groups.as_ref().and_then(|g| g.of(y as usize, x));
+                    self.pixels_together(shader, region.x + x, image_y, among)
                 } else {
                     let mut sums = [DVec3::ZERO; LANES];
                     let mut hits = [0u32; LANES];
@@ -785,15 +823,16 @@ impl<'a> PixelSampler<'a> {
     }
 
     /// [`PixelSampler::pixel`] for the `LANES` pixels from `(image_x, image_y)` rightwards,
-    /// each sample index shaded for all of them at once ([`Shader::radiance_lanes`]); every
-    /// pixel's random numbers are drawn in the same order as by `pixel`, so the results are
-    /// the same.
+    /// each sample index shaded for all of them at once ([`Shader::radiance_lanes`], or
+    /// [`Shader::radiance_lanes_among`] with the group's objects `among`); every pixel's random
+    /// numbers are drawn in the same order as by `pixel`, so the results are the same.
     #[inline(always)]
     fn pixels_together<S: Shader>(
         &self,
         shader: &S,
         image_x: u32,
         image_y: u32,
+        among: Option<&[u32]>,
     ) -> ([DVec3; LANES], [u32; LANES], u64) {
         let mut states: [Sample; LANES] = std::array::from_fn(|lane| {
             Sample::new(
@@ -806,7 +845,10 @@ impl<'a> PixelSampler<'a> {
         let mut hits = [0u32; LANES];
         for i in 0..self.spp {
             let rays = self.camera_rays(&mut states, i, image_x, image_y);
-            let colours = shader.radiance_lanes(&rays, &mut states);
+            let colours = match among {
+                Some(objects) => shader.radiance_lanes_among(&rays, &mut states, objects),
+                None => shader.radiance_lanes(&rays, &mut states),
+            };
             for lane in 0..LANES {
                 if !self.alpha {
                     sums[lane] += colours[lane];
@@ -1188,6 +1230,118 @@ mod tests {
         assert!(!mask.any(0, 99, 1) && mask.any(0, 100, 1) && !mask.any(0, 101, 1));
         assert!(!mask.any(1, 70, 4), "(63, 69) ends left of the region");
         assert!(mask.any(0, 219, 1), "(219.5, 400) reaches the last column");
+    }
+
+    /// Hearts and spheres crowded in front of the camera (overlapping on the image, two
+    /// spheres the same, so that rays meet several objects and ties between them), with a
+    /// light: enough objects for the scene's index, every box in front of the eye.
+    fn crowded_in_view() -> Scene {
+        use crate::materials::Material;
+        use crate::scene::{Object, ObjectIndex};
+        use crate::shapes::{Heart, Sphere};
+        let mut objects = Vec::new();
+        let material = |r: f64| Material {
+            diffuse: DVec3::new(r, 0.5, 0.3),
+            ..Material::default()
+        };
+        for i in 0..4 {
+            for j in 0..3 {
+                let p = DVec3::new(
+                    0.3 * f64::from(j) - 0.3,
+                    f64::from(i) - 1.6,
+                    f64::from(j) - 1.0,
+                );
+                let a = 0.45 + 0.05 * f64::from(i);
+                let heart = Heart::new(p, DVec3::X * a, DVec3::Y * a, DVec3::Z * a).unwrap();
+                objects.push(Object::new(Box::new(heart), material(0.2), "HEART", 1));
+            }
+        }
+        for (c, r) in [
+            (DVec3::new(1.0, 0.3, 0.2), 0.4),
+            (DVec3::new(1.0, 0.3, 0.2), 0.4),
+            (DVec3::new(0.5, -0.6, -0.5), 0.5),
+        ] {
+            let sphere = Sphere::new(c, r).unwrap();
+            objects.push(Object::new(Box::new(sphere), material(0.9), "SPHERE", 1));
+        }
+        Scene {
+            width: 37,
+            height: 23,
+            camera: Camera::new(DVec3::new(9.0, 0.5, 0.3), DVec3::ZERO, DVec3::Z, 32.0).unwrap(),
+            background: DVec3::new(0.1, 0.2, 0.3),
+            ambient: DVec3::splat(0.1),
+            lights: vec![crate::lights::Light {
+                position: DVec3::new(6.0, -3.0, 5.0),
+                colour: DVec3::ONE,
+                radius: 0.3,
+                samples: 2,
+            }],
+            index: ObjectIndex::of(&objects),
+            objects,
+        }
+    }
+
+    #[test]
+    fn a_groups_camera_rays_asking_its_listed_objects_find_what_the_index_finds() {
+        let scene = crowded_in_view();
+        assert!(scene.may_use_index());
+        let setup = |spp| ShadeSetup {
+            scene: &scene,
+            camera: &scene.camera,
+            spp,
+            max_depth: 2,
+            max_shadow_rays: None,
+        };
+        // The whole image, and a region whose columns start off the groups of the image.
+        let regions = [
+            Region::full(scene.width, scene.height),
+            Region {
+                x: 3,
+                y: 2,
+                width: 29,
+                height: 15,
+            },
+        ];
+        for region in regions {
+            for (spp, alpha) in [(1, false), (2, true)] {
+                let job = Job {
+                    scene: &scene,
+                    camera: &scene.camera,
+                    full_width: scene.width,
+                    full_height: scene.height,
+                    region,
+                    spp,
+                    seed: 5,
+                    alpha,
+                    keep_image: true,
+                };
+                let whitted = Whitted::new(&setup(spp));
+                // The lists are made and used, and some groups list several objects.
+                let sampler = PixelSampler::new(&whitted, &job);
+                let groups = sampler.groups.as_ref().expect("lists for an indexed scene");
+                let listed = |row: usize| {
+                    (0..region.width)
+                        .step_by(LANES)
+                        .map(|x| groups.of(row, x).map_or(0, <[u32]>::len))
+                        .max()
+                        .unwrap_or(0)
+                };
+                assert!((0..region.height as usize).any(|row| listed(row) >= 3));
+                let pool = RenderPool::new(2).unwrap();
+                let hooks = Hooks {
+                    cancelled: &|| false,
+                    tile_done: &|_| {},
+                    band_done: &|_, _, _| {},
+                    interactive: false,
+                };
+                let (listed, listed_rays) = run(&pool, &whitted, &job, &hooks).unwrap();
+                let (traced, traced_rays) = run(&pool, &Traced(&whitted), &job, &hooks).unwrap();
+                let (listed, traced) = (listed.unwrap(), traced.unwrap());
+                assert_eq!(listed.pixels, traced.pixels, "{region:?} spp {spp}");
+                assert_eq!(listed.alpha, traced.alpha);
+                assert_eq!(listed_rays, traced_rays);
+            }
+        }
     }
 
     #[test]

@@ -195,6 +195,33 @@ impl Shader for Whitted<'_> {
         // The camera rays' first hits together (the shapes may share work across lanes),
         // then each lane shaded as `trace` shades it.
         let hits = self.scene.intersect_lanes(rays, 0.0, f64::INFINITY);
+        self.shade_camera_lanes(rays, hits, samples)
+    }
+
+    #[inline(always)]
+    fn radiance_lanes_among(
+        &self,
+        rays: &[Ray; LANES],
+        samples: &mut [Sample; LANES],
+        objects: &[u32],
+    ) -> [DVec3; LANES] {
+        // The same hits as `intersect_lanes` finds, asking only the objects the rays may meet.
+        let hits = self
+            .scene
+            .intersect_lanes_among(rays, 0.0, f64::INFINITY, objects);
+        self.shade_camera_lanes(rays, hits, samples)
+    }
+}
+
+impl<'a> Whitted<'a> {
+    /// The colours of camera rays `rays` from their first hits `hits` (each counted here).
+    #[inline(always)]
+    fn shade_camera_lanes(
+        &self,
+        rays: &[Ray; LANES],
+        hits: [Option<SceneHit>; LANES],
+        samples: &mut [Sample; LANES],
+    ) -> [DVec3; LANES] {
         for sample in samples.iter_mut() {
             sample.count_ray();
         }
@@ -207,9 +234,7 @@ impl Shader for Whitted<'_> {
         }
         out
     }
-}
 
-impl<'a> Whitted<'a> {
     /// The shader of `setup.scene` for `setup.spp` samples a pixel (which fixes the strata
     /// of spherical lights) and recursion to `setup.max_depth`.
     pub fn new(setup: &ShadeSetup<'a>) -> Self {
@@ -281,7 +306,7 @@ impl<'a> Whitted<'a> {
     }
 
     /// [`Whitted::shade`] at depth 0 for each lane, the shadow rays of the lanes' hits asked
-    /// together ([`Scene::occluded_lanes`]), for an opaque scene (where a shadow ray is an
+    /// together ([`Scene::occluded_lanes_from`] the first lane's object), for an opaque scene (where a shadow ray is an
     /// any-hit query). Every lane draws its random numbers in the order `shade` draws them
     /// (all lanes walk the same lights and light samples), so the colours are the same.
     #[inline(always)]
@@ -302,10 +327,11 @@ impl<'a> Whitted<'a> {
                 points[lane] = Some(at);
             }
         }
-        if points.iter().all(Option::is_none) {
+        // The object of the first lane's hit, where the shadow rays' walk starts.
+        let Some(from) = hits.iter().flatten().map(|hit| hit.object).next() else {
             // Every lane saw the background: no light to walk, no random number drawn.
             return colours;
-        }
+        };
         for (index, light) in scene.lights.iter().enumerate() {
             let (count, grid) = self.light_grids[index];
             let mut lit = [DVec3::ZERO; LANES];
@@ -332,7 +358,7 @@ impl<'a> Whitted<'a> {
                         asked[lane] = true;
                     }
                 }
-                let blocked = scene.occluded_lanes(&shadow, near, far);
+                let blocked = scene.occluded_lanes_from(&shadow, near, far, from);
                 for lane in 0..LANES {
                     if let (Some(at), true, false) = (&points[lane], asked[lane], blocked[lane]) {
                         lit[lane] += DVec3::ONE * at.reflected_light(shadow[lane].dir);

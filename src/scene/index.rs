@@ -26,6 +26,12 @@ pub(super) struct Built {
     pub(super) bvh: Bvh,
     /// The indices of the objects whose boxes are not finite, in order.
     pub(super) unbounded: Vec<u32>,
+    /// By object index, the leaf of `bvh` that holds the object ([`Bvh::item_leaves`]), or
+    /// `u32::MAX` for an unbounded one.
+    pub(super) leaf_of: Vec<u32>,
+    /// By object index, its [`Bvh::walk_ranks`] (zeros for an unbounded one): the order in
+    /// which the walk asks the objects a group of rays meets, for each octant of directions.
+    pub(super) walk_rank: Vec<[u32; 8]>,
 }
 
 impl std::fmt::Debug for ObjectIndex {
@@ -78,10 +84,21 @@ impl Built {
                 unbounded.push(i);
             }
         }
+        let bvh = Bvh::new(&boxes);
+        let mut leaf_of = vec![u32::MAX; objects.len()];
+        for (id, leaf) in bvh.item_leaves() {
+            leaf_of[id as usize] = leaf;
+        }
+        let mut walk_rank = vec![[0; 8]; objects.len()];
+        for (id, ranks) in bvh.walk_ranks() {
+            walk_rank[id as usize] = ranks;
+        }
         Self {
             key: key(objects),
-            bvh: Bvh::new(&boxes),
+            bvh,
             unbounded,
+            leaf_of,
+            walk_rank,
         }
     }
 }

@@ -191,22 +191,39 @@ impl Scene {
         t_max: [f64; LANES],
     ) -> [bool; LANES] {
         if self.may_use_index() {
-            return self.occluded_lanes_many(rays, t_min, t_max);
+            return self.occluded_lanes_many(rays, t_min, t_max, None);
+        }
+        self.occluded_lanes_in_order(rays, t_min, t_max)
+    }
+
+    /// [`Scene::occluded_lanes`] for rays that start on or near object `from` (shadow rays
+    /// of hits on it): the same answers, for any `from`; with the index, its walk starts at
+    /// that object's leaf and climbs, which costs less for rays that meet little beyond it.
+    pub fn occluded_lanes_from(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: [f64; LANES],
+        t_max: [f64; LANES],
+        from: usize,
+    ) -> [bool; LANES] {
+        if self.may_use_index() {
+            return self.occluded_lanes_many(rays, t_min, t_max, Some(from));
         }
         self.occluded_lanes_in_order(rays, t_min, t_max)
     }
 
     /// [`Scene::occluded_lanes`] of a scene that may use its index (see
-    /// [`Scene::occluded_many`]).
+    /// [`Scene::occluded_many`]), its walk started at object `from`'s leaf when given.
     #[inline(never)]
     fn occluded_lanes_many(
         &self,
         rays: &[Ray; LANES],
         t_min: [f64; LANES],
         t_max: [f64; LANES],
+        from: Option<usize>,
     ) -> [bool; LANES] {
         match self.index.get(&self.objects) {
-            Some(built) => self.occluded_lanes_by_index(built, rays, t_min, t_max),
+            Some(built) => self.occluded_lanes_by_index(built, rays, t_min, t_max, from),
             None => self.occluded_lanes_in_order(rays, t_min, t_max),
         }
     }
@@ -254,13 +271,14 @@ impl Scene {
         rays: &[Ray; LANES],
         t_min: [f64; LANES],
         t_max: [f64; LANES],
+        from: Option<usize>,
     ) -> [bool; LANES] {
         #[cfg(target_arch = "x86_64")]
         if crate::cpu::avx2() {
             // SAFETY: the processor has AVX2.
-            return unsafe { self.occluded_lanes_by_index_avx2(built, rays, t_min, t_max) };
+            return unsafe { self.occluded_lanes_by_index_avx2(built, rays, t_min, t_max, from) };
         }
-        self.occluded_lanes_by_index_body(built, rays, t_min, t_max)
+        self.occluded_lanes_by_index_body(built, rays, t_min, t_max, from)
     }
 
     /// [`Scene::occluded_lanes_by_index`] compiled for AVX2.
@@ -275,8 +293,9 @@ impl Scene {
         rays: &[Ray; LANES],
         t_min: [f64; LANES],
         t_max: [f64; LANES],
+        from: Option<usize>,
     ) -> [bool; LANES] {
-        self.occluded_lanes_by_index_body(built, rays, t_min, t_max)
+        self.occluded_lanes_by_index_body(built, rays, t_min, t_max, from)
     }
 
     /// The work of [`Scene::occluded_lanes_by_index`], inlined into each compiled form.
@@ -287,6 +306,7 @@ impl Scene {
         rays: &[Ray; LANES],
         t_min: [f64; LANES],
         t_max: [f64; LANES],
+        from: Option<usize>,
     ) -> [bool; LANES] {
         let mut blocked = [false; LANES];
         let lanes = RayLanes::new(rays);
@@ -322,14 +342,19 @@ impl Scene {
                 t_max[lane]
             }
         });
-        built.bvh.walk_lanes(&lanes, t_min, range, |i, range| {
+        let visit = |i: u32, range: &mut [f64; LANES]| {
             ask_object(i as usize, &mut blocked);
             for lane in 0..LANES {
                 if blocked[lane] {
                     range[lane] = f64::NEG_INFINITY;
                 }
             }
-        });
+        };
+        // Any object that blocks a lane blocks it, whatever the order the walk asks them in.
+        match from.and_then(|object| built.leaf_of.get(object)) {
+            Some(&leaf) => built.bvh.walk_lanes_from(&lanes, t_min, range, leaf, visit),
+            None => built.bvh.walk_lanes(&lanes, t_min, range, visit),
+        }
         blocked
     }
 
@@ -348,6 +373,45 @@ impl Scene {
         } else {
             self.nearest_lanes_in_order(rays, t_min, t_max)
         };
+        self.hits_lanes(rays, best)
+    }
+
+    /// [`Scene::intersect_lanes`] for rays that may meet only the objects `objects` (indices,
+    /// in any order, each at most once) and the unbounded ones: every other object's box is
+    /// missed by every lane's ray on `(t_min, t_max)`, or met only where the object has no
+    /// hit. The same answers, bit for bit: where the lanes' directions lie in one octant
+    /// and there are at most [`Scene::MAX_LISTED`] objects, they are asked in the order the
+    /// index's walk would ask them (which decides the ranges each is asked on, and so the
+    /// last bits of a hit's `t`) without walking it; otherwise the index is walked. For the
+    /// camera rays of a group of pixels, whose objects the scheduler lists from their images.
+    pub fn intersect_lanes_among(
+        &self,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+        objects: &[u32],
+    ) -> [Option<SceneHit>; LANES] {
+        let best = match (self.index.get(&self.objects), octant(rays)) {
+            (Some(built), Some(octant))
+                if self.may_use_index() && objects.len() <= Self::MAX_LISTED =>
+            {
+                self.nearest_lanes_among(built, rays, t_min, t_max, objects, octant)
+            }
+            _ => return self.intersect_lanes(rays, t_min, t_max),
+        };
+        self.hits_lanes(rays, best)
+    }
+
+    /// The most objects [`Scene::intersect_lanes_among`] asks without the index.
+    pub const MAX_LISTED: usize = 16;
+
+    /// The hit records of the lanes' nearest objects and `t`s, `best`.
+    #[inline(always)]
+    fn hits_lanes(
+        &self,
+        rays: &[Ray; LANES],
+        best: [Option<(usize, f64)>; LANES],
+    ) -> [Option<SceneHit>; LANES] {
         // Where every lane that hit met the same object, and that object's normals cost less
         // asked together, they are (the same answers as `hit` gives one at a time).
         let mut objects = best.iter().flatten().map(|&(object, _)| object);
@@ -457,38 +521,119 @@ impl Scene {
     ) -> [Option<(usize, f64)>; LANES] {
         let mut best: [Option<(usize, f64)>; LANES] = [None; LANES];
         let lanes = RayLanes::new(rays);
-        let ask_object = |i: usize, best: &mut [Option<(usize, f64)>; LANES]| {
-            let obj = &self.objects[i];
-            let limit: [f64; LANES] =
-                std::array::from_fn(|lane| nearer_limit(i, best[lane], t_max));
-            let met = lanes.meet(&obj.bounds, [t_min; LANES], limit);
-            if met == 0 {
-                return;
-            }
-            let ask = std::array::from_fn(|lane| {
-                if met & 1 << lane != 0 {
-                    limit[lane]
-                } else {
-                    f64::NEG_INFINITY
-                }
-            });
-            let hits = obj.shape.intersect_lanes(rays, [t_min; LANES], ask);
-            for lane in 0..LANES {
-                if let Some(t) = hits[lane] {
-                    best[lane] = Some((i, t));
-                }
-            }
-        };
         for &i in &built.unbounded {
-            ask_object(i as usize, &mut best);
+            self.ask_nearest_lanes(i as usize, rays, &lanes, t_min, t_max, &mut best);
         }
         let range = best.map(|hit| walk_limit(hit, t_max));
         built
             .bvh
             .walk_lanes(&lanes, [t_min; LANES], range, |i, range| {
-                ask_object(i as usize, &mut best);
+                self.ask_nearest_lanes(i as usize, rays, &lanes, t_min, t_max, &mut best);
                 *range = best.map(|hit| walk_limit(hit, t_max));
             });
+        best
+    }
+
+    /// Object `i` asked for the lanes whose rays (`lanes`: `rays` by coordinate) meet its box
+    /// before [`nearer_limit`] of the lane's nearest hit so far, `best`, which its hits
+    /// replace.
+    #[inline(always)]
+    fn ask_nearest_lanes(
+        &self,
+        i: usize,
+        rays: &[Ray; LANES],
+        lanes: &RayLanes,
+        t_min: f64,
+        t_max: f64,
+        best: &mut [Option<(usize, f64)>; LANES],
+    ) {
+        let obj = &self.objects[i];
+        let limit: [f64; LANES] = std::array::from_fn(|lane| nearer_limit(i, best[lane], t_max));
+        let met = lanes.meet(&obj.bounds, [t_min; LANES], limit);
+        if met == 0 {
+            return;
+        }
+        let ask = std::array::from_fn(|lane| {
+            if met & 1 << lane != 0 {
+                limit[lane]
+            } else {
+                f64::NEG_INFINITY
+            }
+        });
+        let hits = obj.shape.intersect_lanes(rays, [t_min; LANES], ask);
+        for lane in 0..LANES {
+            if let Some(t) = hits[lane] {
+                best[lane] = Some((i, t));
+            }
+        }
+    }
+
+    /// [`Scene::nearest_lanes_by_index`]'s answers asking the unbounded objects and
+    /// `objects` (at most [`Scene::MAX_LISTED`]) alone, in the walk's order for rays whose
+    /// directions lie in `octant` (see [`crate::bvh::Bvh::walk_ranks`] and
+    /// [`Scene::intersect_lanes_among`]). Compiled for AVX2 where the processor has it.
+    #[inline(never)]
+    fn nearest_lanes_among(
+        &self,
+        built: &index::Built,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+        objects: &[u32],
+        octant: usize,
+    ) -> [Option<(usize, f64)>; LANES] {
+        // The objects in the walk's order: a few, sorted by insertion.
+        let mut order = [0u32; Self::MAX_LISTED];
+        let order = &mut order[..objects.len()];
+        for (k, &object) in objects.iter().enumerate() {
+            let rank = built.walk_rank[object as usize][octant];
+            let mut at = k;
+            while at > 0 && built.walk_rank[order[at - 1] as usize][octant] > rank {
+                order[at] = order[at - 1];
+                at -= 1;
+            }
+            order[at] = object;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if crate::cpu::avx2() {
+            // SAFETY: the processor has AVX2.
+            return unsafe { self.nearest_lanes_among_avx2(built, rays, t_min, t_max, order) };
+        }
+        self.nearest_lanes_among_body(built, rays, t_min, t_max, order)
+    }
+
+    /// [`Scene::nearest_lanes_among`] compiled for AVX2.
+    ///
+    /// # Safety
+    /// The processor must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn nearest_lanes_among_avx2(
+        &self,
+        built: &index::Built,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+        objects: &[u32],
+    ) -> [Option<(usize, f64)>; LANES] {
+        self.nearest_lanes_among_body(built, rays, t_min, t_max, objects)
+    }
+
+    /// The work of [`Scene::nearest_lanes_among`], inlined into each compiled form.
+    #[inline(always)]
+    fn nearest_lanes_among_body(
+        &self,
+        built: &index::Built,
+        rays: &[Ray; LANES],
+        t_min: f64,
+        t_max: f64,
+        objects: &[u32],
+    ) -> [Option<(usize, f64)>; LANES] {
+        let mut best: [Option<(usize, f64)>; LANES] = [None; LANES];
+        let lanes = RayLanes::new(rays);
+        for &i in built.unbounded.iter().chain(objects) {
+            self.ask_nearest_lanes(i as usize, rays, &lanes, t_min, t_max, &mut best);
+        }
         best
     }
 
@@ -594,7 +739,7 @@ impl Scene {
     /// Whether the scene has enough objects for the queries to use its index (they do where
     /// it was built from these objects).
     #[inline]
-    fn may_use_index(&self) -> bool {
+    pub(crate) fn may_use_index(&self) -> bool {
         self.objects.len() >= Self::INDEX_MIN_OBJECTS
     }
 
@@ -680,6 +825,24 @@ fn nearer_limit(i: usize, best: Option<(usize, f64)>, t_max: f64) -> f64 {
         Some((j, t)) if i < j => t.next_up(),
         Some((_, t)) => t,
     }
+}
+
+/// The octant of the lanes' directions, as [`crate::bvh::Bvh::walk_ranks`] numbers them (bit
+/// `a` set where the component along axis `a` is not `≥ 0`), or `None` when they do not all
+/// lie in one.
+#[inline(always)]
+fn octant(rays: &[Ray; LANES]) -> Option<usize> {
+    // The bits set in every lane and in any lane: the same where the lanes agree.
+    let (mut every, mut any) = (7, 0);
+    for ray in rays {
+        let d = ray.dir;
+        // A bit where the component is not `≥ 0` (negative or NaN), as the walk decides.
+        let bit = |c: f64| if c >= 0.0 { 0 } else { 1 };
+        let bits = bit(d.x) | bit(d.y) << 1 | bit(d.z) << 2;
+        every &= bits;
+        any |= bits;
+    }
+    (every == any).then_some(any)
 }
 
 /// The end of the range within which a hierarchy's walk still looks for objects, given the
@@ -798,7 +961,56 @@ mod tests {
                 t_max[lane] > 0.0 && scene.occluded(&rs[lane], 0.0, t_max[lane])
             });
             assert_eq!(scene.occluded_lanes(&rs, [0.0; LANES], t_max), each);
+            // From any object's leaf (or an object out of range), the same answers.
+            let from = k * 7 % (scene.objects.len() + 1);
+            assert_eq!(
+                scene.occluded_lanes_from(&rs, [0.0; LANES], t_max, from),
+                each
+            );
         }
+    }
+
+    #[test]
+    fn a_groups_listed_objects_give_the_index_answers_bit_for_bit() {
+        // Every object whose box some lane meets, listed in any order: the index's answers,
+        // the same bits (the objects asked in the walk's order).
+        let scene = crowded_scene(21, 60);
+        let built = scene.indexed().expect("an indexed scene");
+        let mut ray = rays(23);
+        let mut u = uniform_stream(29);
+        let (mut several, mut among) = (0, 0);
+        for k in 0..3000 {
+            // Four rays close together (most in one octant), or four at random.
+            let base = ray();
+            let rs: [Ray; LANES] = std::array::from_fn(|_| {
+                if k % 5 == 0 {
+                    return ray();
+                }
+                let nudge = DVec3::new(u() - 0.5, u() - 0.5, u() - 0.5) * 0.05;
+                Ray::new(base.origin, base.dir + nudge * base.dir.length())
+            });
+            let mut listed: Vec<u32> = (0..scene.objects.len() as u32)
+                .filter(|&i| !built.unbounded.contains(&i))
+                .filter(|&i| {
+                    let b = scene.objects[i as usize].bounds;
+                    rs.iter().any(|r| b.clip(r, 0.0, f64::INFINITY).is_some())
+                })
+                .collect();
+            listed.reverse();
+            let walked = scene.intersect_lanes(&rs, 0.0, f64::INFINITY);
+            assert_eq!(
+                scene.intersect_lanes_among(&rs, 0.0, f64::INFINITY, &listed),
+                walked,
+                "{rs:?}"
+            );
+            if let Some(octant) = octant(&rs).filter(|_| listed.len() <= Scene::MAX_LISTED) {
+                among += 1;
+                several += usize::from(listed.len() > 1 && walked.iter().any(Option::is_some));
+                let asked = scene.nearest_lanes_among(built, &rs, 0.0, 1e300, &listed, octant);
+                assert_eq!(asked, scene.nearest_lanes_by_index(built, &rs, 0.0, 1e300));
+            }
+        }
+        assert!(among > 1500 && several > 500, "{among} {several}");
     }
 
     #[test]
