@@ -382,7 +382,12 @@ pub fn mesh_solid_cancellable(
             &|pass| progress(march_total + quarter * pass / simplify::MAX_PASSES, all),
         )
         .ok_or(MeshError::Cancelled)?;
-        if check::verify(&mesh).is_ok() {
+        // Checked as computed and as the file will hold it (in the world, rounded to f32).
+        let flip = frame.m.determinant() < 0.0;
+        let written = mesh
+            .mapped(|p| frame.point_to_world(p), flip)
+            .rounded_to_f32();
+        if check::verify(&mesh).is_ok() && check::verify(&written).is_ok() {
             coarsened = Some(Coarsening {
                 done,
                 budget: budget * grow,

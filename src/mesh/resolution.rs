@@ -227,19 +227,86 @@ pub fn refine(
         map: PointMap::default(),
     };
     let examiner = Examiner {
+        spreads: Vec::new(),
+        cube_side: 1,
+        cells: 0,
         field,
         lattice,
         taylor: Taylor::new(field),
         table: marching_table(),
         shallow: EXTRACT_SHARE * tolerance,
+        finest: refinement.finest_level(),
+        f_sign: if field.kind() == SolidKind::Outside {
+            -1.0
+        } else {
+            1.0
+        },
     };
     let finest = refinement.finest_level();
     let total = 3 * depth as usize + 2;
-    // Each leaf with whether it has been examined (or needs no examination).
+    // Each leaf with whether it has been examined (or needs no examination): the coarse
+    // cubes the Taylor bound about their centre proves free of surface need none (tried
+    // first for blocks of BLOCK³ cubes at once).
+    const BLOCK: usize = 4;
+    let n = coarse.cells;
+    let side = refinement.cube_side();
+    let blocks = n.div_ceil(BLOCK);
+    let cube_box = |x: usize, y: usize, z: usize, size: usize| {
+        let lo = [x, y, z].map(|v| (v * side as usize) as i32);
+        let hi = lo.map(|v| v + (size * side as usize) as i32);
+        (lattice.position(lo), lattice.position(hi))
+    };
+    let block_empty: Vec<bool> = (0..blocks * blocks * blocks)
+        .into_par_iter()
+        .map(|b| {
+            let (x, y, z) = (b % blocks, b / blocks % blocks, b / (blocks * blocks));
+            let (lo, hi) = cube_box(x * BLOCK, y * BLOCK, z * BLOCK, BLOCK);
+            examiner.box_empty(lo, hi)
+        })
+        .collect();
+    let cube_empty: Vec<bool> = (0..n * n * n)
+        .into_par_iter()
+        .map(|c| {
+            let (x, y, z) = (c % n, c / n % n, c / (n * n));
+            let block = x / BLOCK + blocks * (y / BLOCK + blocks * (z / BLOCK));
+            block_empty[block] || {
+                let (lo, hi) = cube_box(x, y, z, 1);
+                examiner.box_empty(lo, hi)
+            }
+        })
+        .collect();
+    // For the cubes not proven empty, φ's gradient at the centre and how far it strays
+    // over the cube (the cheap bound of Examiner::quiet).
+    let spreads: Vec<Option<Spread>> = (0..n * n * n)
+        .into_par_iter()
+        .map(|c| {
+            if cube_empty[c] {
+                return None;
+            }
+            let (x, y, z) = (c % n, c / n % n, c / (n * n));
+            let (lo, hi) = cube_box(x, y, z, 1);
+            let centre = 0.5 * (lo + hi);
+            let (value, gradient, spread) =
+                examiner.taylor.gradient_spread(centre, 0.5 * (hi - lo).max_element());
+            let f_sign = examiner.f_sign;
+            Some(Spread {
+                gradient: f_sign * gradient,
+                spread,
+                margin: 1e-10 * (value.abs() + examiner.taylor.magnitude_bound(centre)),
+            })
+        })
+        .collect();
+    let examiner = Examiner {
+        spreads,
+        cube_side: side,
+        cells: n,
+        ..examiner
+    };
     let mut leaves: Vec<(Tet, bool)> = refinement
         .coarse()
         .into_iter()
-        .map(|t| (t, false))
+        .enumerate()
+        .map(|(i, t)| (t, cube_empty[i / 6]))
         .collect();
     let mut refined_for = [0usize; 3];
     let mut rounds = 0;
@@ -346,6 +413,24 @@ struct Examiner<'a> {
     /// The deepest graze allowed; also the deviation allowed ([`EXTRACT_SHARE`] of the
     /// tolerance).
     shallow: f64,
+    /// The finest level (never bisected).
+    finest: u8,
+    /// `φ = f_sign · f` (1 inside, −1 outside).
+    f_sign: f64,
+    /// For each coarse cube (x fastest) not proven empty: how `∇φ` strays over it.
+    spreads: Vec<Option<Spread>>,
+    /// The side of a coarse cube (lattice units) and cubes a side.
+    cube_side: i32,
+    cells: usize,
+}
+
+/// `∇φ` at a coarse cube's centre and, per axis, a bound on how far `∂_i φ` strays from it
+/// over the cube ([`Taylor::gradient_spread`]).
+struct Spread {
+    gradient: DVec3,
+    spread: DVec3,
+    /// A margin for rounding.
+    margin: f64,
 }
 
 impl Examiner<'_> {
@@ -365,7 +450,7 @@ impl Examiner<'_> {
         let phi = t.corners.map(|p| values.get(p));
         match common_sign(&phi) {
             Some(sign) => {
-                if !self.proven_empty(centre, half.max_element(), sign, &phi) {
+                if !self.quiet(t, sign, phi) {
                     return Some(Reason::SurfaceUnproven);
                 }
             }
@@ -401,14 +486,125 @@ impl Examiner<'_> {
         None
     }
 
-    /// Whether the Taylor bound proves `φ` of sign `sign` throughout the tetrahedron with
-    /// corner values `phi` inside the cube of half-side `r` about `centre` (module doc, 3.).
-    fn proven_empty(&self, centre: DVec3, r: f64, sign: f64, phi: &[f64; 4]) -> bool {
+    /// Whether the tetrahedron `t`, whose corners (values `phi`) all have the sign `sign` of
+    /// `φ`, holds no surface the floor would see (module doc, 3.): proven by the Taylor bound,
+    /// or else bisected (without changing the mesh) into the tetrahedra below it, each proven
+    /// the same way, down to the finest level, where corners of the same sign are accepted. A
+    /// tetrahedron below it whose new corner has the other sign fails.
+    fn quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
+        if t.level >= self.finest
+            || self.gradient_bound(t, sign, &phi)
+            || self.proven_empty(t, sign, &phi)
+        {
+            return true;
+        }
+        self.split_quiet(t, sign, phi)
+    }
+
+    /// The tetrahedra below `t` (corner values `phi`, sign `sign`) quiet: [`Examiner::quiet`]
+    /// by the cheap bound only ([`Examiner::gradient_bound`]), the Taylor bound about each
+    /// part's own centre being the dearest part of the examination.
+    fn below_quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
+        if t.level >= self.finest || self.gradient_bound(t, sign, &phi) {
+            return true;
+        }
+        self.split_quiet(t, sign, phi)
+    }
+
+    /// [`Examiner::below_quiet`] for the two halves of `t`, after checking the sign at the
+    /// new corner.
+    fn split_quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
+        let m = t.midpoint();
+        let x = self.lattice.position(m);
+        let value = self.field.value(x);
+        if !(sign * value > 0.0) {
+            // Surface in the tetrahedron (or its box's part outside the ball).
+            return false;
+        }
+        let k = t.tag as usize;
+        let [first, second] = t.children();
+        let mut a = phi;
+        a[k] = value;
+        let mut b = phi;
+        b[..k].copy_from_slice(&phi[1..=k]);
+        b[k] = value;
+        self.below_quiet(&first, sign, a) && self.below_quiet(&second, sign, b)
+    }
+
+    /// The cheap bound: with `g` the gradient of `φ` at the centre of the coarse cube holding
+    /// `t` and `L_i` the bound on `|∂_i φ − g_i|` over that cube, for any corner `v` and any
+    /// point `x` of `t`, `s·φ(x) ≥ s·φ(v) + s·g·(x − v) − Σ L_i |x_i − v_i|`, a concave
+    /// function of `x`, least at a corner: `t` is proven free of surface if for some `v`
+    /// that is positive at every corner.
+    fn gradient_bound(&self, t: &Tet, sign: f64, phi: &[f64; 4]) -> bool {
+        let (lo, _) = t.bounds();
+        let n = self.cells;
+        let cube = lo.map(|c| ((c / self.cube_side) as usize).min(n - 1));
+        let Some(s) = &self.spreads[cube[0] + n * (cube[1] + n * cube[2])] else {
+            return self.proven_empty(t, sign, phi);
+        };
+        let points = t.corners.map(|p| self.lattice.position(p));
+        (0..4).any(|v| {
+            let least = points
+                .iter()
+                .map(|&w| {
+                    let d = w - points[v];
+                    sign * s.gradient.dot(d) - s.spread.dot(d.abs())
+                })
+                .fold(f64::INFINITY, f64::min);
+            sign * phi[v] + least.min(0.0) > s.margin
+        })
+    }
+
+    /// Whether the box `lo`–`hi` is proven free of `φ = 0` inside the clip ball: wholly
+    /// outside the ball, or `|φ(c)| > Σ_{|α|≥1} |a_α| r^{|α|}` about its centre `c` (`r` its
+    /// largest half-side).
+    fn box_empty(&self, lo: DVec3, hi: DVec3) -> bool {
+        let centre = 0.5 * (lo + hi);
+        let nearest = (centre.abs() - 0.5 * (hi - lo)).max(DVec3::ZERO);
+        let radius = self.field.radius();
+        if nearest.length_squared() >= radius * radius {
+            return true;
+        }
+        self.taylor
+            .at(centre, 0.5 * (hi - lo).max_element())
+            .is_some_and(|sums| {
+                sums.value.abs() - sums.linear - sums.quadratic > 1e-10 * sums.magnitude
+            })
+    }
+
+    /// Whether the box of `t` lies wholly outside the clip ball.
+    fn outside_ball(&self, t: &Tet) -> bool {
+        let (lo, hi) = t.bounds();
+        let (lo, hi) = (self.lattice.position(lo), self.lattice.position(hi));
+        let nearest = (0.5 * (lo + hi)).abs() - 0.5 * (hi - lo);
+        let r = self.field.radius();
+        nearest.max(DVec3::ZERO).length_squared() >= r * r
+    }
+
+    /// Whether the Taylor bound proves `φ` of sign `sign` throughout the tetrahedron `t`
+    /// with corner values `phi` (module doc, 3.): about the centre `c` of its box, with `r`
+    /// the box's largest half-side, the linear part `s·(φ(c) + ∇φ(c)·(v − c))` is least at a
+    /// corner `v` and the rest is at most `Q` in absolute value; also `min s·φ(v) − 2Q`.
+    fn proven_empty(&self, t: &Tet, sign: f64, phi: &[f64; 4]) -> bool {
+        let (lo, hi) = t.bounds();
+        let (lo, hi) = (self.lattice.position(lo), self.lattice.position(hi));
+        let centre = 0.5 * (lo + hi);
+        let r = 0.5 * (hi - lo).max_element();
+        if self.outside_ball(t) {
+            return true;
+        }
         self.taylor.at(centre, r).is_some_and(|sums| {
             let least_corner = phi.iter().map(|v| sign * v).fold(f64::INFINITY, f64::min);
-            let centre_value = sign * self.field.value(centre);
-            let bound = (least_corner - 2.0 * sums.quadratic)
-                .max(centre_value - sums.linear - sums.quadratic);
+            // The Taylor sums are of f; φ = ±f.
+            let s = sign * self.f_sign;
+            let centre_value = s * sums.value;
+            let least_linear = t
+                .corners
+                .iter()
+                .map(|&p| centre_value + s * sums.gradient.dot(self.lattice.position(p) - centre))
+                .fold(f64::INFINITY, f64::min);
+            let bound = (least_corner - 2.0 * sums.quadratic).max(least_linear - sums.quadratic);
             // A margin for the rounding of the values and of the bound's own sums.
             bound > 1e-10 * sums.magnitude
         })
@@ -577,6 +773,10 @@ impl Taylor {
 
 /// The sums [`Taylor::at`] gives for a cube of half-side `r`.
 struct TaylorSums {
+    /// `f` at the centre (the coefficient of degree 0).
+    value: f64,
+    /// `∇f` at the centre (the coefficients of degree 1).
+    gradient: DVec3,
     /// `Σ_{|α|=1} |a_α| r`.
     linear: f64,
     /// `Σ_{|α|≥2} |a_α| r^{|α|}`.
@@ -601,37 +801,8 @@ impl Taylor {
     /// The sums of the Taylor coefficients' magnitudes of `f` about `c` for the cube of
     /// half-side `r` (the same for `φ = −f`); `None` if not finite.
     fn at(&self, c: DVec3, r: f64) -> Option<TaylorSums> {
-        const N: usize = MAX_DEGREE + 1;
         let d = self.degree + 1;
-        let mut coef = vec![0.0f64; d * d * d];
-        let powers = |x: f64| {
-            let mut out = [1.0f64; N];
-            for i in 1..d {
-                out[i] = out[i - 1] * x;
-            }
-            out
-        };
-        let (xs, ys, zs) = (powers(c.x), powers(c.y), powers(c.z));
-        // C(a, i)·x^(a−i) for i = 0..=a.
-        let shifted = |a: usize, pw: &[f64; N]| {
-            let mut out = [0.0f64; N];
-            for (i, o) in out.iter_mut().enumerate().take(a + 1) {
-                *o = BINOMIAL[a][i] * pw[a - i];
-            }
-            out
-        };
-        for &([a, b, e], k) in &self.terms {
-            let (px, py, pz) = (shifted(a, &xs), shifted(b, &ys), shifted(e, &zs));
-            for (i, x) in px.iter().enumerate().take(a + 1) {
-                for (j, y) in py.iter().enumerate().take(b + 1) {
-                    let xy = k * x * y;
-                    let row = &mut coef[i + d * j..];
-                    for (l, z) in pz.iter().enumerate().take(e + 1) {
-                        row[d * d * l] += xy * z;
-                    }
-                }
-            }
-        }
+        let coef = self.coefficients(c);
         let mut by_degree = vec![0.0f64; 3 * d];
         for l in 0..d {
             for j in 0..d {
@@ -651,11 +822,82 @@ impl Taylor {
             }
             power *= r;
         }
+        let value = coef[0];
+        let gradient = DVec3::new(coef[1], coef[d], coef[d * d]);
         (linear + quadratic).is_finite().then_some(TaylorSums {
+            value,
+            gradient,
             linear,
             quadratic,
             magnitude: self.magnitude_bound(c),
         })
+    }
+
+    /// `f(c)`, `∇f(c)` and, for each axis `i`, a bound `L_i` on `|∂_i f(x) − ∂_i f(c)|` over
+    /// the cube of half-side `r` about `c`: `Σ_{|α|≥2, α_i≥1} |a_α| α_i r^{|α|−1}`.
+    fn gradient_spread(&self, c: DVec3, r: f64) -> (f64, DVec3, DVec3) {
+        let d = self.degree + 1;
+        let coef = self.coefficients(c);
+        let mut spread = [0.0f64; 3];
+        let mut powers = vec![1.0f64; 3 * d];
+        for k in 1..3 * d {
+            powers[k] = powers[k - 1] * r;
+        }
+        for l in 0..d {
+            for j in 0..d {
+                for i in 0..d {
+                    let total = i + j + l;
+                    if total < 2 {
+                        continue;
+                    }
+                    let a = coef[i + d * (j + d * l)].abs() * powers[total - 1];
+                    spread[0] += a * i as f64;
+                    spread[1] += a * j as f64;
+                    spread[2] += a * l as f64;
+                }
+            }
+        }
+        (
+            coef[0],
+            DVec3::new(coef[1], coef[d], coef[d * d]),
+            DVec3::from_array(spread),
+        )
+    }
+
+    /// The Taylor coefficients of `f` about `c`: `a_(i,j,l)` at `i + d·(j + d·l)`, `d` the
+    /// degree + 1.
+    fn coefficients(&self, c: DVec3) -> Vec<f64> {
+        const N: usize = MAX_DEGREE + 1;
+        let d = self.degree + 1;
+        let mut coef = vec![0.0f64; d * d * d];
+        // table[a][i] = C(a, i)·x^(a−i): the coefficient of d^i in (x + d)^a.
+        let table = |x: f64| {
+            let mut powers = [1.0f64; N];
+            for i in 1..d {
+                powers[i] = powers[i - 1] * x;
+            }
+            let mut out = [[0.0f64; N]; N];
+            for (a, row) in out.iter_mut().enumerate().take(d) {
+                for (i, o) in row.iter_mut().enumerate().take(a + 1) {
+                    *o = BINOMIAL[a][i] * powers[a - i];
+                }
+            }
+            out
+        };
+        let (tx, ty, tz) = (table(c.x), table(c.y), table(c.z));
+        for &([a, b, e], k) in &self.terms {
+            let (px, py, pz) = (&tx[a][..=a], &ty[b][..=b], &tz[e][..=e]);
+            for (j, y) in py.iter().enumerate() {
+                for (l, z) in pz.iter().enumerate() {
+                    let yz = k * y * z;
+                    let row = &mut coef[d * (j + d * l)..][..=a];
+                    for (o, x) in row.iter_mut().zip(px) {
+                        *o += yz * x;
+                    }
+                }
+            }
+        }
+        coef
     }
 }
 
