@@ -27,6 +27,7 @@
 //! inside the domain is a whole face of exactly one other leaf; a test checks it).
 
 use std::collections::HashSet;
+use std::hash::{BuildHasherDefault, Hasher};
 
 /// A lattice point (lattice units, each coordinate in `0..=cells·2^depth`).
 pub type Point = [i32; 3];
@@ -92,6 +93,17 @@ impl Tet {
     }
 }
 
+/// A lattice point packed in a `u64` (21 bits a coordinate), ordered as its `(z, y, x)`.
+pub fn pack(p: Point) -> u64 {
+    (p[2] as u64) << 42 | (p[1] as u64) << 21 | p[0] as u64
+}
+
+/// The lattice point [`pack`] packed.
+pub fn unpack(k: u64) -> Point {
+    let mask = (1u64 << 21) - 1;
+    [k & mask, k >> 21 & mask, k >> 42].map(|c| c as i32)
+}
+
 /// The midpoint of two lattice points whose coordinates differ by even numbers.
 fn midpoint(a: Point, b: Point) -> Point {
     [0, 1, 2].map(|i| (a[i] + b[i]) / 2)
@@ -132,18 +144,38 @@ pub fn kuhn_tetrahedra(lo: Point, side: i32) -> [Tet; 6] {
 pub struct Refinement {
     cells: i32,
     depth: u32,
-    marked: HashSet<Point>,
+    /// Midpoints of the marked edges, [`pack`]ed.
+    marked: HashSet<u64, BuildHasherDefault<PointHasher>>,
+}
+
+/// A hasher for lattice points and packed lattice points (a multiply per word; the keys are
+/// well spread integers, and the tables are not exposed to chosen input).
+#[derive(Default)]
+pub struct PointHasher(u64);
+
+impl Hasher for PointHasher {
+    fn finish(&self) -> u64 {
+        self.0 ^ self.0 >> 29
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(21) ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
 }
 
 impl Refinement {
     /// No edge marked: the leaves are the domain's Kuhn tetrahedra. `depth`: how many times a
     /// cube's side may be halved (the finest tetrahedra have level `3·depth`).
     pub fn new(cells: usize, depth: u32) -> Self {
-        assert!(depth <= 20 && cells << depth < 1 << 29, "lattice too large");
+        assert!(depth <= 20 && cells << depth < 1 << 21, "lattice too large");
         Self {
             cells: cells as i32,
             depth,
-            marked: HashSet::new(),
+            marked: HashSet::default(),
         }
     }
 
@@ -266,9 +298,13 @@ impl Refinement {
         let mut stack = vec![m];
         let mut added = 0;
         while let Some(p) = stack.pop() {
-            if self.marked.insert(p) {
+            if self.marked.insert(pack(p)) {
                 added += 1;
-                stack.extend(self.parents(p).into_iter().filter(|q| !self.marked.contains(q)));
+                stack.extend(
+                    self.parents(p)
+                        .into_iter()
+                        .filter(|&q| !self.marked.contains(&pack(q))),
+                );
             }
         }
         added
@@ -276,7 +312,7 @@ impl Refinement {
 
     /// Whether `t` is bisected: below the finest level with its refinement edge marked.
     pub fn splits(&self, t: &Tet) -> bool {
-        t.level < self.finest_level() && self.marked.contains(&t.midpoint())
+        t.level < self.finest_level() && self.marked.contains(&pack(t.midpoint()))
     }
 
     /// `t` if it is not bisected, else the leaves below it, in order (first child first).
@@ -419,7 +455,7 @@ mod tests {
                         let m = midpoint(p, q);
                         let made = r.level_of(m);
                         assert!(
-                            !(r.marked.contains(&m) && made.is_some()),
+                            !(r.marked.contains(&pack(m)) && made.is_some()),
                             "leaf {t:?} has a marked edge at {m:?}"
                         );
                     }

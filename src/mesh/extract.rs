@@ -12,6 +12,7 @@
 //! the exact boundary ([`Field::crossing`]): the solid's surface by the root finder, or the
 //! clip sphere.
 
+pub use super::bisection::{pack, unpack};
 use super::bisection::{Point, Tet};
 use super::field::{Field, VertexKind};
 use super::TriangleMesh;
@@ -436,46 +437,32 @@ impl Lattice {
     }
 }
 
-/// A lattice point packed in a `u64` (21 bits a coordinate), ordered as its `(z, y, x)`.
-pub fn pack(p: Point) -> u64 {
-    (p[2] as u64) << 42 | (p[1] as u64) << 21 | p[0] as u64
-}
-
-/// The lattice point [`pack`] packed.
-pub fn unpack(k: u64) -> Point {
-    let mask = (1u64 << 21) - 1;
-    [k & mask, k >> 21 & mask, k >> 42].map(|c| c as i32)
-}
-
-/// The corners of `t` in an order of positive orientation (corners 1 and 2 swapped if
-/// needed).
-pub fn positively_oriented(t: &Tet) -> [Point; 4] {
-    let mut c = t.corners;
-    if t.orientation() < 0 {
-        c.swap(1, 2);
-    }
-    c
-}
-
 /// The marching-tetrahedra mesh of `field`'s solid on the `leaves` of a conforming
-/// refinement (object space, with each vertex's kind), on `lattice`; `inside(p)`: the label
-/// of lattice point `p` ([`Field::inside`] at its position). Closed, 2-manifold, outward
-/// and free of self-intersections as on a uniform grid (module doc): the leaves share whole
-/// faces. `None` once `cancel` is set.
+/// refinement (object space, with each vertex's kind), on `lattice`; `labels[i]`: bit `k` set
+/// when corner `k` of leaf `i` is inside ([`Field::inside`] at its position; the same for a
+/// lattice point in every leaf). Closed, 2-manifold, outward and free of self-intersections
+/// as on a uniform grid (module doc): the leaves share whole faces. `None` once `cancel` is
+/// set.
 pub fn march_leaves(
     field: &Field,
     lattice: Lattice,
     leaves: &[Tet],
-    inside: &(dyn Fn(Point) -> bool + Sync),
+    labels: &[u8],
     cancel: &AtomicBool,
 ) -> Option<(TriangleMesh, Vec<VertexKind>)> {
     let cancelled = || cancel.load(Ordering::Relaxed);
     let table = marching_table();
     let polygons: Vec<[u128; 4]> = leaves
         .par_iter()
-        .filter_map(|t| {
-            let c = positively_oriented(t);
-            let case = (0..4).fold(0usize, |m, i| m | usize::from(inside(c[i])) << i);
+        .zip(labels)
+        .filter(|(_, &m)| m != 0 && m != 15)
+        .filter_map(|(t, &m)| {
+            let mut c = t.corners;
+            let mut case = usize::from(m);
+            if t.orientation() < 0 {
+                c.swap(1, 2);
+                case = case & 0b1001 | (case & 2) << 1 | (case & 4) >> 1;
+            }
             let polygon = table[case].as_ref()?;
             let mut keys = [NO_EDGE; 4];
             for (slot, [i, j]) in keys.iter_mut().zip(polygon) {
@@ -487,6 +474,20 @@ pub fn march_leaves(
     if cancelled() {
         return None;
     }
+    // A lattice point's label, from any leaf that has it as a corner.
+    let mut label_of: Vec<(u64, bool)> = leaves
+        .par_iter()
+        .zip(labels)
+        .filter(|(_, &m)| m != 0 && m != 15)
+        .flat_map_iter(|(t, &m)| (0..4).map(move |k| (pack(t.corners[k]), m >> k & 1 == 1)))
+        .collect();
+    label_of.par_sort_unstable();
+    label_of.dedup();
+    let inside = |p: Point| {
+        let k = pack(p);
+        let i = label_of.partition_point(|&(q, _)| q < k);
+        label_of[i].1
+    };
     let ends = |k: u128| (unpack((k >> 64) as u64), unpack(k as u64));
     assemble(
         field,
@@ -494,7 +495,7 @@ pub fn march_leaves(
         NO_EDGE,
         ends,
         |p| lattice.position(p),
-        |p| inside(p),
+        inside,
         cancelled,
     )
 }

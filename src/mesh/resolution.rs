@@ -44,7 +44,7 @@
 //! `φ` (degree twice `f`'s, a square less a sum of squares) is meshed on the uniform grid of
 //! the floor step ([`super::extract::march`]).
 
-use super::bisection::{Point, Refinement, Tet, TET_EDGES};
+use super::bisection::{Point, PointHasher, Refinement, Tet, TET_EDGES};
 use super::extract::{self, marching_table, Grid, Lattice, TablePolygon};
 use super::field::{Field, SolidKind, VertexKind};
 use super::TriangleMesh;
@@ -53,7 +53,7 @@ use crate::roots::sturm_roots;
 use crate::shapes::implicit::MAX_DEGREE;
 use rayon::prelude::*;
 use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
+use std::hash::BuildHasherDefault;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The share of the tolerance an extracted triangle may deviate from the surface (by the
@@ -139,24 +139,6 @@ pub fn depth_for(radius: f64, floor: f64, kind: SolidKind) -> u32 {
     depth
 }
 
-/// A hasher for packed lattice points (one multiply; the keys are well spread integers).
-#[derive(Default)]
-pub(crate) struct PointHasher(u64);
-
-impl Hasher for PointHasher {
-    fn finish(&self) -> u64 {
-        self.0 ^ self.0 >> 29
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(u64::from(b));
-        }
-    }
-    fn write_u64(&mut self, v: u64) {
-        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    }
-}
-
 type PointMap<V> = HashMap<u64, V, BuildHasherDefault<PointHasher>>;
 
 /// `φ` at lattice points, computed once each.
@@ -193,20 +175,12 @@ pub struct Adaptive {
     pub refinement: Refinement,
     /// The leaves, in a fixed order (whatever the number of threads).
     pub leaves: Vec<Tet>,
+    /// Each leaf's labels: bit `k` set when its corner `k` is inside ([`Field::inside`]).
+    pub labels: Vec<u8>,
     /// Where the lattice lies in object space.
     pub lattice: Lattice,
     /// What was made.
     pub refined: Refined,
-    values: Values,
-}
-
-impl Adaptive {
-    /// The label of lattice point `p` (a corner of a leaf): strictly inside the clip ball
-    /// and `φ < 0` ([`Field::inside`]).
-    pub fn inside(&self, field: &Field, p: Point) -> bool {
-        let x = self.lattice.position(p);
-        x.length_squared() < field.radius() * field.radius() && self.values.get(p) < 0.0
-    }
 }
 
 /// Refines the Kuhn tetrahedra of `coarse` (depth ≥ 1 halvings down to the floor) where
@@ -352,32 +326,39 @@ pub fn refine(
     }
     let leaves: Vec<Tet> = leaves.into_iter().map(|(t, _)| t).collect();
     values.fill(field, leaves.iter().flat_map(|t| t.corners.into_iter()));
-    let mut adaptive = Adaptive {
-        refinement,
-        leaves,
-        lattice,
-        refined: Refined {
-            coarse,
-            depth,
-            leaves_by_level: vec![0; finest as usize + 1],
-            crossed_by_level: vec![0; finest as usize + 1],
-            refined_for,
-            rounds,
-        },
-        values,
+    let r2 = field.radius() * field.radius();
+    let labels: Vec<u8> = leaves
+        .par_iter()
+        .map(|t| {
+            (0..4).fold(0u8, |m, k| {
+                let p = t.corners[k];
+                let inside =
+                    lattice.position(p).length_squared() < r2 && values.get(p) < 0.0;
+                m | u8::from(inside) << k
+            })
+        })
+        .collect();
+    let mut refined = Refined {
+        coarse,
+        depth,
+        leaves_by_level: vec![0; finest as usize + 1],
+        crossed_by_level: vec![0; finest as usize + 1],
+        refined_for,
+        rounds,
     };
-    for t in &adaptive.leaves {
-        let level = t.level as usize;
-        adaptive.refined.leaves_by_level[level] += 1;
-        let first = adaptive.inside(field, t.corners[0]);
-        if t.corners[1..]
-            .iter()
-            .any(|&p| adaptive.inside(field, p) != first)
-        {
-            adaptive.refined.crossed_by_level[level] += 1;
+    for (t, &m) in leaves.iter().zip(&labels) {
+        refined.leaves_by_level[t.level as usize] += 1;
+        if m != 0 && m != 15 {
+            refined.crossed_by_level[t.level as usize] += 1;
         }
     }
-    Some(adaptive)
+    Some(Adaptive {
+        refinement,
+        leaves,
+        labels,
+        lattice,
+        refined,
+    })
 }
 
 /// The mesh of `field`'s solid (object space, each vertex's kind) on the leaves of
@@ -396,7 +377,7 @@ pub fn mesh_adaptive(
         field,
         adaptive.lattice,
         &adaptive.leaves,
-        &|p| adaptive.inside(field, p),
+        &adaptive.labels,
         cancel,
     )?;
     let total = 3 * depth as usize + 2;
