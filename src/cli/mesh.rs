@@ -181,7 +181,8 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
                 let by_side: Vec<String> = (0..r.crossed_by_level.len())
                     .step_by(3)
                     .map(|level| {
-                        let n: usize = r.crossed_by_level[level..(level + 3).min(r.crossed_by_level.len())]
+                        let n: usize = r.crossed_by_level
+                            [level..(level + 3).min(r.crossed_by_level.len())]
                             .iter()
                             .sum();
                         format!("{:.3e}: {n}", r.cube_side(level))

@@ -280,8 +280,16 @@ impl Refinement {
             _ => {
                 let i = half[0];
                 let (j, k) = ((i + 1) % 3, (i + 2) % 3);
-                for (a, b) in [(h, 0), (-h, 0), (0, h), (0, -h), (h, h), (h, -h), (-h, h), (-h, -h)]
-                {
+                for (a, b) in [
+                    (h, 0),
+                    (-h, 0),
+                    (0, h),
+                    (0, -h),
+                    (h, h),
+                    (h, -h),
+                    (-h, h),
+                    (-h, -h),
+                ] {
                     around.push(shift(shift(m, j, a), k, b));
                 }
             }
@@ -345,12 +353,16 @@ mod tests {
     /// Each face as its sorted corners.
     fn faces(t: &Tet) -> [[Point; 3]; 4] {
         let c = t.corners;
-        [[c[1], c[2], c[3]], [c[0], c[2], c[3]], [c[0], c[1], c[3]], [c[0], c[1], c[2]]].map(
-            |mut f| {
-                f.sort();
-                f
-            },
-        )
+        [
+            [c[1], c[2], c[3]],
+            [c[0], c[2], c[3]],
+            [c[0], c[1], c[3]],
+            [c[0], c[1], c[2]],
+        ]
+        .map(|mut f| {
+            f.sort();
+            f
+        })
     }
 
     /// Conforming: every face inside the domain is shared by exactly two leaves, every face
@@ -367,7 +379,11 @@ mod tests {
             }
         }
         let e = r.extent();
-        assert_eq!(volume, 6 * i64::from(e).pow(3), "the leaves fill the domain");
+        assert_eq!(
+            volume,
+            6 * i64::from(e).pow(3),
+            "the leaves fill the domain"
+        );
         for (f, n) in count {
             let on_boundary = (0..3).any(|i| {
                 (f[0][i] == f[1][i] && f[1][i] == f[2][i]) && (f[0][i] == 0 || f[0][i] == e)
@@ -434,7 +450,9 @@ mod tests {
         assert_conforming(&r, &r.leaves());
         let mut state = 12345u64;
         let mut next = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (state >> 33) as usize
         };
         for round in 0..6 {

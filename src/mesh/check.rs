@@ -297,7 +297,7 @@ pub fn triangles_meet(ti: [u32; 3], tj: [u32; 3], vertices: &[DVec3]) -> bool {
             let na = (v - u).cross(a - u);
             let nb = (v - u).cross(b - u);
             let sine = orient(u, v, a, b).abs() / (na.length() * (b - u).length());
-            !(sine > FOLD_SINE) && na.dot(nb) > 0.0
+            (sine <= FOLD_SINE || sine.is_nan()) && na.dot(nb) > 0.0
         }
         _ => true,
     }

@@ -323,7 +323,7 @@ where
             let n = if p[3] == none { 3 } else { 4 };
             let mut out = [u32::MAX; 4];
             for (o, k) in out.iter_mut().zip(&p[..n]) {
-                *o = keys.binary_search(k).ok().expect("every key was placed") as u32;
+                *o = keys.binary_search(k).expect("every key was placed") as u32;
             }
             (out, n)
         })

@@ -344,15 +344,9 @@ pub fn mesh_solid_cancellable(
         (mesh, kinds, floor, None)
     } else {
         let coarse = extract::Grid::covering(radius, floor_step * f64::from(1u32 << depth));
-        let (mesh, kinds, refined) = resolution::mesh_adaptive(
-            &field,
-            coarse,
-            depth,
-            tolerance / grow,
-            &scaled,
-            cancel,
-        )
-        .ok_or(MeshError::Cancelled)?;
+        let (mesh, kinds, refined) =
+            resolution::mesh_adaptive(&field, coarse, depth, tolerance / grow, &scaled, cancel)
+                .ok_or(MeshError::Cancelled)?;
         (mesh, kinds, coarse, Some(refined))
     };
     times.extraction = started.elapsed();

@@ -260,8 +260,9 @@ pub fn refine(
             let (x, y, z) = (c % n, c / n % n, c / (n * n));
             let (lo, hi) = cube_box(x, y, z, 1);
             let centre = 0.5 * (lo + hi);
-            let (value, gradient, spread) =
-                examiner.taylor.gradient_spread(centre, 0.5 * (hi - lo).max_element());
+            let (value, gradient, spread) = examiner
+                .taylor
+                .gradient_spread(centre, 0.5 * (hi - lo).max_element());
             let f_sign = examiner.f_sign;
             Some(Spread {
                 gradient: f_sign * gradient,
@@ -332,8 +333,7 @@ pub fn refine(
         .map(|t| {
             (0..4).fold(0u8, |m, k| {
                 let p = t.corners[k];
-                let inside =
-                    lattice.position(p).length_squared() < r2 && values.get(p) < 0.0;
+                let inside = lattice.position(p).length_squared() < r2 && values.get(p) < 0.0;
                 m | u8::from(inside) << k
             })
         })
@@ -444,9 +444,8 @@ impl Examiner<'_> {
             }
         }
         let r2 = radius * radius;
-        let labels = std::array::from_fn::<bool, 4, _>(|i| {
-            points[i].length_squared() < r2 && phi[i] < 0.0
-        });
+        let labels =
+            std::array::from_fn::<bool, 4, _>(|i| points[i].length_squared() < r2 && phi[i] < 0.0);
         let case = (0..4).fold(0usize, |m, i| m | usize::from(labels[i]) << i);
         let polygon = self.table[case].as_ref()?;
         let placed: Vec<(DVec3, VertexKind)> = polygon
@@ -498,7 +497,7 @@ impl Examiner<'_> {
         let m = t.midpoint();
         let x = self.lattice.position(m);
         let value = self.field.value(x);
-        if !(sign * value > 0.0) {
+        if sign * value <= 0.0 || value.is_nan() {
             // Surface in the tetrahedron (or its box's part outside the ball).
             return false;
         }
@@ -956,7 +955,10 @@ mod tests {
         assert!(worst_deviation(&f, &mesh, &kinds) <= EXTRACT_SHARE * 0.02);
         // Every crossed leaf is in a cube of the coarsest step: nothing needed refining.
         let crossed = &refined.crossed_by_level;
-        assert!(crossed[0] > 0 && crossed[3..].iter().all(|&n| n == 0), "{refined:?}");
+        assert!(
+            crossed[0] > 0 && crossed[3..].iter().all(|&n| n == 0),
+            "{refined:?}"
+        );
         // At a quarter of the tolerance the same coarse cubes are refined for the deviation,
         // and the mesh is still within its share.
         let (mesh, _, refined) = adaptive(&f, 0.005);
