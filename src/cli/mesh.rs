@@ -163,24 +163,49 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
     );
     for (s, part) in solids.iter().zip(&printable.parts) {
         let d = &part.deviation;
-        outln!(
-            "  {}: tolerance {:.3e}, grid {}³ (step {:.3e} in object units; the finest allowed \
-             {:.3e})",
-            s.name,
-            part.tolerance,
-            part.grid.cells,
-            part.grid.step(),
-            part.floor.step()
-        );
-        let tried: Vec<String> = part
-            .levels
-            .iter()
-            .map(|l| match l.rejected {
-                Some(why) => format!("{}³ rejected ({why})", l.grid.cells),
-                None => format!("{}³ accepted", l.grid.cells),
-            })
-            .collect();
-        outln!("    grid steps tried, coarse to fine: {}", tried.join(", "));
+        match &part.refined {
+            Some(r) => {
+                outln!(
+                    "  {}: tolerance {:.3e}, tetrahedra of a {}³ grid (step {:.3e} in object \
+                     units) bisected where needed down to step {:.3e}: {} leaves ({} on a \
+                     uniform grid of that step), {} of them cut by the boundary",
+                    s.name,
+                    part.tolerance,
+                    r.coarse.cells,
+                    r.coarse.step(),
+                    r.cube_side(r.crossed_by_level.len() - 1),
+                    r.leaves(),
+                    r.uniform_leaves(),
+                    r.crossed()
+                );
+                let by_side: Vec<String> = (0..r.crossed_by_level.len())
+                    .step_by(3)
+                    .map(|level| {
+                        let n: usize = r.crossed_by_level
+                            [level..(level + 3).min(r.crossed_by_level.len())]
+                            .iter()
+                            .sum();
+                        format!("{:.3e}: {n}", r.cube_side(level))
+                    })
+                    .collect();
+                outln!(
+                    "    cut leaves by cube side: {}; bisected for a triangle's deviation {}, an \
+                     edge crossed twice {}, surface not proven absent {} ({} rounds)",
+                    by_side.join(", "),
+                    r.refined_for[0],
+                    r.refined_for[1],
+                    r.refined_for[2],
+                    r.rounds
+                );
+            }
+            None => outln!(
+                "  {}: tolerance {:.3e}, uniform grid {}³ of the floor step {:.3e} (object units)",
+                s.name,
+                part.tolerance,
+                part.grid.cells,
+                part.grid.step()
+            ),
+        }
         match part.coarsened {
             Some(c) => outln!(
                 "    coarsened where flat: {} triangles from marching tetrahedra's {} ({} \

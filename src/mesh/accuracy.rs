@@ -1,7 +1,7 @@
 //! How far the mesh is from the exact surface, measured with the project's root finder.
 //!
 //! - Vertices: each surface or crease vertex's distance to the surface: the nearest root of `φ` on the
-//!   line along `∇φ` or along any of the grid's seven edge directions (the least of these
+//!   line along `∇φ` or along any of the tetrahedra's 13 edge directions (the least of these
 //!   bounds the distance from above).
 //! - Mesh to surface: from the centroid of every triangle whose corners are all on the
 //!   surface (or the crease), the nearest root of `φ` along the triangle's normal (or along `∇φ` if nearer).
@@ -23,16 +23,23 @@ use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-/// The directions of the grid's edges ([`super::extract`]: the cube's axes, face diagonals
-/// and main diagonal).
-const EDGE_DIRECTIONS: [DVec3; 7] = [
+/// The directions of the tetrahedra's edges ([`super::bisection`]: the axes, the diagonals
+/// of the faces and the main diagonals of cubes, every one of them, as the bisection's half
+/// cubes are mirror images of each other).
+const EDGE_DIRECTIONS: [DVec3; 13] = [
     DVec3::X,
     DVec3::Y,
     DVec3::Z,
     DVec3::new(1.0, 1.0, 0.0),
     DVec3::new(1.0, 0.0, 1.0),
     DVec3::new(0.0, 1.0, 1.0),
+    DVec3::new(1.0, -1.0, 0.0),
+    DVec3::new(1.0, 0.0, -1.0),
+    DVec3::new(0.0, 1.0, -1.0),
     DVec3::ONE,
+    DVec3::new(-1.0, 1.0, 1.0),
+    DVec3::new(1.0, -1.0, 1.0),
+    DVec3::new(1.0, 1.0, -1.0),
 ];
 
 /// Distances measured between a mesh and the exact surface (see the module doc).
@@ -221,11 +228,11 @@ pub fn measure_cancellable(
 
 /// An upper bound on the distance from the object-space point `p` to `φ = 0`: the nearest
 /// root of `φ` on the line through `p` along `∇φ`, or where that line has none within
-/// `reach` (at a node, where `∇φ` vanishes), the nearest on the lines along the grid's seven
-/// edge directions (a vertex was found on one of them), by the root finder; `None` if there
-/// is none within `reach`. (The line along `∇φ` is the one that meets the surface nearest
-/// wherever the surface is smooth on the scale of the distance, so the others are searched
-/// only when it finds nothing: one root search per vertex instead of eight.)
+/// `reach` (at a node, where `∇φ` vanishes), the nearest on the lines along the tetrahedra's
+/// 13 edge directions (a vertex was found on one of them), by the root finder; `None` if
+/// there is none within `reach`. (The line along `∇φ` is the one that meets the surface
+/// nearest wherever the surface is smooth on the scale of the distance, so the others are
+/// searched only when it finds nothing: one root search per vertex instead of fourteen.)
 pub fn vertex_distance(field: &Field, p: DVec3, reach: f64) -> Option<f64> {
     let h = 1e-7 * field.radius();
     field

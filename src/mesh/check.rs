@@ -171,7 +171,7 @@ fn segment_crosses(p: DVec3, q: DVec3, [a, b, c]: [DVec3; 3]) -> bool {
 /// Pairs of triangles `(i, j)`, `i < j`, that intersect other than in the vertices and
 /// edges they share: a broad phase by a uniform grid of cells about the triangles' size,
 /// then exact tests of each candidate pair (segment against triangle in both directions;
-/// pairs that share an edge: the two folded onto each other in one plane).
+/// pairs that share an edge: the two folded onto each other, to within [`FOLD_SINE`]).
 pub fn crossing_triangles(mesh: &TriangleMesh) -> Vec<(usize, usize)> {
     let tris = &mesh.triangles;
     if tris.is_empty() {
@@ -243,6 +243,11 @@ pub fn crossing_triangles(mesh: &TriangleMesh) -> Vec<(usize, usize)> {
     found
 }
 
+/// Two triangles sharing an edge, on the same side of it, count as folded onto each other
+/// (meeting) when the sine of the angle between them is at most this: the rounding of
+/// their coordinates (to `f32` in the files) could make them coplanar.
+pub const FOLD_SINE: f64 = 1e-6;
+
 /// Whether triangles `i` and `j` meet anywhere but in what they share (see
 /// [`crossing_triangles`]).
 fn triangles_cross(mesh: &TriangleMesh, i: usize, j: usize) -> bool {
@@ -295,9 +300,11 @@ pub fn corners_meet(ti: [u32; 3], pi: [DVec3; 3], tj: [u32; 3], pj: [DVec3; 3]) 
             let other =
                 |t: [u32; 3], p: [DVec3; 3]| p[t.iter().position(|w| !shared.contains(w)).unwrap()];
             let (a, b) = (other(ti, pi), other(tj, pj));
+            // Folded to within FOLD_SINE counts: rounding (the files' f32) could close it.
             let na = (v - u).cross(a - u);
             let nb = (v - u).cross(b - u);
-            orient(u, v, a, b) == 0.0 && na.dot(nb) > 0.0
+            let sine = orient(u, v, a, b).abs() / (na.length() * (b - u).length());
+            (sine <= FOLD_SINE || sine.is_nan()) && na.dot(nb) > 0.0
         }
         _ => true,
     }
@@ -358,5 +365,22 @@ mod tests {
             crossing.triangles.push(t.map(|v| v + 4));
         }
         assert!(verify(&crossing).unwrap_err().contains("intersect"));
+    }
+
+    #[test]
+    fn two_triangles_folded_onto_each_other_to_rounding_meet() {
+        // Sharing the edge u v, on the same side, in one plane up to rounding (the shape the
+        // coarsening once made at one of Barth's nodes, which f32 rounding made coplanar).
+        let vertices = vec![
+            DVec3::new(-1.0200023690523115, 1.0200023690523115, 1.04),
+            DVec3::new(-1.0000400000000003, 0.99996, 1.00004),
+            DVec3::new(-1.0000400000000003, 1.00004, 0.99996),
+            DVec3::new(-1.0200023690523108, 1.04, 1.0200023690523108),
+        ];
+        assert!(triangles_meet([0, 1, 2], [3, 1, 0], &vertices));
+        // Turned out of the plane by a thousandth of a radian, they do not.
+        let mut turned = vertices.clone();
+        turned[3].x += 1e-3 * 0.028;
+        assert!(!triangles_meet([0, 1, 2], [3, 1, 0], &turned));
     }
 }

@@ -12,6 +12,8 @@
 //! the exact boundary ([`Field::crossing`]): the solid's surface by the root finder, or the
 //! clip sphere.
 
+pub use super::bisection::{pack, unpack};
+use super::bisection::{Point, Tet};
 use super::field::{Field, VertexKind};
 use super::TriangleMesh;
 use crate::geometry::DVec3;
@@ -57,7 +59,7 @@ fn orientation(t: &[DVec3; 4]) -> f64 {
 
 /// A polygon of the marching table: three or four edges of the tetrahedron in order around
 /// the polygon, each a pair of local corner numbers (the inside corner first).
-type TablePolygon = Vec<[u8; 2]>;
+pub(crate) type TablePolygon = Vec<[u8; 2]>;
 
 /// For each of the 16 labellings of a positively oriented tetrahedron (bit `i` set when
 /// corner `i` is inside), the polygon of its boundary piece (a triangle when one corner is
@@ -67,7 +69,7 @@ type TablePolygon = Vec<[u8; 2]>;
 /// vertices at edge midpoints; it holds wherever the vertices are on the open edges, as no
 /// triangle of the polygon's fan can flatten or turn over while its vertices move along their
 /// edges.
-fn marching_table() -> Vec<Option<TablePolygon>> {
+pub(crate) fn marching_table() -> Vec<Option<TablePolygon>> {
     let reference = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
     (0..16u8)
         .map(|case| {
@@ -243,16 +245,6 @@ pub fn march_cancellable(
         return None;
     }
     let polygons: Vec<[u64; 4]> = by_layer.into_iter().flatten().collect();
-
-    // 3. One vertex per crossed edge, placed on the exact boundary.
-    let mut keys: Vec<u64> = polygons
-        .iter()
-        .flatten()
-        .copied()
-        .filter(|&k| k != NO_KEY)
-        .collect();
-    keys.par_sort_unstable();
-    keys.dedup();
     let ends = |k: u64| {
         let lower = (k >> 3) as usize;
         let bits = (k & 7) as u8;
@@ -268,6 +260,49 @@ pub fn march_cancellable(
         let (x, y, z) = grid.coords(v);
         grid.point(x, y, z)
     };
+    let mesh = assemble(
+        field,
+        &polygons,
+        NO_KEY,
+        ends,
+        position,
+        |v| labels[v],
+        cancelled,
+    );
+    tick();
+    mesh
+}
+
+/// Steps 3 to 5 of marching tetrahedra, for any conforming tetrahedral mesh: `polygons` are
+/// cycles of edge keys (a triangle's fourth key `none`), each key an edge whose `ends` are
+/// mesh vertices (`position` in object space, `inside` their labels). One vertex per crossed
+/// edge placed on the exact boundary ([`Field::crossing`]); a side joining a surface vertex
+/// to a cap vertex split at the crease point in the face the two edges span (the same face
+/// of both tetrahedra that share it, so the split is the same in both); each polygon fanned
+/// from its first crease vertex or else its first vertex (see the module doc). `None` once
+/// `cancelled()` (read before each vertex is placed).
+pub(crate) fn assemble<K, P>(
+    field: &Field,
+    polygons: &[[K; 4]],
+    none: K,
+    ends: impl Fn(K) -> (P, P) + Sync,
+    position: impl Fn(P) -> DVec3 + Sync,
+    inside: impl Fn(P) -> bool + Sync,
+    cancelled: impl Fn() -> bool + Sync,
+) -> Option<(TriangleMesh, Vec<VertexKind>)>
+where
+    K: Copy + Ord + Send + Sync,
+    P: Copy + PartialEq + Send + Sync,
+{
+    // 3. One vertex per crossed edge, placed on the exact boundary.
+    let mut keys: Vec<K> = polygons
+        .iter()
+        .flatten()
+        .copied()
+        .filter(|&k| k != none)
+        .collect();
+    keys.par_sort_unstable();
+    keys.dedup();
     let placed: Vec<(DVec3, VertexKind)> = keys
         .par_iter()
         .map(|&k| {
@@ -276,17 +311,16 @@ pub fn march_cancellable(
             }
             let (lower, upper) = ends(k);
             let (p, q) = (position(lower), position(upper));
-            let (a, b) = if labels[lower] { (p, q) } else { (q, p) };
+            let (a, b) = if inside(lower) { (p, q) } else { (q, p) };
             let (s, kind) = field.crossing(a, b);
             Some((a + s * (b - a), kind))
         })
         .collect::<Option<_>>()?;
-    tick();
     let (mut vertices, mut kinds): (Vec<DVec3>, Vec<VertexKind>) = placed.into_iter().unzip();
     let indexed: Vec<([u32; 4], usize)> = polygons
         .par_iter()
         .map(|p| {
-            let n = if p[3] == NO_KEY { 3 } else { 4 };
+            let n = if p[3] == none { 3 } else { 4 };
             let mut out = [u32::MAX; 4];
             for (o, k) in out.iter_mut().zip(&p[..n]) {
                 *o = keys.binary_search(k).expect("every key was placed") as u32;
@@ -377,6 +411,103 @@ pub fn march_cancellable(
         kinds,
     ))
 }
+
+/// Where the lattice of a [`Refinement`] lies in object space: lattice point `p` is at
+/// `origin + unit · p`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lattice {
+    /// The object-space position of lattice point `(0, 0, 0)`.
+    pub origin: DVec3,
+    /// The lattice spacing (object units): the side of the finest cubes.
+    pub unit: f64,
+}
+
+impl Lattice {
+    /// The lattice whose domain cubes (side `2^depth` units) are the cells of `grid`.
+    pub fn of_grid(grid: Grid, depth: u32) -> Self {
+        Self {
+            origin: DVec3::splat(-grid.half),
+            unit: grid.step() / f64::from(1u32 << depth),
+        }
+    }
+
+    /// The object-space position of a lattice point.
+    pub fn position(&self, p: Point) -> DVec3 {
+        self.origin + DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2])) * self.unit
+    }
+}
+
+/// The marching-tetrahedra mesh of `field`'s solid on the `leaves` of a conforming
+/// refinement (object space, with each vertex's kind), on `lattice`; `labels[i]`: bit `k` set
+/// when corner `k` of leaf `i` is inside ([`Field::inside`] at its position; the same for a
+/// lattice point in every leaf). Closed, 2-manifold, outward and free of self-intersections
+/// as on a uniform grid (module doc): the leaves share whole faces. `None` once `cancel` is
+/// set.
+pub fn march_leaves(
+    field: &Field,
+    lattice: Lattice,
+    leaves: &[Tet],
+    labels: &[u8],
+    cancel: &AtomicBool,
+) -> Option<(TriangleMesh, Vec<VertexKind>)> {
+    let cancelled = || cancel.load(Ordering::Relaxed);
+    let table = marching_table();
+    let polygons: Vec<[u128; 4]> = leaves
+        .par_iter()
+        .zip(labels)
+        .filter(|(_, &m)| m != 0 && m != 15)
+        .filter_map(|(t, &m)| {
+            let mut c = t.corners;
+            let mut case = usize::from(m);
+            if t.orientation() < 0 {
+                c.swap(1, 2);
+                case = case & 0b1001 | (case & 2) << 1 | (case & 4) >> 1;
+            }
+            let polygon = table[case].as_ref()?;
+            let mut keys = [NO_EDGE; 4];
+            for (slot, [i, j]) in keys.iter_mut().zip(polygon) {
+                *slot = edge_key(c[*i as usize], c[*j as usize]);
+            }
+            Some(keys)
+        })
+        .collect();
+    if cancelled() {
+        return None;
+    }
+    // A lattice point's label, from any leaf that has it as a corner.
+    let mut label_of: Vec<(u64, bool)> = leaves
+        .par_iter()
+        .zip(labels)
+        .filter(|(_, &m)| m != 0 && m != 15)
+        .flat_map_iter(|(t, &m)| (0..4).map(move |k| (pack(t.corners[k]), m >> k & 1 == 1)))
+        .collect();
+    label_of.par_sort_unstable();
+    label_of.dedup();
+    let inside = |p: Point| {
+        let k = pack(p);
+        let i = label_of.partition_point(|&(q, _)| q < k);
+        label_of[i].1
+    };
+    let ends = |k: u128| (unpack((k >> 64) as u64), unpack(k as u64));
+    assemble(
+        field,
+        &polygons,
+        NO_EDGE,
+        ends,
+        |p| lattice.position(p),
+        inside,
+        cancelled,
+    )
+}
+
+/// An edge of lattice points as one key: the two packed ends, the smaller first.
+pub fn edge_key(a: Point, b: Point) -> u128 {
+    let (a, b) = (pack(a), pack(b));
+    u128::from(a.min(b)) << 64 | u128::from(a.max(b))
+}
+
+/// The fourth key of a triangle's polygon in [`march_leaves`] (no edge).
+const NO_EDGE: u128 = u128::MAX;
 
 /// The fourth key of a triangle's polygon (no vertex).
 const NO_KEY: u64 = u64::MAX;

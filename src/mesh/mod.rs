@@ -4,14 +4,16 @@
 //!
 //! The steps, one module each: [`field`] (the solid's indicator — inside, outside or a shell
 //! — and the exact boundary point on a segment, by the project's root finder and the clip
-//! sphere), [`extract`] (labels on a uniform grid cut into tetrahedra, marching tetrahedra),
-//! [`resolution`] (the grid step chosen by measurement, coarse to fine),
+//! sphere), [`extract`] (labels on tetrahedra, marching tetrahedra), [`bisection`] (conforming
+//! local refinement of Kuhn tetrahedra on an integer lattice), [`resolution`] (which
+//! tetrahedra to refine, by measurement, from a coarse grid down to the floor step),
 //! [`simplify`] (the extracted mesh coarsened by edge collapses where the surface is flat),
 //! [`accuracy`] (distances between the mesh and the exact surface, measured with the root
 //! finder), [`check`] (every guarantee checked on the finished mesh) and [`write`] (binary
 //! STL, OBJ, binary PLY and 3MF, written atomically).
 
 pub mod accuracy;
+pub mod bisection;
 pub mod check;
 pub mod extract;
 pub mod field;
@@ -168,11 +170,12 @@ pub struct MeshedSolid {
     pub mesh: TriangleMesh,
     /// Where each vertex lies (on the surface or on the clip sphere).
     pub kinds: Vec<VertexKind>,
-    /// The grid the mesh was extracted on (object units): the coarsest step accepted
-    /// ([`resolution`]).
+    /// The coarsest grid (object units): the cubes the refinement started from
+    /// ([`resolution`]), or for a shell the uniform grid of the floor step it is meshed on.
     pub grid: extract::Grid,
-    /// Every grid step tried, coarse to fine, the last one accepted.
-    pub levels: Vec<resolution::Level>,
+    /// What the local refinement made (leaves by level, why tetrahedra were bisected);
+    /// `None` for a mesh on the uniform grid of the floor step (a shell).
+    pub refined: Option<resolution::Refined>,
     /// The finest step allowed, `2 ×` the tolerance in object units (its grid measures the
     /// mesh's accuracy).
     pub floor: extract::Grid,
@@ -192,8 +195,8 @@ pub struct MeshedSolid {
 /// The wall-clock time of the stages of [`mesh_solid`].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct StageTimes {
-    /// Choosing the grid step and extracting the mesh on it ([`resolution::choose`]: every
-    /// grid tried, their checks, marching tetrahedra).
+    /// Refining the tetrahedra where needed and extracting the mesh on the leaves
+    /// ([`resolution::mesh_adaptive`]: the checks of every round, marching tetrahedra).
     pub extraction: Duration,
     /// Coarsening, with the check for crossing triangles each budget tried needs.
     pub coarsening: Duration,
@@ -258,9 +261,10 @@ pub fn stretch(m: &DMat3) -> f64 {
     (mtm * v).length().sqrt()
 }
 
-/// Meshes `solid` as `request` asks: the grid (the coarsest step from the clip radius / 8 down
-/// to 2 × the tolerance, carried to object space, that [`resolution::choose`] accepts), the
-/// labels and marching tetrahedra in object space, the mesh coarsened where
+/// Meshes `solid` as `request` asks: the tetrahedra of a grid of step at most the clip radius
+/// / 8 refined where [`resolution::refine`] needs down to 2 × the tolerance (carried to
+/// object space), the labels and marching tetrahedra on the leaves in object space, the mesh
+/// coarsened where
 /// the surface is flat ([`simplify::coarsen`], within [`COARSEN_SHARE`] of the tolerance),
 /// the vertices carried to the world by the solid's frame, and the deviation from the exact
 /// surface measured. `progress(done, total)` reports every stage (from any thread): the
@@ -274,7 +278,8 @@ pub fn mesh_solid(
 }
 
 /// [`mesh_solid`], stopping with [`MeshError::Cancelled`] once `cancel` is set (read before
-/// each of the grid's layers, [`extract::march_cancellable`], between batches of
+/// each round of the refinement, [`resolution::refine`], or each layer of a uniform grid,
+/// [`extract::march_cancellable`], before each vertex is placed, between batches of
 /// collapses, and by every sample of the measurement, [`accuracy::measure_cancellable`]).
 pub fn mesh_solid_cancellable(
     solid: &PolynomialSolid,
@@ -325,22 +330,25 @@ pub fn mesh_solid_cancellable(
     let reported = AtomicUsize::new(0);
     let mut times = StageTimes::default();
     let started = Instant::now();
-    let steps = resolution::candidate_steps(radius, floor_step, kind);
-    let (extracted, extracted_kinds, levels) = resolution::choose(
-        &field,
-        &steps,
-        tolerance / grow,
-        &|done, total| {
-            let scaled = done * march_total / total.max(1);
-            progress(
-                reported.fetch_max(scaled, Ordering::Relaxed).max(scaled),
-                all,
-            )
-        },
-        cancel,
-    )
-    .ok_or(MeshError::Cancelled)?;
-    let grid = levels[levels.len() - 1].grid;
+    let scaled = |done: usize, total: usize| {
+        let scaled = done * march_total / total.max(1);
+        progress(
+            reported.fetch_max(scaled, Ordering::Relaxed).max(scaled),
+            all,
+        )
+    };
+    let depth = resolution::depth_for(radius, floor_step, kind);
+    let (extracted, extracted_kinds, grid, refined) = if depth == 0 {
+        let (mesh, kinds) = extract::march_cancellable(&field, floor, &scaled, cancel)
+            .ok_or(MeshError::Cancelled)?;
+        (mesh, kinds, floor, None)
+    } else {
+        let coarse = extract::Grid::covering(radius, floor_step * f64::from(1u32 << depth));
+        let (mesh, kinds, refined) =
+            resolution::mesh_adaptive(&field, coarse, depth, tolerance / grow, &scaled, cancel)
+                .ok_or(MeshError::Cancelled)?;
+        (mesh, kinds, coarse, Some(refined))
+    };
     times.extraction = started.elapsed();
     if cancel.load(Ordering::Relaxed) {
         return Err(MeshError::Cancelled);
@@ -368,7 +376,12 @@ pub fn mesh_solid_cancellable(
             &|pass| progress(march_total + quarter * pass / simplify::MAX_PASSES, all),
         )
         .ok_or(MeshError::Cancelled)?;
-        if check::verify(&mesh).is_ok() {
+        // Checked as computed and as the file will hold it (in the world, rounded to f32).
+        let flip = frame.m.determinant() < 0.0;
+        let written = mesh
+            .mapped(|p| frame.point_to_world(p), flip)
+            .rounded_to_f32();
+        if check::verify(&mesh).is_ok() && check::verify(&written).is_ok() {
             coarsened = Some(Coarsening {
                 done,
                 budget: budget * grow,
@@ -406,7 +419,7 @@ pub fn mesh_solid_cancellable(
         mesh,
         kinds,
         grid,
-        levels,
+        refined,
         floor,
         times,
         tolerance,

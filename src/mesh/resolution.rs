@@ -1,170 +1,600 @@
-//! The grid step, chosen by measurement from coarse to fine: the coarsest grid whose
-//! marching-tetrahedra mesh is already close enough to the exact surface and whose grid sees
-//! the surface's topology, down to the floor of twice the tolerance (the step every surface
-//! got before; always accepted).
+//! The local step: which tetrahedra to refine, by measurement. The solid is meshed on the
+//! leaves of a conforming bisection of Kuhn tetrahedra ([`super::bisection`]): it starts
+//! from a grid of cubes of the coarsest step (at most the clip radius /
+//! [`FIRST_STEP_DIVISOR`]) and bisects a tetrahedron only where one of these checks fails for
+//! it, down to cubes of the floor step of twice the tolerance, where everything is accepted
+//! (the step every surface got before any search):
 //!
-//! A step is accepted only when all of these hold on its grid:
+//! 1. **Accuracy**: every triangle marching tetrahedra makes in it (its vertices placed by the
+//!    root finder, fanned from the first) has its centroid and edge midpoints within
+//!    [`EXTRACT_SHARE`] of the tolerance of the boundary by the first-order estimate
+//!    `|φ|/|∇φ|` (a triangle with all vertices on the clip sphere: `|R − |x||`; one with
+//!    vertices on both: the smaller of the two).
+//! 2. **No edge crossed twice**: if its corners do not all have the same sign of `φ`, each of
+//!    its six edges holds at most one distinct root of `φ` inside the clip ball, counted
+//!    exactly (Bernstein sign variations, then Sturm sequences by
+//!    [`crate::roots::sturm_roots`] where those allow two or more). An edge crossed twice
+//!    hides a handle, a thin part or a small piece between its ends. One exception, a shallow
+//!    graze: exactly two roots, with the point midway between them within [`EXTRACT_SHARE`]
+//!    of the tolerance of the surface and within [`GRAZE`] of the roots' distance apart (both
+//!    by `|φ|/|∇φ|`): an edge nearly tangent to a curved sheet clips a cap off it no deeper
+//!    than that.
+//! 3. **No surface where the corners agree**: if its four corners have the same sign of `φ`
+//!    (and its box meets the clip ball), it is proven free of `φ = 0` by a Taylor bound: with
+//!    `φ(c + d) = Σ a_α d^α` about the centre `c` of its box, the remainder past the linear
+//!    part is at most `Q = Σ_{|α|≥2} |a_α| r^{|α|}` on the cube of half-side `r` holding the
+//!    box, and the linear part is least at a corner of the tetrahedron, so
+//!    `s·φ ≥ min_corners s·φ − 2Q` in it (`s` the corners' sign; or
+//!    `s·φ(c) − Σ_{|α|≥1} |a_α| r^{|α|}`, whichever is larger).
 //!
-//! 1. **Accuracy** ([`worst_deviation`]): every extracted triangle's centroid and edge
-//!    midpoints are within [`EXTRACT_SHARE`] of the tolerance of the boundary by the
-//!    first-order estimate `|φ|/|∇φ|` (a triangle with all vertices on the clip sphere:
-//!    `|R − |x||`; one with vertices on both: the smaller of the two).
-//! 2. **No edge crossed twice** ([`topology_problem`]): on every edge of the tetrahedra of a
-//!    cell whose corners do not all have the same sign of `φ`, the part inside the clip ball
-//!    holds at most one distinct root of `φ`, counted exactly (Bernstein sign variations,
-//!    then Sturm sequences by [`crate::roots::sturm_roots`] where those allow two or more).
-//!    An edge crossed twice hides a handle, a thin part or a small piece between its ends.
-//!    One exception, a shallow graze: exactly two roots, with the point midway between them
-//!    within [`EXTRACT_SHARE`] of the tolerance of the surface and within [`GRAZE`] of the
-//!    roots' distance apart (both by `|φ|/|∇φ|`): an edge nearly tangent to a curved sheet
-//!    clips a cap off it that is no deeper than that, which the labels may miss at the cost
-//!    of that depth (a smooth convex surface has such edges at every step).
-//! 3. **No surface in a cell whose corners agree** ([`topology_problem`]): every cell whose
-//!    eight corners have the same sign of `φ` (and which meets the clip ball) is proven free
-//!    of `φ = 0` by a Taylor bound about its centre: with `φ(c + d) = Σ a_α d^α`, the
-//!    remainder past the linear part is at most `Q = Σ_{|α|≥2} |a_α| r^{|α|}` on the cube of
-//!    half-side `r`, and the linear part is least at a corner, so `s·φ ≥ min_corners s·φ − 2Q`
-//!    there (`s` the corners' sign; or `s·φ(c) − Σ_{|α|≥1} |a_α| r^{|α|}`, whichever is
-//!    larger). A cell this does not prove is cut in eight, and its parts likewise, down to
-//!    parts no larger than the floor step (parts wholly outside the ball are skipped): a part
-//!    whose corners differ in sign rejects the step; a part of the floor's size whose corners
-//!    agree is accepted unproven (the floor grid would see nothing there either). Blocks of
-//!    4³ cells whose centre bound proves them empty skip their cells' own bounds.
+//! Bisecting one tetrahedron bisects every tetrahedron around its refinement edge, and first
+//! the coarser ones it needs ([`super::bisection::Refinement::mark`]), so the leaves stay
+//! conforming and marching tetrahedra on them keeps every guarantee of a uniform grid. Each
+//! round examines the leaves made by the last (in parallel; the marks are a set, so the
+//! result does not depend on the number of threads).
 //!
 //! What this proves: within the ball, no piece of the surface that sampling at the floor
-//! step would see lies inside a cell whose corners agree (a small component, a bubble, a
-//! bulge through a face), and no grid edge of a crossed cell passes through the surface
-//! twice but for a shallow graze. What it does not: features smaller than the floor step
-//! (as at the floor itself); a second piece of surface wholly
-//! inside a crossed cell that meets none of its edges (its corners already differ, so the
-//! Taylor bound cannot help); the acute wedge at the crease that binary labels cannot see
-//! (as at every step); and the first-order estimate of 1. is an estimate, not a bound, which
-//! the measured Hausdorff distance afterwards checks. The Taylor bound is on `f` (the inside
-//! and outside); a shell's `φ` (degree twice `f`'s, a square less a sum of squares) is meshed
-//! at the floor step without a search.
+//! step would see lies inside a leaf whose corners agree (a small component, a bubble, a
+//! bulge through a face), and no edge of a crossed leaf passes through the surface twice but
+//! for a shallow graze. What it does not: features smaller than the floor step (as at the
+//! floor itself); a second piece of surface wholly inside a crossed leaf that meets none of
+//! its edges; the acute wedge at the crease that binary labels cannot see; and the
+//! first-order estimate of 1. is an estimate, not a bound, which the measured Hausdorff
+//! distance afterwards checks. The Taylor bound is on `f` (the inside and outside); a shell's
+//! `φ` (degree twice `f`'s, a square less a sum of squares) is meshed on the uniform grid of
+//! the floor step ([`super::extract::march`]).
 
-use super::extract::{self, Grid};
+use super::bisection::{Point, PointHasher, Refinement, Tet, TET_EDGES};
+use super::extract::{self, marching_table, Grid, Lattice, TablePolygon};
 use super::field::{Field, SolidKind, VertexKind};
 use super::TriangleMesh;
 use crate::geometry::DVec3;
 use crate::roots::sturm_roots;
 use crate::shapes::implicit::MAX_DEGREE;
 use rayon::prelude::*;
+use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The share of the tolerance an extracted triangle may deviate from the surface (by the
-/// first-order estimate at its centroid and edge midpoints) for its grid step to be
-/// accepted: the coarsening may then spend [`super::COARSEN_SHARE`] of it again.
+/// first-order estimate at its centroid and edge midpoints) for its tetrahedron to be kept:
+/// the coarsening may then spend [`super::COARSEN_SHARE`] of it again.
 pub const EXTRACT_SHARE: f64 = 0.75;
 
-/// The coarsest step tried is at most the clip radius divided by this.
+/// The coarsest step is at most the clip radius divided by this.
 pub const FIRST_STEP_DIVISOR: f64 = 8.0;
 
-/// Why a grid step was not accepted.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Rejection {
-    /// An extracted triangle deviates by more than [`EXTRACT_SHARE`] of the tolerance: the
-    /// worst first-order estimate found (object units).
-    Deviation(f64),
-    /// A grid edge inside the clip ball holds two or more roots of `φ`.
-    EdgeCrossedTwice,
-    /// A cell whose corners agree holds surface: a part of it has corners of both signs.
-    SurfaceInQuietCell,
+/// Why a tetrahedron was bisected (module doc, 1. to 3.).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reason {
+    /// A triangle in it deviates by more than [`EXTRACT_SHARE`] of the tolerance.
+    Deviation = 0,
+    /// An edge of it (its corners differing in sign) crosses `φ = 0` twice.
+    EdgeCrossedTwice = 1,
+    /// Its corners agree in sign, and the Taylor bound does not prove it free of surface.
+    SurfaceUnproven = 2,
 }
 
-impl std::fmt::Display for Rejection {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Rejection::Deviation(d) => write!(f, "a triangle {d:.2e} from the surface"),
-            Rejection::EdgeCrossedTwice => write!(f, "an edge crosses the surface twice"),
-            Rejection::SurfaceInQuietCell => {
-                write!(f, "surface inside a cell whose corners agree")
-            }
-        }
+/// What the refinement made (object units).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refined {
+    /// The domain's cubes: the coarsest step, each cut into six Kuhn tetrahedra.
+    pub coarse: Grid,
+    /// How many times a cube's side may be halved: the finest cubes (the floor) have side
+    /// `coarse.step() / 2^depth`, their tetrahedra level `3·depth`.
+    pub depth: u32,
+    /// Leaf tetrahedra at each level (`0..=3·depth`; the cube side of level `ℓ` is
+    /// [`Refined::cube_side`]).
+    pub leaves_by_level: Vec<usize>,
+    /// Of those, the leaves whose corners' labels differ (where the mesh is), at each level.
+    pub crossed_by_level: Vec<usize>,
+    /// Tetrahedra bisected for each [`Reason`] (indexed by it), not counting those bisected
+    /// to keep the leaves conforming.
+    pub refined_for: [usize; 3],
+    /// Rounds of examination.
+    pub rounds: usize,
+}
+
+impl Refined {
+    /// The side of the cube a tetrahedron of `level` lies in (object units).
+    pub fn cube_side(&self, level: usize) -> f64 {
+        self.coarse.step() / f64::from(1u32 << (level / 3))
+    }
+
+    /// Leaf tetrahedra in all.
+    pub fn leaves(&self) -> usize {
+        self.leaves_by_level.iter().sum()
+    }
+
+    /// Leaf tetrahedra the mesh passes through (their corners' labels differ).
+    pub fn crossed(&self) -> usize {
+        self.crossed_by_level.iter().sum()
+    }
+
+    /// Tetrahedra a uniform grid of the floor step over the same domain would have.
+    pub fn uniform_leaves(&self) -> usize {
+        6 * (self.coarse.cells << self.depth).pow(3)
+    }
+
+    /// The largest cube side of a leaf the mesh passes through (object units).
+    pub fn coarsest_crossed_side(&self) -> f64 {
+        self.crossed_by_level
+            .iter()
+            .position(|&n| n > 0)
+            .map_or(0.0, |level| self.cube_side(level))
     }
 }
 
-/// One grid step tried.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Level {
-    /// The grid (object units).
-    pub grid: Grid,
-    /// `None` when this step was accepted (the last level tried), else why not.
-    pub rejected: Option<Rejection>,
-}
-
-/// The steps to try, coarse to fine, in object units: the floor times 2ᵏ, from the largest
-/// that is at most `radius /` [`FIRST_STEP_DIVISOR`] down to the floor itself (only the floor
-/// when it is already coarser than that, or for a shell).
-pub fn candidate_steps(radius: f64, floor: f64, kind: SolidKind) -> Vec<f64> {
-    let mut steps = vec![floor];
-    if !matches!(kind, SolidKind::Shell { .. }) {
-        while steps[steps.len() - 1] * 2.0 <= radius / FIRST_STEP_DIVISOR {
-            steps.push(steps[steps.len() - 1] * 2.0);
-        }
+/// How many times the coarsest cube's side is halved to reach the floor step `floor`: the
+/// most with `floor·2^depth ≤ radius /` [`FIRST_STEP_DIVISOR`] (0 for a shell, which is
+/// meshed on the floor's uniform grid).
+pub fn depth_for(radius: f64, floor: f64, kind: SolidKind) -> u32 {
+    if matches!(kind, SolidKind::Shell { .. }) {
+        return 0;
     }
-    steps.reverse();
-    steps
+    let mut depth = 0;
+    while floor * f64::from(2u32 << depth) <= radius / FIRST_STEP_DIVISOR && depth < 12 {
+        depth += 1;
+    }
+    depth
 }
 
-/// The mesh of the coarsest acceptable grid step (see the module doc) among `steps`
-/// (coarse to fine; the last is accepted without checks), with each vertex's kind, the
-/// grid, and every level tried. `tolerance` in object units. `progress(done, total)` is the
-/// march's progress of each level (from any thread). `None` once `cancel` is set.
-pub fn choose(
+type PointMap<V> = HashMap<u64, V, BuildHasherDefault<PointHasher>>;
+
+/// `φ` at lattice points, computed once each.
+struct Values {
+    lattice: Lattice,
+    map: PointMap<f64>,
+}
+
+impl Values {
+    /// Computes `φ` (in parallel) at those of `points` not yet known.
+    fn fill(&mut self, field: &Field, points: impl Iterator<Item = Point>) {
+        let mut missing: Vec<u64> = points
+            .map(extract::pack)
+            .filter(|k| !self.map.contains_key(k))
+            .collect();
+        missing.par_sort_unstable();
+        missing.dedup();
+        let lattice = self.lattice;
+        let computed: Vec<f64> = missing
+            .par_iter()
+            .map(|&k| field.value(lattice.position(extract::unpack(k))))
+            .collect();
+        self.map.extend(missing.into_iter().zip(computed));
+    }
+
+    fn get(&self, p: Point) -> f64 {
+        self.map[&extract::pack(p)]
+    }
+}
+
+/// The tetrahedra of the refinement's leaves and how they came about: see the module doc.
+pub struct Adaptive {
+    /// The marked edges.
+    pub refinement: Refinement,
+    /// The leaves, in a fixed order (whatever the number of threads).
+    pub leaves: Vec<Tet>,
+    /// Each leaf's labels: bit `k` set when its corner `k` is inside ([`Field::inside`]).
+    pub labels: Vec<u8>,
+    /// Where the lattice lies in object space.
+    pub lattice: Lattice,
+    /// What was made.
+    pub refined: Refined,
+}
+
+/// Refines the Kuhn tetrahedra of `coarse` (depth ≥ 1 halvings down to the floor) where
+/// the checks of the module doc fail; `tolerance` in object units. `progress(done, total)`
+/// after each round; `None` once `cancel` is set (read before each round).
+pub fn refine(
     field: &Field,
-    steps: &[f64],
+    coarse: Grid,
+    depth: u32,
     tolerance: f64,
     progress: &(dyn Fn(usize, usize) + Sync),
     cancel: &AtomicBool,
-) -> Option<(TriangleMesh, Vec<VertexKind>, Vec<Level>)> {
-    let mut levels = Vec::new();
-    for (i, &step) in steps.iter().enumerate() {
-        let grid = Grid::covering(field.radius(), step);
-        let last = i + 1 == steps.len();
-        // The topology first: it needs no extraction.
-        let rejected = if last {
-            None
+) -> Option<Adaptive> {
+    let mut refinement = Refinement::new(coarse.cells, depth);
+    let lattice = Lattice::of_grid(coarse, depth);
+    let mut values = Values {
+        lattice,
+        map: PointMap::default(),
+    };
+    let examiner = Examiner {
+        spreads: Vec::new(),
+        cube_side: 1,
+        cells: 0,
+        field,
+        lattice,
+        taylor: Taylor::new(field),
+        table: marching_table(),
+        shallow: EXTRACT_SHARE * tolerance,
+        finest: refinement.finest_level(),
+        f_sign: if field.kind() == SolidKind::Outside {
+            -1.0
         } else {
-            topology_problem(
-                field,
-                grid,
-                EXTRACT_SHARE * tolerance,
-                steps[steps.len() - 1],
-                cancel,
-            )
-        };
+            1.0
+        },
+    };
+    let finest = refinement.finest_level();
+    let total = 3 * depth as usize + 2;
+    // Each leaf with whether it has been examined (or needs no examination): the coarse
+    // cubes the Taylor bound about their centre proves free of surface need none (tried
+    // first for blocks of BLOCK³ cubes at once).
+    const BLOCK: usize = 4;
+    let n = coarse.cells;
+    let side = refinement.cube_side();
+    let blocks = n.div_ceil(BLOCK);
+    let cube_box = |x: usize, y: usize, z: usize, size: usize| {
+        let lo = [x, y, z].map(|v| (v * side as usize) as i32);
+        let hi = lo.map(|v| v + (size * side as usize) as i32);
+        (lattice.position(lo), lattice.position(hi))
+    };
+    let block_empty: Vec<bool> = (0..blocks * blocks * blocks)
+        .into_par_iter()
+        .map(|b| {
+            let (x, y, z) = (b % blocks, b / blocks % blocks, b / (blocks * blocks));
+            let (lo, hi) = cube_box(x * BLOCK, y * BLOCK, z * BLOCK, BLOCK);
+            examiner.box_empty(lo, hi)
+        })
+        .collect();
+    let cube_empty: Vec<bool> = (0..n * n * n)
+        .into_par_iter()
+        .map(|c| {
+            let (x, y, z) = (c % n, c / n % n, c / (n * n));
+            let block = x / BLOCK + blocks * (y / BLOCK + blocks * (z / BLOCK));
+            block_empty[block] || {
+                let (lo, hi) = cube_box(x, y, z, 1);
+                examiner.box_empty(lo, hi)
+            }
+        })
+        .collect();
+    // For the cubes not proven empty, φ's gradient at the centre and how far it strays
+    // over the cube (the cheap bound of Examiner::quiet).
+    let spreads: Vec<Option<Spread>> = (0..n * n * n)
+        .into_par_iter()
+        .map(|c| {
+            if cube_empty[c] {
+                return None;
+            }
+            let (x, y, z) = (c % n, c / n % n, c / (n * n));
+            let (lo, hi) = cube_box(x, y, z, 1);
+            let centre = 0.5 * (lo + hi);
+            let (value, gradient, spread) = examiner
+                .taylor
+                .gradient_spread(centre, 0.5 * (hi - lo).max_element());
+            let f_sign = examiner.f_sign;
+            Some(Spread {
+                gradient: f_sign * gradient,
+                spread,
+                margin: 1e-10 * (value.abs() + examiner.taylor.magnitude_bound(centre)),
+            })
+        })
+        .collect();
+    let examiner = Examiner {
+        spreads,
+        cube_side: side,
+        cells: n,
+        ..examiner
+    };
+    let mut leaves: Vec<(Tet, bool)> = refinement
+        .coarse()
+        .into_iter()
+        .enumerate()
+        .map(|(i, t)| (t, cube_empty[i / 6]))
+        .collect();
+    let mut refined_for = [0usize; 3];
+    let mut rounds = 0;
+    loop {
         if cancel.load(Ordering::Relaxed) {
             return None;
         }
-        if rejected.is_some() {
-            levels.push(Level { grid, rejected });
-            continue;
+        let todo: Vec<usize> = (0..leaves.len())
+            .filter(|&i| !leaves[i].1 && leaves[i].0.level < finest)
+            .collect();
+        if todo.is_empty() {
+            break;
         }
-        let (mesh, kinds) = extract::march_cancellable(field, grid, progress, cancel)?;
-        if !last {
-            let worst = worst_deviation(field, &mesh, &kinds);
-            if worst.is_nan() || worst > EXTRACT_SHARE * tolerance {
-                levels.push(Level {
-                    grid,
-                    rejected: Some(Rejection::Deviation(worst)),
-                });
-                continue;
+        rounds += 1;
+        values.fill(
+            field,
+            todo.iter().flat_map(|&i| leaves[i].0.corners.into_iter()),
+        );
+        let verdicts: Vec<Option<Reason>> = todo
+            .par_iter()
+            .map(|&i| examiner.examine(&leaves[i].0, &values))
+            .collect();
+        for (&i, verdict) in todo.iter().zip(&verdicts) {
+            leaves[i].1 = true;
+            if let Some(reason) = verdict {
+                refined_for[*reason as usize] += 1;
+                refinement.mark(leaves[i].0.midpoint());
             }
         }
-        levels.push(Level {
-            grid,
-            rejected: None,
-        });
-        return Some((mesh, kinds, levels));
+        let mut next = Vec::with_capacity(leaves.len());
+        let mut below = Vec::new();
+        for &(t, examined) in &leaves {
+            if refinement.splits(&t) {
+                below.clear();
+                refinement.expand(t, &mut below);
+                next.extend(below.iter().map(|&c| (c, false)));
+            } else {
+                next.push((t, examined));
+            }
+        }
+        leaves = next;
+        progress(rounds.min(total - 1), total);
     }
-    unreachable!("the last step is always accepted")
+    let leaves: Vec<Tet> = leaves.into_iter().map(|(t, _)| t).collect();
+    values.fill(field, leaves.iter().flat_map(|t| t.corners.into_iter()));
+    let r2 = field.radius() * field.radius();
+    let labels: Vec<u8> = leaves
+        .par_iter()
+        .map(|t| {
+            (0..4).fold(0u8, |m, k| {
+                let p = t.corners[k];
+                let inside = lattice.position(p).length_squared() < r2 && values.get(p) < 0.0;
+                m | u8::from(inside) << k
+            })
+        })
+        .collect();
+    let mut refined = Refined {
+        coarse,
+        depth,
+        leaves_by_level: vec![0; finest as usize + 1],
+        crossed_by_level: vec![0; finest as usize + 1],
+        refined_for,
+        rounds,
+    };
+    for (t, &m) in leaves.iter().zip(&labels) {
+        refined.leaves_by_level[t.level as usize] += 1;
+        if m != 0 && m != 15 {
+            refined.crossed_by_level[t.level as usize] += 1;
+        }
+    }
+    Some(Adaptive {
+        refinement,
+        leaves,
+        labels,
+        lattice,
+        refined,
+    })
 }
 
-/// The largest first-order deviation of `mesh`'s triangles from the boundary at their
-/// centroids and edge midpoints (object units; see the module doc, 1.): infinite where
-/// `∇φ` vanishes (a node).
-pub fn worst_deviation(field: &Field, mesh: &TriangleMesh, kinds: &[VertexKind]) -> f64 {
+/// The mesh of `field`'s solid (object space, each vertex's kind) on the leaves of
+/// [`refine`] for `coarse` and `depth` (≥ 1), with what the refinement made; `None` once
+/// `cancel` is set.
+pub fn mesh_adaptive(
+    field: &Field,
+    coarse: Grid,
+    depth: u32,
+    tolerance: f64,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    cancel: &AtomicBool,
+) -> Option<(TriangleMesh, Vec<VertexKind>, Refined)> {
+    let adaptive = refine(field, coarse, depth, tolerance, progress, cancel)?;
+    let (mesh, kinds) = extract::march_leaves(
+        field,
+        adaptive.lattice,
+        &adaptive.leaves,
+        &adaptive.labels,
+        cancel,
+    )?;
+    let total = 3 * depth as usize + 2;
+    progress(total, total);
+    Some((mesh, kinds, adaptive.refined))
+}
+
+/// The checks of the module doc for one tetrahedron.
+struct Examiner<'a> {
+    field: &'a Field,
+    lattice: Lattice,
+    taylor: Taylor,
+    table: Vec<Option<TablePolygon>>,
+    /// The deepest graze allowed; also the deviation allowed ([`EXTRACT_SHARE`] of the
+    /// tolerance).
+    shallow: f64,
+    /// The finest level (never bisected).
+    finest: u8,
+    /// `φ = f_sign · f` (1 inside, −1 outside).
+    f_sign: f64,
+    /// For each coarse cube (x fastest) not proven empty: how `∇φ` strays over it.
+    spreads: Vec<Option<Spread>>,
+    /// The side of a coarse cube (lattice units) and cubes a side.
+    cube_side: i32,
+    cells: usize,
+}
+
+/// `∇φ` at a coarse cube's centre and, per axis, a bound on how far `∂_i φ` strays from it
+/// over the cube ([`Taylor::gradient_spread`]).
+struct Spread {
+    gradient: DVec3,
+    spread: DVec3,
+    /// A margin for rounding.
+    margin: f64,
+}
+
+impl Examiner<'_> {
+    /// Why `t` must be bisected, or `None` if it passes every check.
+    fn examine(&self, t: &Tet, values: &Values) -> Option<Reason> {
+        let field = self.field;
+        let radius = field.radius();
+        let (lo, hi) = t.bounds();
+        let (lo, hi) = (self.lattice.position(lo), self.lattice.position(hi));
+        let centre = 0.5 * (lo + hi);
+        let half = 0.5 * (hi - lo);
+        let nearest = (centre.abs() - half).max(DVec3::ZERO);
+        if nearest.length_squared() >= radius * radius {
+            return None;
+        }
+        let points = t.corners.map(|p| self.lattice.position(p));
+        let phi = t.corners.map(|p| values.get(p));
+        match common_sign(&phi) {
+            Some(sign) => {
+                if !self.quiet(t, sign, phi) {
+                    return Some(Reason::SurfaceUnproven);
+                }
+            }
+            None => {
+                for (a, b) in TET_EDGES {
+                    if crossed_twice(field, points[a], points[b], self.shallow) {
+                        return Some(Reason::EdgeCrossedTwice);
+                    }
+                }
+            }
+        }
+        let r2 = radius * radius;
+        let labels =
+            std::array::from_fn::<bool, 4, _>(|i| points[i].length_squared() < r2 && phi[i] < 0.0);
+        let case = (0..4).fold(0usize, |m, i| m | usize::from(labels[i]) << i);
+        let polygon = self.table[case].as_ref()?;
+        let placed: Vec<(DVec3, VertexKind)> = polygon
+            .iter()
+            .map(|&[i, j]| {
+                let (a, b) = (points[i as usize], points[j as usize]);
+                let (s, kind) = field.crossing(a, b);
+                (a + s * (b - a), kind)
+            })
+            .collect();
+        for k in 1..placed.len() - 1 {
+            let corners = [placed[0], placed[k], placed[k + 1]];
+            let worst = triangle_deviation(field, corners.map(|c| c.0), corners.map(|c| c.1));
+            if worst.is_nan() || worst > self.shallow {
+                return Some(Reason::Deviation);
+            }
+        }
+        None
+    }
+
+    /// Whether the tetrahedron `t`, whose corners (values `phi`) all have the sign `sign` of
+    /// `φ`, holds no surface the floor would see (module doc, 3.): proven by the Taylor bound,
+    /// or else bisected (without changing the mesh) into the tetrahedra below it, each proven
+    /// the same way, down to the finest level, where corners of the same sign are accepted. A
+    /// tetrahedron below it whose new corner has the other sign fails.
+    fn quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
+        if t.level >= self.finest
+            || self.gradient_bound(t, sign, &phi)
+            || self.proven_empty(t, sign, &phi)
+        {
+            return true;
+        }
+        self.split_quiet(t, sign, phi)
+    }
+
+    /// The tetrahedra below `t` (corner values `phi`, sign `sign`) quiet: [`Examiner::quiet`]
+    /// by the cheap bound only ([`Examiner::gradient_bound`]), the Taylor bound about each
+    /// part's own centre being the dearest part of the examination.
+    fn below_quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
+        if t.level >= self.finest || self.gradient_bound(t, sign, &phi) {
+            return true;
+        }
+        self.split_quiet(t, sign, phi)
+    }
+
+    /// [`Examiner::below_quiet`] for the two halves of `t`, after checking the sign at the
+    /// new corner.
+    fn split_quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
+        let m = t.midpoint();
+        let x = self.lattice.position(m);
+        let value = self.field.value(x);
+        if sign * value <= 0.0 || value.is_nan() {
+            // Surface in the tetrahedron (or its box's part outside the ball).
+            return false;
+        }
+        let k = t.tag as usize;
+        let [first, second] = t.children();
+        let mut a = phi;
+        a[k] = value;
+        let mut b = phi;
+        b[..k].copy_from_slice(&phi[1..=k]);
+        b[k] = value;
+        self.below_quiet(&first, sign, a) && self.below_quiet(&second, sign, b)
+    }
+
+    /// The cheap bound: with `g` the gradient of `φ` at the centre of the coarse cube holding
+    /// `t` and `L_i` the bound on `|∂_i φ − g_i|` over that cube, for any corner `v` and any
+    /// point `x` of `t`, `s·φ(x) ≥ s·φ(v) + s·g·(x − v) − Σ L_i |x_i − v_i|`, a concave
+    /// function of `x`, least at a corner: `t` is proven free of surface if for some `v`
+    /// that is positive at every corner.
+    fn gradient_bound(&self, t: &Tet, sign: f64, phi: &[f64; 4]) -> bool {
+        let (lo, _) = t.bounds();
+        let n = self.cells;
+        let cube = lo.map(|c| ((c / self.cube_side) as usize).min(n - 1));
+        let Some(s) = &self.spreads[cube[0] + n * (cube[1] + n * cube[2])] else {
+            return self.proven_empty(t, sign, phi);
+        };
+        let points = t.corners.map(|p| self.lattice.position(p));
+        (0..4).any(|v| {
+            let least = points
+                .iter()
+                .map(|&w| {
+                    let d = w - points[v];
+                    sign * s.gradient.dot(d) - s.spread.dot(d.abs())
+                })
+                .fold(f64::INFINITY, f64::min);
+            sign * phi[v] + least.min(0.0) > s.margin
+        })
+    }
+
+    /// Whether the box `lo`–`hi` is proven free of `φ = 0` inside the clip ball: wholly
+    /// outside the ball, or `|φ(c)| > Σ_{|α|≥1} |a_α| r^{|α|}` about its centre `c` (`r` its
+    /// largest half-side).
+    fn box_empty(&self, lo: DVec3, hi: DVec3) -> bool {
+        let centre = 0.5 * (lo + hi);
+        let nearest = (centre.abs() - 0.5 * (hi - lo)).max(DVec3::ZERO);
+        let radius = self.field.radius();
+        if nearest.length_squared() >= radius * radius {
+            return true;
+        }
+        self.taylor
+            .at(centre, 0.5 * (hi - lo).max_element())
+            .is_some_and(|sums| {
+                sums.value.abs() - sums.linear - sums.quadratic > 1e-10 * sums.magnitude
+            })
+    }
+
+    /// Whether the box of `t` lies wholly outside the clip ball.
+    fn outside_ball(&self, t: &Tet) -> bool {
+        let (lo, hi) = t.bounds();
+        let (lo, hi) = (self.lattice.position(lo), self.lattice.position(hi));
+        let nearest = (0.5 * (lo + hi)).abs() - 0.5 * (hi - lo);
+        let r = self.field.radius();
+        nearest.max(DVec3::ZERO).length_squared() >= r * r
+    }
+
+    /// Whether the Taylor bound proves `φ` of sign `sign` throughout the tetrahedron `t`
+    /// with corner values `phi` (module doc, 3.): about the centre `c` of its box, with `r`
+    /// the box's largest half-side, the linear part `s·(φ(c) + ∇φ(c)·(v − c))` is least at a
+    /// corner `v` and the rest is at most `Q` in absolute value; also `min s·φ(v) − 2Q`.
+    fn proven_empty(&self, t: &Tet, sign: f64, phi: &[f64; 4]) -> bool {
+        let (lo, hi) = t.bounds();
+        let (lo, hi) = (self.lattice.position(lo), self.lattice.position(hi));
+        let centre = 0.5 * (lo + hi);
+        let r = 0.5 * (hi - lo).max_element();
+        if self.outside_ball(t) {
+            return true;
+        }
+        self.taylor.at(centre, r).is_some_and(|sums| {
+            let least_corner = phi.iter().map(|v| sign * v).fold(f64::INFINITY, f64::min);
+            // The Taylor sums are of f; φ = ±f.
+            let s = sign * self.f_sign;
+            let centre_value = s * sums.value;
+            let least_linear = t
+                .corners
+                .iter()
+                .map(|&p| centre_value + s * sums.gradient.dot(self.lattice.position(p) - centre))
+                .fold(f64::INFINITY, f64::min);
+            let bound = (least_corner - 2.0 * sums.quadratic).max(least_linear - sums.quadratic);
+            // A margin for the rounding of the values and of the bound's own sums.
+            bound > 1e-10 * sums.magnitude
+        })
+    }
+}
+
+/// The largest first-order deviation of the triangle `corners` (vertex kinds `kinds`) from
+/// the boundary at its centroid and edge midpoints (object units; module doc, 1.): infinite
+/// where `∇φ` vanishes (a node).
+pub fn triangle_deviation(field: &Field, corners: [DVec3; 3], kinds: [VertexKind; 3]) -> f64 {
     let h = 1e-7 * field.radius();
     let off_surface = |p: DVec3| {
         let g = field.gradient(p, h).length();
@@ -178,151 +608,41 @@ pub fn worst_deviation(field: &Field, mesh: &TriangleMesh, kinds: &[VertexKind])
         }
     };
     let off_sphere = |p: DVec3| (field.radius() - p.length()).abs();
+    let [a, b, c] = corners;
+    let surface = kinds.iter().all(|k| k.on_surface());
+    let sphere = kinds.iter().all(|k| k.on_sphere());
+    [
+        (a + b + c) / 3.0,
+        0.5 * (a + b),
+        0.5 * (b + c),
+        0.5 * (c + a),
+    ]
+    .iter()
+    .map(|&p| match (surface, sphere) {
+        (true, false) => off_surface(p),
+        (false, true) => off_sphere(p),
+        _ => off_surface(p).min(off_sphere(p)),
+    })
+    .fold(0.0, f64::max)
+}
+
+/// The largest first-order deviation of `mesh`'s triangles from the boundary
+/// ([`triangle_deviation`]).
+pub fn worst_deviation(field: &Field, mesh: &TriangleMesh, kinds: &[VertexKind]) -> f64 {
     mesh.triangles
         .par_iter()
         .map(|t| {
-            let [a, b, c] = t.map(|v| mesh.vertices[v as usize]);
-            let k = t.map(|v| kinds[v as usize]);
-            let surface = k.iter().all(|k| k.on_surface());
-            let sphere = k.iter().all(|k| k.on_sphere());
-            let points = [
-                (a + b + c) / 3.0,
-                0.5 * (a + b),
-                0.5 * (b + c),
-                0.5 * (c + a),
-            ];
-            points
-                .iter()
-                .map(|&p| match (surface, sphere) {
-                    (true, false) => off_surface(p),
-                    (false, true) => off_sphere(p),
-                    _ => off_surface(p).min(off_sphere(p)),
-                })
-                .fold(0.0, f64::max)
+            triangle_deviation(
+                field,
+                t.map(|v| mesh.vertices[v as usize]),
+                t.map(|v| kinds[v as usize]),
+            )
         })
         .reduce(|| 0.0, f64::max)
 }
 
-/// The first reason found (see the module doc, 2. and 3.) why `grid` does not see `field`'s
-/// topology, or `None`; `shallow`: the deepest graze allowed, `floor_step`: the finest step
-/// (object units). Stops early (with `None`) once `cancel` is set.
-pub fn topology_problem(
-    field: &Field,
-    grid: Grid,
-    shallow: f64,
-    floor_step: f64,
-    cancel: &AtomicBool,
-) -> Option<Rejection> {
-    let taylor = Taylor::new(field);
-    let n = grid.cells + 1;
-    let h = grid.step();
-    let point = |x: usize, y: usize, z: usize| {
-        DVec3::new(x as f64, y as f64, z as f64) * h - DVec3::splat(grid.half)
-    };
-    let values: Vec<f64> = (0..n * n * n)
-        .into_par_iter()
-        .map(|i| field.value(point(i % n, (i / n) % n, i / (n * n))))
-        .collect();
-    let radius = field.radius();
-    // Cells, one z layer per task: a quiet cell proven, a crossed cell's edges counted.
-    // Blocks of BLOCK³ cells far from the surface are proven free of it at once (the
-    // Taylor bound about the block's centre), sparing their cells' own bounds.
-    const BLOCK: usize = 4;
-    let blocks = grid.cells.div_ceil(BLOCK);
-    let block_is_empty = |bx: usize, by: usize, bz: usize| {
-        let r = 0.5 * h * BLOCK as f64;
-        let centre = point(bx * BLOCK, by * BLOCK, bz * BLOCK) + DVec3::splat(r);
-        taylor.at(centre, r).is_some_and(|sums| {
-            let v = field.value(centre).abs();
-            v - sums.linear - sums.quadratic > 1e-10 * sums.magnitude
-        })
-    };
-    (0..grid.cells).into_par_iter().find_map_any(|z| {
-        if cancel.load(Ordering::Relaxed) {
-            return None;
-        }
-        let mut empty: Vec<Option<bool>> = vec![None; blocks * blocks];
-        for y in 0..grid.cells {
-            for x in 0..grid.cells {
-                let lo = point(x, y, z);
-                let centre = lo + DVec3::splat(0.5 * h);
-                if outside_ball(centre, 0.5 * h, radius) {
-                    continue;
-                }
-                let (bx, by) = (x / BLOCK, y / BLOCK);
-                if *empty[bx + blocks * by].get_or_insert_with(|| block_is_empty(bx, by, z / BLOCK))
-                {
-                    continue;
-                }
-                let corner_value = |b: usize| {
-                    values[(x + (b & 1)) + n * ((y + (b >> 1 & 1)) + n * (z + (b >> 2 & 1)))]
-                };
-                let corners: [f64; 8] = std::array::from_fn(corner_value);
-                if let Some(sign) = common_sign(&corners) {
-                    let quiet = Quiet {
-                        field,
-                        taylor: &taylor,
-                        sign,
-                        finest: floor_step,
-                    };
-                    if let Err(r) = quiet.prove(centre, 0.5 * h, corners) {
-                        return Some(r);
-                    }
-                } else {
-                    for (b0, b1) in CELL_EDGES {
-                        let (p, q) = (lo + corner(b0) * h, lo + corner(b1) * h);
-                        if crossed_twice(field, p, q, shallow) {
-                            return Some(Rejection::EdgeCrossedTwice);
-                        }
-                    }
-                }
-            }
-        }
-        None
-    })
-}
-
-/// The 19 edges of a cube's six Freudenthal tetrahedra, as pairs of corner bits (x = 1,
-/// y = 2, z = 4): a corner to one whose bits hold its own.
-const CELL_EDGES: [(u8, u8); 19] = [
-    (0, 1),
-    (0, 2),
-    (0, 4),
-    (0, 3),
-    (0, 5),
-    (0, 6),
-    (0, 7),
-    (1, 3),
-    (1, 5),
-    (1, 7),
-    (2, 3),
-    (2, 6),
-    (2, 7),
-    (4, 5),
-    (4, 6),
-    (4, 7),
-    (3, 7),
-    (5, 7),
-    (6, 7),
-];
-
-/// The unit-cube corner of offset bits `b`.
-fn corner(b: u8) -> DVec3 {
-    DVec3::new(
-        f64::from(b & 1),
-        f64::from((b >> 1) & 1),
-        f64::from((b >> 2) & 1),
-    )
-}
-
-/// Whether the cube of half-side `r` about `centre` lies wholly outside the open ball.
-fn outside_ball(centre: DVec3, r: f64, radius: f64) -> bool {
-    let nearest = (centre.abs() - DVec3::splat(r)).max(DVec3::ZERO);
-    nearest.length_squared() >= radius * radius
-}
-
 /// `Some(1.0)` when every value is positive, `Some(-1.0)` when every one is negative, else
-/// `None` (a zero counts as neither: the cell is treated as crossed).
+/// `None` (a zero counts as neither: the tetrahedron is treated as crossed).
 fn common_sign(values: &[f64]) -> Option<f64> {
     if values.iter().all(|&v| v > 0.0) {
         Some(1.0)
@@ -330,71 +650,6 @@ fn common_sign(values: &[f64]) -> Option<f64> {
         Some(-1.0)
     } else {
         None
-    }
-}
-
-/// A cell whose corners all have the sign `sign` of `φ`, to be shown free of surface the
-/// floor grid would see (module doc, 3.).
-struct Quiet<'a> {
-    field: &'a Field,
-    taylor: &'a Taylor,
-    sign: f64,
-    /// The floor step: parts are cut no smaller.
-    finest: f64,
-}
-
-impl Quiet<'_> {
-    /// Proves the cube of half-side `r` about `centre` (corner values `corners`) free of
-    /// `φ = 0` inside the clip ball, cutting it in eight where the bound does not suffice,
-    /// down to parts no smaller than the floor step, where corners of the same sign are
-    /// accepted; a part with corners of both signs is an error.
-    fn prove(&self, centre: DVec3, r: f64, corners: [f64; 8]) -> Result<(), Rejection> {
-        let (field, sign) = (self.field, self.sign);
-        // A part no larger than the floor step whose corners agree: what the floor grid
-        // would see here too.
-        if r < 0.75 * self.finest {
-            return Ok(());
-        }
-        let proven = self.taylor.at(centre, r).is_some_and(|sums| {
-            let least_corner = corners
-                .iter()
-                .map(|v| sign * v)
-                .fold(f64::INFINITY, f64::min);
-            let centre_value = sign * field.value(centre);
-            let bound = (least_corner - 2.0 * sums.quadratic)
-                .max(centre_value - sums.linear - sums.quadratic);
-            // A margin for the rounding of the values and of the bound's own sums.
-            bound > 1e-10 * sums.magnitude
-        });
-        if proven {
-            return Ok(());
-        }
-        let half = 0.5 * r;
-        let lo = centre - DVec3::splat(r);
-        // The 27 points of the cube cut in eight (3 a side, step r).
-        let mut values = [0.0f64; 27];
-        for (i, v) in values.iter_mut().enumerate() {
-            let (a, b, c) = (i % 3, (i / 3) % 3, i / 9);
-            *v = match (a % 2, b % 2, c % 2) {
-                (0, 0, 0) => corners[(a / 2) | ((b / 2) << 1) | ((c / 2) << 2)],
-                _ => field.value(lo + DVec3::new(a as f64, b as f64, c as f64) * r),
-            };
-        }
-        for part in 0..8usize {
-            let (ox, oy, oz) = (part & 1, part >> 1 & 1, part >> 2 & 1);
-            let sub_centre = lo + DVec3::new(ox as f64 + 0.5, oy as f64 + 0.5, oz as f64 + 0.5) * r;
-            if outside_ball(sub_centre, half, field.radius()) {
-                continue;
-            }
-            let sub: [f64; 8] = std::array::from_fn(|b| {
-                values[(ox + (b & 1)) + 3 * (oy + (b >> 1 & 1)) + 9 * (oz + (b >> 2 & 1))]
-            });
-            if common_sign(&sub) != Some(sign) {
-                return Err(Rejection::SurfaceInQuietCell);
-            }
-            self.prove(sub_centre, half, sub)?;
-        }
-        Ok(())
     }
 }
 
@@ -498,6 +753,10 @@ impl Taylor {
 
 /// The sums [`Taylor::at`] gives for a cube of half-side `r`.
 struct TaylorSums {
+    /// `f` at the centre (the coefficient of degree 0).
+    value: f64,
+    /// `∇f` at the centre (the coefficients of degree 1).
+    gradient: DVec3,
     /// `Σ_{|α|=1} |a_α| r`.
     linear: f64,
     /// `Σ_{|α|≥2} |a_α| r^{|α|}`.
@@ -522,37 +781,8 @@ impl Taylor {
     /// The sums of the Taylor coefficients' magnitudes of `f` about `c` for the cube of
     /// half-side `r` (the same for `φ = −f`); `None` if not finite.
     fn at(&self, c: DVec3, r: f64) -> Option<TaylorSums> {
-        const N: usize = MAX_DEGREE + 1;
         let d = self.degree + 1;
-        let mut coef = vec![0.0f64; d * d * d];
-        let powers = |x: f64| {
-            let mut out = [1.0f64; N];
-            for i in 1..d {
-                out[i] = out[i - 1] * x;
-            }
-            out
-        };
-        let (xs, ys, zs) = (powers(c.x), powers(c.y), powers(c.z));
-        // C(a, i)·x^(a−i) for i = 0..=a.
-        let shifted = |a: usize, pw: &[f64; N]| {
-            let mut out = [0.0f64; N];
-            for (i, o) in out.iter_mut().enumerate().take(a + 1) {
-                *o = BINOMIAL[a][i] * pw[a - i];
-            }
-            out
-        };
-        for &([a, b, e], k) in &self.terms {
-            let (px, py, pz) = (shifted(a, &xs), shifted(b, &ys), shifted(e, &zs));
-            for (i, x) in px.iter().enumerate().take(a + 1) {
-                for (j, y) in py.iter().enumerate().take(b + 1) {
-                    let xy = k * x * y;
-                    let row = &mut coef[i + d * j..];
-                    for (l, z) in pz.iter().enumerate().take(e + 1) {
-                        row[d * d * l] += xy * z;
-                    }
-                }
-            }
-        }
+        let coef = self.coefficients(c);
         let mut by_degree = vec![0.0f64; 3 * d];
         for l in 0..d {
             for j in 0..d {
@@ -572,11 +802,82 @@ impl Taylor {
             }
             power *= r;
         }
+        let value = coef[0];
+        let gradient = DVec3::new(coef[1], coef[d], coef[d * d]);
         (linear + quadratic).is_finite().then_some(TaylorSums {
+            value,
+            gradient,
             linear,
             quadratic,
             magnitude: self.magnitude_bound(c),
         })
+    }
+
+    /// `f(c)`, `∇f(c)` and, for each axis `i`, a bound `L_i` on `|∂_i f(x) − ∂_i f(c)|` over
+    /// the cube of half-side `r` about `c`: `Σ_{|α|≥2, α_i≥1} |a_α| α_i r^{|α|−1}`.
+    fn gradient_spread(&self, c: DVec3, r: f64) -> (f64, DVec3, DVec3) {
+        let d = self.degree + 1;
+        let coef = self.coefficients(c);
+        let mut spread = [0.0f64; 3];
+        let mut powers = vec![1.0f64; 3 * d];
+        for k in 1..3 * d {
+            powers[k] = powers[k - 1] * r;
+        }
+        for l in 0..d {
+            for j in 0..d {
+                for i in 0..d {
+                    let total = i + j + l;
+                    if total < 2 {
+                        continue;
+                    }
+                    let a = coef[i + d * (j + d * l)].abs() * powers[total - 1];
+                    spread[0] += a * i as f64;
+                    spread[1] += a * j as f64;
+                    spread[2] += a * l as f64;
+                }
+            }
+        }
+        (
+            coef[0],
+            DVec3::new(coef[1], coef[d], coef[d * d]),
+            DVec3::from_array(spread),
+        )
+    }
+
+    /// The Taylor coefficients of `f` about `c`: `a_(i,j,l)` at `i + d·(j + d·l)`, `d` the
+    /// degree + 1.
+    fn coefficients(&self, c: DVec3) -> Vec<f64> {
+        const N: usize = MAX_DEGREE + 1;
+        let d = self.degree + 1;
+        let mut coef = vec![0.0f64; d * d * d];
+        // table[a][i] = C(a, i)·x^(a−i): the coefficient of d^i in (x + d)^a.
+        let table = |x: f64| {
+            let mut powers = [1.0f64; N];
+            for i in 1..d {
+                powers[i] = powers[i - 1] * x;
+            }
+            let mut out = [[0.0f64; N]; N];
+            for (a, row) in out.iter_mut().enumerate().take(d) {
+                for (i, o) in row.iter_mut().enumerate().take(a + 1) {
+                    *o = BINOMIAL[a][i] * powers[a - i];
+                }
+            }
+            out
+        };
+        let (tx, ty, tz) = (table(c.x), table(c.y), table(c.z));
+        for &([a, b, e], k) in &self.terms {
+            let (px, py, pz) = (&tx[a][..=a], &ty[b][..=b], &tz[e][..=e]);
+            for (j, y) in py.iter().enumerate() {
+                for (l, z) in pz.iter().enumerate() {
+                    let yz = k * y * z;
+                    let row = &mut coef[d * (j + d * l)..][..=a];
+                    for (o, x) in row.iter_mut().zip(px) {
+                        *o += yz * x;
+                    }
+                }
+            }
+        }
+        coef
     }
 }
 
@@ -590,15 +891,28 @@ mod tests {
         Field::new(&expand(equation).unwrap(), radius, SolidKind::Inside)
     }
 
+    /// The mesh on the leaves for `tolerance`, from the coarsest grid at most radius / 8.
+    fn adaptive(f: &Field, tolerance: f64) -> (TriangleMesh, Vec<VertexKind>, Refined) {
+        let floor = 2.0 * tolerance;
+        let depth = depth_for(f.radius(), floor, SolidKind::Inside);
+        let coarse = Grid::covering(f.radius(), floor * f64::from(1u32 << depth));
+        mesh_adaptive(
+            f,
+            coarse,
+            depth,
+            tolerance,
+            &|_, _| {},
+            &AtomicBool::new(false),
+        )
+        .unwrap()
+    }
+
     #[test]
-    fn the_steps_double_from_the_floor_up_to_an_eighth_of_the_radius() {
-        assert_eq!(
-            candidate_steps(2.0, 0.04, SolidKind::Inside),
-            vec![0.16, 0.08, 0.04]
-        );
-        assert_eq!(candidate_steps(2.0, 0.3, SolidKind::Outside), vec![0.3]);
+    fn the_depth_halves_from_an_eighth_of_the_radius_down_to_the_floor() {
+        assert_eq!(depth_for(2.0, 0.04, SolidKind::Inside), 2);
+        assert_eq!(depth_for(2.0, 0.3, SolidKind::Outside), 0);
         let shell = SolidKind::Shell { thickness: 0.1 };
-        assert_eq!(candidate_steps(2.0, 0.04, shell), vec![0.04]);
+        assert_eq!(depth_for(2.0, 0.04, shell), 0);
     }
 
     #[test]
@@ -633,45 +947,46 @@ mod tests {
     }
 
     #[test]
-    fn a_sphere_meets_its_tolerance_at_the_coarsest_step() {
+    fn a_sphere_is_meshed_coarse_and_refined_only_for_a_finer_tolerance() {
         let f = field("x^2 + y^2 + z^2 = 1", 1.5);
-        let steps = candidate_steps(1.5, 0.04, SolidKind::Inside);
-        assert_eq!(steps.len(), 3);
-        let (mesh, kinds, levels) =
-            choose(&f, &steps, 0.02, &|_, _| {}, &AtomicBool::new(false)).unwrap();
-        assert_eq!(levels.len(), 1, "{levels:?}");
+        let (mesh, kinds, refined) = adaptive(&f, 0.02);
+        check::verify(&mesh).unwrap();
+        eprintln!("sphere 0.02: {refined:?}");
         assert!(worst_deviation(&f, &mesh, &kinds) <= EXTRACT_SHARE * 0.02);
-        // At half the tolerance the same step is refused for its deviation.
-        let (_, _, levels) = choose(&f, &steps, 0.01, &|_, _| {}, &AtomicBool::new(false)).unwrap();
-        assert!(matches!(levels[0].rejected, Some(Rejection::Deviation(_))));
+        // Every crossed leaf is in a cube of the coarsest step: nothing needed refining.
+        let crossed = &refined.crossed_by_level;
+        assert!(
+            crossed[0] > 0 && crossed[3..].iter().all(|&n| n == 0),
+            "{refined:?}"
+        );
+        // At a quarter of the tolerance the same coarse cubes are refined for the deviation,
+        // and the mesh is still within its share.
+        let (mesh, _, refined) = adaptive(&f, 0.005);
+        eprintln!("sphere 0.005: {refined:?}");
+        check::verify(&mesh).unwrap();
+        assert!(refined.refined_for[Reason::Deviation as usize] > 0);
+        let finest = refined.crossed_by_level.len() - 1;
+        assert!(refined.crossed_by_level[finest] < refined.crossed() / 2);
     }
 
-    /// A ball of radius 0.06 (with the unit ball) wholly inside one cell of the coarsest grid
-    /// tried, whose corners are all outside: that grid loses it, and the search refuses it.
+    /// A ball of radius 0.06 (with the unit ball) wholly inside one cube of the coarsest grid,
+    /// whose corners are all outside: that grid loses it, and the refinement finds it.
     #[test]
-    fn a_small_component_inside_a_quiet_cell_forces_a_finer_step() {
+    fn a_small_component_inside_a_quiet_tetrahedron_is_found() {
         let f = field(
             "(x^2 + y^2 + z^2 - 1)*((x - 1.6)^2 + y^2 + z^2 - 0.0036) = 0",
             2.0,
         );
-        let steps = candidate_steps(2.0, 0.04, SolidKind::Inside);
-        let coarsest = Grid::covering(2.0, steps[0]);
+        let coarsest = Grid::covering(2.0, 0.04 * 4.0);
         let (lost, _) = march(&f, coarsest, &|_, _| {});
         assert_eq!(
             check::components(&lost),
             1,
             "the coarsest grid sees the small ball"
         );
-        let never = AtomicBool::new(false);
-        assert_eq!(
-            topology_problem(&f, coarsest, 0.015, 0.04, &never),
-            Some(Rejection::SurfaceInQuietCell)
-        );
-        let (mesh, _, levels) = choose(&f, &steps, 0.02, &|_, _| {}, &never).unwrap();
-        assert!(
-            levels.len() > 1 && levels[0].rejected.is_some(),
-            "{levels:?}"
-        );
+        let (mesh, _, refined) = adaptive(&f, 0.02);
+        eprintln!("small ball: {refined:?}");
+        assert!(refined.refined_for[Reason::SurfaceUnproven as usize] > 0);
         let v = check::verify(&mesh).unwrap();
         assert_eq!(v.components, 2);
         let exact = 4.0 / 3.0 * std::f64::consts::PI * (1.0 + 0.06f64.powi(3));
@@ -684,8 +999,8 @@ mod tests {
     }
 
     /// Two lobes joined by a neck of radius 0.05 (a surface of revolution about x): edges
-    /// crossing the neck cross the surface twice, so coarse steps are refused, and the mesh
-    /// is one piece with the neck in it.
+    /// crossing the neck cross the surface twice, so the tetrahedra there are refined, and
+    /// the mesh is one piece with the neck in it.
     #[test]
     fn a_thin_neck_is_kept() {
         // y² + z² = g(x), g ≥ 0.0025 everywhere, wide lobes about x = ±0.35.
@@ -693,21 +1008,19 @@ mod tests {
             "y^2 + z^2 - 0.0025 - 1.2*(1 - (x/0.6)^2)^2*(x/0.6)^2 = 0",
             1.0,
         );
-        let steps = candidate_steps(1.0, 0.02, SolidKind::Inside);
-        let never = AtomicBool::new(false);
-        let (mesh, _, levels) = choose(&f, &steps, 0.01, &|_, _| {}, &never).unwrap();
+        let (mesh, _, refined) = adaptive(&f, 0.01);
         let v = check::verify(&mesh).unwrap();
-        let (coarse, _) = march(&f, Grid::covering(1.0, steps[0]), &|_, _| {});
+        let (coarse, _) = march(&f, refined.coarse, &|_, _| {});
         eprintln!(
-            "neck: levels {levels:?}; the coarsest grid gives {} pieces",
+            "neck: {refined:?}; the coarsest grid gives {} pieces",
             check::components(&coarse)
         );
-        assert_eq!(v.components, 1, "{levels:?}");
+        assert_eq!(v.components, 1, "{refined:?}");
         assert!(
             check::components(&coarse) > 1,
             "the coarsest grid keeps the neck"
         );
-        assert_eq!(levels[0].rejected, Some(Rejection::EdgeCrossedTwice));
+        assert!(refined.refined_for[Reason::EdgeCrossedTwice as usize] > 0);
         assert!(mesh
             .vertices
             .iter()

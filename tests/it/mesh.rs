@@ -473,9 +473,9 @@ fn triangles_per_area(
 /// Adaptivity (docs/mesh.md, "How it is made"): on `x⁴ + y⁴ + z⁴ = 1`, flat about the six
 /// points on the axes and curved along the rounded edges between them, the coarsened mesh
 /// has far fewer triangles per area on the flat parts than on the curved ones, while the
-/// uniform grid's marching tetrahedra (the mesh before coarsening) has about as many; and
-/// the torus at the default tolerance is extracted on a grid 4 times coarser than the floor
-/// step and coarsened, within its tolerance.
+/// uniform grid's marching tetrahedra has about as many; and the torus at the default
+/// tolerance is extracted on tetrahedra 4 times coarser than the floor step and coarsened,
+/// within its tolerance.
 #[test]
 fn the_mesh_is_coarser_where_the_surface_is_flatter() {
     use kardia::geometry::DVec3;
@@ -535,18 +535,86 @@ fn the_mesh_is_coarser_where_the_surface_is_flatter() {
         part.mesh.triangles.len()
     );
     assert!(part.deviation.hausdorff() <= part.tolerance);
-    // The grid step is chosen by measurement (mesh::resolution): the torus is extracted at
-    // 4 times the floor step of 2 × the tolerance (at which it was 154 336 triangles).
+    // Refined where needed (mesh::resolution): every tetrahedron the torus's surface passes
+    // through is in a cube at least 4 times the floor step of 2 × the tolerance (at which it
+    // was 154 336 triangles).
+    let refined = part.refined.as_ref().unwrap();
+    let finest_cut = (0..refined.crossed_by_level.len())
+        .rev()
+        .find(|&l| refined.crossed_by_level[l] > 0)
+        .unwrap();
     assert!(
-        part.grid.step() >= 3.9 * part.floor.step(),
-        "{:?}",
-        part.levels
+        refined.cube_side(finest_cut) >= 3.9 * part.floor.step(),
+        "{refined:?}"
     );
     assert!(
         part.extracted_triangles <= 20_000,
         "{}",
         part.extracted_triangles
     );
+}
+
+/// Local refinement: on Barth's sextic the leaves are far fewer than the tetrahedra of a
+/// uniform grid of the floor step, and most of the surface lies in the coarse cubes'
+/// tetrahedra while some is refined to the floor; the leaves are
+/// conforming (every face inside the domain shared by exactly two leaves, every face on its
+/// boundary in one) and fill the domain.
+#[test]
+fn the_tetrahedra_are_fine_only_where_the_surface_needs_it() {
+    use kardia::mesh::bisection::Point;
+    use kardia::mesh::resolution;
+    use std::collections::HashMap;
+    use std::sync::atomic::AtomicBool;
+    let barth = preset_solid("barth_sextic").solid;
+    let radius = barth.clip_radius;
+    let tolerance = 0.01 * radius;
+    let field = mesh::Field::new(&barth.polynomial, radius, SolidKind::Inside);
+    let floor = 2.0 * tolerance;
+    let depth = resolution::depth_for(radius, floor, SolidKind::Inside);
+    let coarse = mesh::extract::Grid::covering(radius, floor * f64::from(1u32 << depth));
+    let adaptive = resolution::refine(
+        &field,
+        coarse,
+        depth,
+        tolerance,
+        &|_, _| {},
+        &AtomicBool::new(false),
+    )
+    .unwrap();
+    let refined = &adaptive.refined;
+    eprintln!("barth_sextic: {refined:?}");
+    assert!(depth >= 2);
+    // Far fewer tetrahedra than the floor's uniform grid, and most of the surface coarse.
+    assert!(
+        refined.leaves() * 20 < refined.uniform_leaves(),
+        "{} leaves, {} uniform",
+        refined.leaves(),
+        refined.uniform_leaves()
+    );
+    let finest = refined.crossed_by_level.len() - 1;
+    assert!(refined.crossed_by_level[finest] * 4 < refined.crossed());
+    let in_coarse_cubes: usize = refined.crossed_by_level[..3].iter().sum();
+    assert!(in_coarse_cubes * 2 > refined.crossed(), "{refined:?}");
+    assert!(refined.crossed_by_level[finest] > 0, "{refined:?}");
+    // Conforming, and filling the domain.
+    let mut faces: HashMap<[Point; 3], u32> = HashMap::new();
+    let mut volume = 0i64;
+    for t in &adaptive.leaves {
+        volume += t.orientation().abs();
+        let c = t.corners;
+        for skip in 0..4 {
+            let mut f: Vec<Point> = (0..4).filter(|&k| k != skip).map(|k| c[k]).collect();
+            f.sort();
+            *faces.entry([f[0], f[1], f[2]]).or_default() += 1;
+        }
+    }
+    let extent = adaptive.refinement.extent();
+    assert_eq!(volume, 6 * i64::from(extent).pow(3));
+    for (f, n) in faces {
+        let on_boundary =
+            (0..3).any(|i| f.iter().all(|p| p[i] == 0) || f.iter().all(|p| p[i] == extent));
+        assert_eq!(n, if on_boundary { 1 } else { 2 }, "face {f:?}");
+    }
 }
 
 /// The coarsening tests each new fan against the triangles near it, so the check of the
