@@ -112,19 +112,22 @@ fn midpoint(a: Point, b: Point) -> Point {
 /// The edges of a tetrahedron as pairs of corner indices.
 pub const TET_EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
 
+/// The six orders of the axes x = 0, y = 1, z = 2: each is the path along a cube's edges from
+/// its lowest corner to the opposite one that makes one of its Kuhn tetrahedra.
+pub const AXIS_ORDERS: [[usize; 3]; 6] = [
+    [0, 1, 2],
+    [0, 2, 1],
+    [1, 0, 2],
+    [1, 2, 0],
+    [2, 0, 1],
+    [2, 1, 0],
+];
+
 /// The six Kuhn tetrahedra of the cube of side `side` at `lo`, in Maubach's order (a path
 /// along the cube's edges from `lo` to the opposite corner; refinement edge the main
 /// diagonal, tag 3).
 pub fn kuhn_tetrahedra(lo: Point, side: i32) -> [Tet; 6] {
-    const PATHS: [[usize; 3]; 6] = [
-        [0, 1, 2],
-        [0, 2, 1],
-        [1, 0, 2],
-        [1, 2, 0],
-        [2, 0, 1],
-        [2, 1, 0],
-    ];
-    PATHS.map(|path| {
+    AXIS_ORDERS.map(|path| {
         let mut corners = [lo; 4];
         for (step, &axis) in path.iter().enumerate() {
             corners[step + 1] = corners[step];

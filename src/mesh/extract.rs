@@ -13,7 +13,7 @@
 //! clip sphere.
 
 pub use super::bisection::{pack, unpack};
-use super::bisection::{Point, Tet};
+use super::bisection::{Point, Tet, AXIS_ORDERS};
 use super::field::{Field, VertexKind};
 use super::TriangleMesh;
 use crate::geometry::DVec3;
@@ -24,15 +24,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 /// The six tetrahedra of the unit cube (corner offsets as bits x = 1, y = 2, z = 4),
 /// each ordered with positive orientation.
 fn cube_tetrahedra() -> [[u8; 4]; 6] {
-    const PERMUTATIONS: [[u8; 3]; 6] = [
-        [0, 1, 2],
-        [0, 2, 1],
-        [1, 0, 2],
-        [1, 2, 0],
-        [2, 0, 1],
-        [2, 1, 0],
-    ];
-    PERMUTATIONS.map(|p| {
+    AXIS_ORDERS.map(|p| {
         let c1 = 1u8 << p[0];
         let c2 = c1 | (1u8 << p[1]);
         let mut t = [0u8, c1, c2, 7];
