@@ -48,7 +48,6 @@ use crate::shapes::triangles::closest_on_triangle;
 use grid::{Box32, TriangleGrid};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
 
 /// A new triangle's unit normal must be within this cosine of the replaced triangle's (60°).
 pub const MAX_TURN_COS: f64 = 0.5;
@@ -575,12 +574,10 @@ impl Work<'_> {
     fn make(&mut self, steps: &[Step], cancel: &AtomicBool, checking: Checking) -> Option<usize> {
         let mut scratch = Scratch::default();
         let mut made = 0;
-        let parallel_possible = rayon::current_num_threads() > 1 && checking != Checking::Serial;
+        let parallel = rayon::current_num_threads() > 1 && checking != Checking::Serial;
         let mut changed_at = vec![0u32; self.vertices.len()];
         let mut changed_boxes: Vec<Box32> = Vec::new();
         let mut footprint = Vec::new();
-        // Seconds per step of the last batch checked one by one, and in parallel.
-        let mut rate = [f64::INFINITY; 2];
         let mut begun = 0;
         let mut stamp = 0;
         while begun < steps.len() {
@@ -595,16 +592,6 @@ impl Work<'_> {
             let batch = &steps[begun..(begun + length).min(steps.len())];
             begun += batch.len();
             stamp += 1;
-            let parallel = parallel_possible
-                && match checking {
-                    Checking::Fastest => match stamp % PROBE_EVERY {
-                        0 => false,
-                        1 => true,
-                        _ => rate[1] < rate[0],
-                    },
-                    _ => true,
-                };
-            let started = Instant::now();
             if !parallel {
                 for &step in batch {
                     if self.check(step, &mut scratch).ok {
@@ -612,7 +599,6 @@ impl Work<'_> {
                         made += 1;
                     }
                 }
-                rate[0] = started.elapsed().as_secs_f64() / batch.len() as f64;
                 continue;
             }
             changed_boxes.clear();
@@ -644,7 +630,6 @@ impl Work<'_> {
                     made += 1;
                 }
             }
-            rate[1] = started.elapsed().as_secs_f64() / batch.len() as f64;
         }
         Some(made)
     }
@@ -657,14 +642,7 @@ pub(crate) enum Checking {
     Serial,
     /// In parallel, when the pool has more than one thread.
     Parallel,
-    /// Whichever of the two took less time a step in the last batch timed each way: every
-    /// [`PROBE_EVERY`] batches one is checked each way, and the faster way is kept until the
-    /// next (a machine busy with other work makes the parallel checks wait for each other).
-    Fastest,
 }
-
-/// How often [`Checking::Fastest`] times both ways again, in batches.
-const PROBE_EVERY: u32 = 16;
 
 /// One step of a pass: `u` collapsed into `v`, or side `k` of triangle `t` flipped.
 #[derive(Clone, Copy, Debug)]
@@ -687,9 +665,9 @@ const BATCH: usize = 1024;
 /// vertices are dropped and the kinds kept in step. Gives up (`None`, the mesh untouched)
 /// once `cancel` is set (read between batches of collapses). `pass_done(k)` is called as
 /// pass `k` (1 to at most [`MAX_PASSES`]) ends. The steps are checked one by one unless the
-/// environment variable `KARDIA_COARSEN_CHECKS` is `parallel` (batches checked in parallel)
-/// or `fastest` (whichever way was faster when last timed): the mesh is the same every way,
-/// for any number of threads (on a busy two-core machine one by one was the fastest).
+/// environment variable `KARDIA_COARSEN_CHECKS` is `parallel` (batches checked in parallel):
+/// the mesh is the same either way, for any number of threads (on two cores, busy or quiet,
+/// one by one was the faster).
 pub fn coarsen(
     field: &Field,
     mesh: &mut TriangleMesh,
@@ -700,7 +678,6 @@ pub fn coarsen(
 ) -> Option<Coarsened> {
     let checking = match std::env::var("KARDIA_COARSEN_CHECKS").as_deref() {
         Ok("parallel") => Checking::Parallel,
-        Ok("fastest") => Checking::Fastest,
         _ => Checking::Serial,
     };
     coarsen_checking(field, mesh, kinds, budget, cancel, pass_done, checking)
@@ -919,7 +896,6 @@ mod tests {
         };
         let one = run(1, Checking::Serial);
         let two = run(2, Checking::Parallel);
-        let fastest = run(2, Checking::Fastest);
         eprintln!(
             "{} -> {} triangles, {:?}",
             extracted.triangles.len(),
@@ -929,10 +905,6 @@ mod tests {
         assert!(one.2.collapses > 1000 && one.2.flips > 0, "{:?}", one.2);
         check::verify(&one.0).unwrap();
         assert!(one == two, "the meshes differ between 1 and 2 threads");
-        assert!(
-            one == fastest,
-            "the meshes differ when the fastest way is chosen"
-        );
     }
 
     #[test]
