@@ -364,6 +364,7 @@ pub fn mesh_solid_cancellable(
     let started = Instant::now();
     let mut coarsened = None;
     let (mut object_mesh, mut kinds) = (extracted.clone(), extracted_kinds.clone());
+    let flip = frame.m.determinant() < 0.0;
     for attempt in 0..COARSEN_ATTEMPTS {
         let budget = COARSEN_SHARE * tolerance / grow / f64::from(1u32 << attempt);
         let (mut mesh, mut mesh_kinds) = (extracted.clone(), extracted_kinds.clone());
@@ -377,7 +378,6 @@ pub fn mesh_solid_cancellable(
         )
         .ok_or(MeshError::Cancelled)?;
         // Checked as computed and as the file will hold it (in the world, rounded to f32).
-        let flip = frame.m.determinant() < 0.0;
         let written = mesh
             .mapped(|p| frame.point_to_world(p), flip)
             .rounded_to_f32();
@@ -413,7 +413,6 @@ pub fn mesh_solid_cancellable(
     .ok_or(MeshError::Cancelled)?
     .scaled(grow);
     times.measurement = started.elapsed();
-    let flip = frame.m.determinant() < 0.0;
     let mesh = object_mesh.mapped(|p| frame.point_to_world(p), flip);
     Ok(MeshedSolid {
         mesh,
