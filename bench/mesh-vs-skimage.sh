@@ -3,7 +3,7 @@
 # exact surface (issue 34, item 4; docs/mesh.md, "Against marching cubes"): torus, heart,
 # Kummer's quartic and Barth's sextic (clipped to their balls). For each: kardia's meshing time
 # (extraction + coarsening, from its summary; the time column compared) beside its whole run
-# (release build, default tolerance: with its accuracy measurement, check and file), with its
+# (release build, at the tolerance compared: with its accuracy measurement, check and file), with its
 # triangles, peak memory and its two-sided Hausdorff estimate; then scikit-image on an n³ grid
 # refined by 1.25× until its mesh is as close (both measured by `kardia mesh --measure`), with
 # the time of sampling plus marching (without the interpreter's start or the file).
@@ -12,8 +12,10 @@
 #   bench/mesh-vs-skimage.sh [BINARY]
 #     BINARY  the kardia binary (default: target/release/kardia, built with cargo first)
 #
-# ONLY=REGEX runs only the surfaces whose name matches; NMAX=N caps scikit-image's grid
-# (default 320: 320³ samples are 260 MB); KEEP=DIR keeps the meshes in DIR. Makes its own
+# ONLY=REGEX runs only the surfaces whose name matches; SCALES="1 0.5 0.25" compares at
+# those shares of kardia's default tolerance (1% of the clip radius; default "1"), both
+# meshes measured at the grid step of that tolerance; NMAX=N caps scikit-image's grid
+# (default 400: 400³ samples are 512 MB); KEEP=DIR keeps the meshes in DIR. Makes its own
 # virtual environment .venv-bench-mesh (scikit-image, numpy, trimesh), never the system Python.
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -1,13 +1,14 @@
 """`kardia mesh` against scikit-image's marching_cubes (Lewiner) at the same distance from
 the exact surface (run by bench/mesh-vs-skimage.sh, which makes the virtual environment).
 
-For each surface: `kardia mesh` (the release binary, default tolerance) is timed as a whole
+For each surface and tolerance (SCALES: shares of kardia's default, 1% of the clip radius):
+`kardia mesh` (the release binary) is timed as a whole
 run, with its peak memory, and its meshing time (extraction and coarsening, as its summary
 prints them: without its own accuracy measurement, check and file) is read from its summary; then scikit-image meshes the same solid (the surface's f ≤ 0
 inside the clip ball: the sampled field is max(f, x² + y² + z² − R²)) on an n³ grid of
 samples, n growing by 1.25× until its mesh is as close to the exact surface as kardia's.
 Both meshes are measured the same way, by `kardia mesh --measure` (the root finder's
-two-sided Hausdorff estimate at the grid step of kardia's default tolerance). The time of
+two-sided Hausdorff estimate at the grid step of the tolerance compared). The time of
 scikit-image is sampling plus marching (not the interpreter's start or the file written);
 peak memory is each process's maximum resident size (for scikit-image the whole Python
 process, numpy and scikit-image included).
@@ -78,10 +79,13 @@ def timed(cmd):
     return r.stdout, float(t[0]), int(t[1]) / 1024
 
 
-def measure(kardia, preset, path):
-    """(Hausdorff estimate, surface→mesh distance, samples beyond the search reach)."""
+def measure(kardia, preset, tolerance, path):
+    """(Hausdorff estimate, surface→mesh distance, samples beyond the search reach), measured
+    at the grid step of `tolerance`."""
     out = subprocess.run(
-        [kardia, "mesh", "--preset", *preset, "--measure", path], capture_output=True, text=True
+        [kardia, "mesh", "--preset", *preset, "--tolerance", repr(tolerance), "--measure", path],
+        capture_output=True,
+        text=True,
     )
     if out.returncode != 0:
         raise SystemExit(out.stdout + out.stderr)
@@ -99,52 +103,82 @@ def watertight(path):
 def main():
     kardia, work = sys.argv[1], sys.argv[2]
     only = os.environ.get("ONLY")
-    nmax = int(os.environ.get("NMAX", "320"))
+    nmax = int(os.environ.get("NMAX", "400"))
+    # Shares of kardia's default tolerance (1% of the clip radius), finest last.
+    scales = sorted((float(s) for s in os.environ.get("SCALES", "1").split()), reverse=True)
     rows = []
-    for name, preset, _, _ in SURFACES:
+    for name, preset, _, radius in SURFACES:
         if only and not re.search(only, name):
             continue
-        k_path = os.path.join(work, f"{name}-kardia.stl")
-        out, k_time, k_mem = timed([kardia, "mesh", "--preset", *preset, "--quiet", "-o", k_path])
-        k_tris = int(re.search(r"\((\d+) triangles", out).group(1))
-        k_meshing = float(re.search(r"meshing ([\d.]+) s", out).group(1))
-        k_haus, k_s2m, k_beyond = measure(kardia, preset, k_path)
-        # Where kardia's own estimate is capped by the search reach (samples at singular
-        # points, with no surface point found on the lines searched), the distances compared
-        # are the surface→mesh ones, which sample the exact surface and stay meaningful.
-        by_s2m = k_beyond > 0
-        k_dist = k_s2m if by_s2m else k_haus
-        print(
-            f"{name}: kardia {k_tris} triangles, meshing {k_meshing:.2f} s (whole run {k_time:.2f} s), "
-            f"{k_mem:.0f} MB, distance {k_dist:.2e}",
-            flush=True,
-        )
-        n = 32
-        while True:
-            s_path = os.path.join(work, f"{name}-skimage-{n}.stl")
-            out, _, s_mem = timed([sys.executable, __file__, "--skimage", name, str(n), s_path])
-            s = json.loads(out)
-            s_haus, s_s2m, _ = measure(kardia, preset, s_path)
-            s_dist = s_s2m if by_s2m else s_haus
-            print(f"  skimage n={n}: {s['triangles']} triangles, {s['time']:.2f} s, {s_mem:.0f} MB, distance {s_dist:.2e}", flush=True)
-            if s_dist <= k_dist or n >= nmax:
-                break
-            n = min(nmax, int(n * 1.25))
-        rows.append(
-            (name + (" (surface→mesh)" if by_s2m else ""), k_meshing, k_time, k_tris, k_mem, k_dist, watertight(k_path), n, s["time"], s["triangles"], s_mem, s_dist, watertight(s_path))
-        )
+        n_start = 32
+        for scale in scales:
+            tolerance = scale * 0.01 * radius
+            tag = f"{name}-{scale:g}"
+            k_path = os.path.join(work, f"{tag}-kardia.stl")
+            out, k_time, k_mem = timed(
+                [kardia, "mesh", "--preset", *preset, "--tolerance", repr(tolerance), "--quiet", "-o", k_path]
+            )
+            k_tris = int(re.search(r"\((\d+) triangles", out).group(1))
+            k_meshing = float(re.search(r"meshing ([\d.]+) s", out).group(1))
+            k_haus, k_s2m, k_beyond = measure(kardia, preset, tolerance, k_path)
+            # Where kardia's own estimate is capped by the search reach (samples at singular
+            # points, with no surface point found on the lines searched), the distances
+            # compared are the surface→mesh ones, which sample the exact surface and stay
+            # meaningful.
+            by_s2m = k_beyond > 0
+            k_dist = k_s2m if by_s2m else k_haus
+            print(
+                f"{name} (tolerance {tolerance:.3g}): kardia {k_tris} triangles, meshing {k_meshing:.3f} s "
+                f"(whole run {k_time:.2f} s), {k_mem:.0f} MB, distance {k_dist:.2e}",
+                flush=True,
+            )
+            n = n_start
+            while True:
+                s_path = os.path.join(work, f"{tag}-skimage-{n}.stl")
+                out, _, s_mem = timed([sys.executable, __file__, "--skimage", name, str(n), s_path])
+                s = json.loads(out)
+                s_haus, s_s2m, _ = measure(kardia, preset, tolerance, s_path)
+                s_dist = s_s2m if by_s2m else s_haus
+                print(
+                    f"  skimage n={n}: {s['triangles']} triangles, {s['time']:.3f} s, {s_mem:.0f} MB, "
+                    f"distance {s_dist:.2e}",
+                    flush=True,
+                )
+                if s_dist <= k_dist or n >= nmax:
+                    break
+                n = min(nmax, int(n * 1.25))
+            # A finer tolerance needs at least this grid.
+            n_start = n
+            rows.append(
+                (
+                    name + (" (surface→mesh)" if by_s2m else ""),
+                    tolerance,
+                    k_meshing,
+                    k_time,
+                    k_tris,
+                    k_mem,
+                    k_dist,
+                    watertight(k_path),
+                    n,
+                    s["time"],
+                    s["triangles"],
+                    s_mem,
+                    s_dist,
+                    watertight(s_path),
+                )
+            )
     print()
     print(
-        "| surface | kardia meshing time | whole run | triangles | peak memory | distance | watertight "
+        "| surface | tolerance | kardia meshing time | whole run | triangles | peak memory | distance | watertight "
         "| skimage grid | time | triangles | peak memory | distance | watertight "
         "| meshing time kardia/skimage | triangles kardia/skimage |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    for name, kmt, kt, ktr, km, kd, kw, n, st, stri, sm, sd, sw in rows:
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for name, tol, kmt, kt, ktr, km, kd, kw, n, st, stri, sm, sd, sw in rows:
         reached = "" if sd <= kd else " (not reached)"
         print(
-            f"| {name} | {kmt:.2f} s | {kt:.2f} s | {ktr} | {km:.0f} MB | {kd:.2e} | {kw} | {n}³{reached} | {st:.2f} s | {stri} "
-            f"| {sm:.0f} MB | {sd:.2e} | {sw} "
+            f"| {name} | {tol:.3g} | {kmt:.3f} s | {kt:.2f} s | {ktr} | {km:.0f} MB | {kd:.2e} | {kw} "
+            f"| {n}³{reached} | {st:.3f} s | {stri} | {sm:.0f} MB | {sd:.2e} | {sw} "
             f"| {kmt / st:.2f} | {ktr / stri:.2f} |"
         )
 

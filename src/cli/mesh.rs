@@ -275,8 +275,8 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
             .as_secs_f64()
     };
     outln!(
-        "  time {:.2} s: meshing {:.2} s (extraction {:.2} s, coarsening {:.2} s), measurement \
-         {:.2} s, check {:.2} s, write {:.2} s",
+        "  time {:.3} s: meshing {:.3} s (extraction {:.3} s, coarsening {:.3} s), measurement \
+         {:.3} s, check {:.3} s, write {:.3} s",
         started.elapsed().as_secs_f64(),
         sum(|t| t.meshing()),
         sum(|t| t.extraction),
