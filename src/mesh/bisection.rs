@@ -306,11 +306,18 @@ impl Refinement {
     /// Marks the refinement edge of midpoint `m` and, recursively, every diamond it needs
     /// refined first; returns how many edges were newly marked.
     pub fn mark(&mut self, m: Point) -> usize {
+        let mut fresh = Vec::new();
+        self.mark_collecting(m, &mut fresh);
+        fresh.len()
+    }
+
+    /// [`Refinement::mark`], appending to `fresh` the midpoint of every edge newly marked
+    /// (the only tetrahedra that may split are those whose refinement edge is among them).
+    pub fn mark_collecting(&mut self, m: Point, fresh: &mut Vec<Point>) {
         let mut stack = vec![m];
-        let mut added = 0;
         while let Some(p) = stack.pop() {
             if self.marked.insert(pack(p)) {
-                added += 1;
+                fresh.push(p);
                 stack.extend(
                     self.parents(p)
                         .into_iter()
@@ -318,7 +325,6 @@ impl Refinement {
                 );
             }
         }
-        added
     }
 
     /// Whether `t` is bisected: below the finest level with its refinement edge marked.

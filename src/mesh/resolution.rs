@@ -44,7 +44,7 @@
 //! `φ` (degree twice `f`'s, a square less a sum of squares) is meshed on the uniform grid of
 //! the floor step ([`super::extract::march`]).
 
-use super::bisection::{Point, PointHasher, Refinement, Tet, TET_EDGES};
+use super::bisection::{kuhn_tetrahedra, Point, PointHasher, Refinement, Tet, TET_EDGES};
 use super::extract::{self, marching_table, Grid, Lattice, TablePolygon};
 use super::field::{Field, SolidKind, VertexKind};
 use super::TriangleMesh;
@@ -173,9 +173,12 @@ impl Values {
 pub struct Adaptive {
     /// The marked edges.
     pub refinement: Refinement,
-    /// The leaves, in a fixed order (whatever the number of threads).
+    /// The leaves the boundary passes through (their corners' labels differ), in the order
+    /// of [`Refinement::leaves`] (whatever the number of threads); the others hold no
+    /// triangle.
     pub leaves: Vec<Tet>,
-    /// Each leaf's labels: bit `k` set when its corner `k` is inside ([`Field::inside`]).
+    /// Each of those leaves' labels: bit `k` set when its corner `k` is inside
+    /// ([`Field::inside`]).
     pub labels: Vec<u8>,
     /// Where the lattice lies in object space.
     pub lattice: Lattice,
@@ -277,58 +280,119 @@ pub fn refine(
         cells: n,
         ..examiner
     };
-    let mut leaves: Vec<(Tet, bool)> = refinement
-        .coarse()
-        .into_iter()
-        .enumerate()
-        .map(|(i, t)| (t, cube_empty[i / 6]))
+    // Each coarse cube's leaves, in the order of `Refinement::leaves` (empty while they are
+    // still its six Kuhn tetrahedra). The leaves to examine are those not yet examined: at
+    // first the Kuhn tetrahedra of the cubes not proven empty, then the leaves each round's
+    // bisections make (below the finest level), wherever they are.
+    let kuhn = |c: usize| {
+        let (x, y, z) = (c % n, c / n % n, c / (n * n));
+        kuhn_tetrahedra([x, y, z].map(|v| v as i32 * side), side)
+    };
+    let mut cube_leaves: Vec<Vec<Tet>> = vec![Vec::new(); n * n * n];
+    let mut todo: Vec<Tet> = (0..n * n * n)
+        .filter(|&c| !cube_empty[c])
+        .flat_map(kuhn)
         .collect();
     let mut refined_for = [0usize; 3];
     let mut rounds = 0;
+    let mut fresh = Vec::new();
     loop {
         if cancel.load(Ordering::Relaxed) {
             return None;
         }
-        let todo: Vec<usize> = (0..leaves.len())
-            .filter(|&i| !leaves[i].1 && leaves[i].0.level < finest)
-            .collect();
         if todo.is_empty() {
             break;
         }
         rounds += 1;
-        values.fill(
-            field,
-            todo.iter().flat_map(|&i| leaves[i].0.corners.into_iter()),
-        );
+        values.fill(field, todo.iter().flat_map(|t| t.corners.into_iter()));
         let verdicts: Vec<Option<Reason>> = todo
             .par_iter()
-            .map(|&i| examiner.examine(&leaves[i].0, &values))
+            .map(|t| examiner.examine(t, &values))
             .collect();
-        for (&i, verdict) in todo.iter().zip(&verdicts) {
-            leaves[i].1 = true;
+        fresh.clear();
+        for (t, verdict) in todo.iter().zip(&verdicts) {
             if let Some(reason) = verdict {
                 refined_for[*reason as usize] += 1;
-                refinement.mark(leaves[i].0.midpoint());
+                refinement.mark_collecting(t.midpoint(), &mut fresh);
             }
         }
-        let mut next = Vec::with_capacity(leaves.len());
-        let mut below = Vec::new();
-        for &(t, examined) in &leaves {
-            if refinement.splits(&t) {
-                below.clear();
-                refinement.expand(t, &mut below);
-                next.extend(below.iter().map(|&c| (c, false)));
-            } else {
-                next.push((t, examined));
-            }
+        // Only a leaf whose refinement edge was just marked splits, and it lies in a coarse
+        // cube whose closed box holds that edge's midpoint.
+        let mut dirty: Vec<usize> = fresh
+            .iter()
+            .flat_map(|&m| cubes_holding(m, side, n))
+            .collect();
+        dirty.sort_unstable();
+        dirty.dedup();
+        let before: Vec<Vec<Tet>> = dirty
+            .iter()
+            .map(|&c| std::mem::take(&mut cube_leaves[c]))
+            .collect();
+        let rebuilt: Vec<(Vec<Tet>, Vec<Tet>)> = dirty
+            .par_iter()
+            .zip(before)
+            .map(|(&c, old)| {
+                let old = if old.is_empty() { kuhn(c).to_vec() } else { old };
+                let (mut leaves, mut made, mut below) = (Vec::new(), Vec::new(), Vec::new());
+                for t in old {
+                    if refinement.splits(&t) {
+                        below.clear();
+                        refinement.expand(t, &mut below);
+                        leaves.extend_from_slice(&below);
+                        made.extend(below.iter().filter(|c| c.level < finest));
+                    } else {
+                        leaves.push(t);
+                    }
+                }
+                (leaves, made)
+            })
+            .collect();
+        todo.clear();
+        for (&c, (leaves, made)) in dirty.iter().zip(rebuilt) {
+            cube_leaves[c] = leaves;
+            todo.extend(made);
         }
-        leaves = next;
         progress(rounds.min(total - 1), total);
     }
-    let leaves: Vec<Tet> = leaves.into_iter().map(|(t, _)| t).collect();
-    values.fill(field, leaves.iter().flat_map(|t| t.corners.into_iter()));
+    // The cubes proven empty that lie wholly inside or wholly outside the clip ball (with a
+    // margin for the rounding of the corners' positions): every corner of their leaves has
+    // the same label, so they hold no triangle and are neither labelled nor marched.
     let r2 = field.radius() * field.radius();
-    let labels: Vec<u8> = leaves
+    let uniform = |c: usize| {
+        let (x, y, z) = (c % n, c / n % n, c / (n * n));
+        let (lo, hi) = cube_box(x, y, z, 1);
+        let (centre, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
+        let nearest = (centre.abs() - half).max(DVec3::ZERO).length_squared();
+        let farthest = (centre.abs() + half).length_squared();
+        nearest > r2 * (1.0 + 1e-9) || farthest < r2 * (1.0 - 1e-9)
+    };
+    let mut refined = Refined {
+        coarse,
+        depth,
+        leaves_by_level: vec![0; finest as usize + 1],
+        crossed_by_level: vec![0; finest as usize + 1],
+        refined_for,
+        rounds,
+    };
+    let mut kept: Vec<Tet> = Vec::new();
+    for (c, leaves) in cube_leaves.iter().enumerate() {
+        let skip = cube_empty[c] && uniform(c);
+        if leaves.is_empty() {
+            refined.leaves_by_level[0] += 6;
+            if !skip {
+                kept.extend(kuhn(c));
+            }
+        } else {
+            for t in leaves {
+                refined.leaves_by_level[t.level as usize] += 1;
+            }
+            if !skip {
+                kept.extend_from_slice(leaves);
+            }
+        }
+    }
+    values.fill(field, kept.iter().flat_map(|t| t.corners.into_iter()));
+    let labels: Vec<u8> = kept
         .par_iter()
         .map(|t| {
             (0..4).fold(0u8, |m, k| {
@@ -338,19 +402,13 @@ pub fn refine(
             })
         })
         .collect();
-    let mut refined = Refined {
-        coarse,
-        depth,
-        leaves_by_level: vec![0; finest as usize + 1],
-        crossed_by_level: vec![0; finest as usize + 1],
-        refined_for,
-        rounds,
-    };
-    for (t, &m) in leaves.iter().zip(&labels) {
-        refined.leaves_by_level[t.level as usize] += 1;
-        if m != 0 && m != 15 {
-            refined.crossed_by_level[t.level as usize] += 1;
-        }
+    let (leaves, labels): (Vec<Tet>, Vec<u8>) = kept
+        .into_iter()
+        .zip(labels)
+        .filter(|&(_, m)| m != 0 && m != 15)
+        .unzip();
+    for t in &leaves {
+        refined.crossed_by_level[t.level as usize] += 1;
     }
     Some(Adaptive {
         refinement,
@@ -358,6 +416,22 @@ pub fn refine(
         labels,
         lattice,
         refined,
+    })
+}
+
+/// The coarse cubes (x fastest, `n` a side of `side` lattice units) whose closed box holds
+/// the lattice point `m`: one, or two, four or eight where `m` lies on their faces.
+fn cubes_holding(m: Point, side: i32, n: usize) -> impl Iterator<Item = usize> {
+    let range = |v: i32| {
+        let c = (v / side) as usize;
+        let first = if v % side == 0 && c > 0 { c - 1 } else { c };
+        first..=c.min(n - 1)
+    };
+    let (rx, ry, rz) = (range(m[0]), range(m[1]), range(m[2]));
+    rz.flat_map(move |z| {
+        let rx = rx.clone();
+        ry.clone()
+            .flat_map(move |y| rx.clone().map(move |x| x + n * (y + n * z)))
     })
 }
 
@@ -967,6 +1041,45 @@ mod tests {
         assert!(refined.refined_for[Reason::Deviation as usize] > 0);
         let finest = refined.crossed_by_level.len() - 1;
         assert!(refined.crossed_by_level[finest] < refined.crossed() / 2);
+    }
+
+    /// `refine` hands marching tetrahedra only the leaves of cubes that may hold a triangle:
+    /// they must be exactly the leaves of the whole refinement whose labels differ, here for
+    /// a solid wholly inside a clip ball (every triangle a cap's, in cubes proven empty of
+    /// surface that the sphere cuts) and a torus the sphere clips.
+    #[test]
+    fn the_marched_leaves_are_every_leaf_whose_labels_differ() {
+        for (equation, radius) in [
+            ("x^2 + y^2 + z^2 = 4", 1.0),
+            (
+                "(x^2 + y^2 + z^2 + 0.64 - 0.09)^2 = 2.56*(x^2 + y^2)",
+                1.0,
+            ),
+        ] {
+            let f = field(equation, radius);
+            let tolerance = 0.01;
+            let floor = 2.0 * tolerance;
+            let depth = depth_for(f.radius(), floor, SolidKind::Inside);
+            let coarse = Grid::covering(f.radius(), floor * f64::from(1u32 << depth));
+            let cancel = AtomicBool::new(false);
+            let a = refine(&f, coarse, depth, tolerance, &|_, _| {}, &cancel).unwrap();
+            let all = a.refinement.leaves();
+            let label = |t: &Tet| {
+                (0..4).fold(0u8, |m, k| {
+                    m | u8::from(f.inside(a.lattice.position(t.corners[k]))) << k
+                })
+            };
+            let (crossed, labels): (Vec<Tet>, Vec<u8>) = all
+                .iter()
+                .map(|t| (*t, label(t)))
+                .filter(|&(_, m)| m != 0 && m != 15)
+                .unzip();
+            assert!(crossed.len() > 100, "{equation}: {}", crossed.len());
+            assert_eq!(a.leaves, crossed, "{equation}");
+            assert_eq!(a.labels, labels, "{equation}");
+            assert_eq!(a.refined.leaves(), all.len(), "{equation}");
+            assert_eq!(a.refined.crossed(), crossed.len(), "{equation}");
+        }
     }
 
     /// A ball of radius 0.06 (with the unit ball) wholly inside one cube of the coarsest grid,
