@@ -151,7 +151,7 @@ pub struct Refinement {
     marked: HashSet<u64, BuildHasherDefault<PointHasher>>,
 }
 
-/// A hasher for lattice points and packed lattice points (a multiply per word; the keys are
+/// A hasher for lattice points, packed lattice points and edges of them (a multiply per word; the keys are
 /// well spread integers, and the tables are not exposed to chosen input).
 #[derive(Default)]
 pub struct PointHasher(u64);
@@ -167,6 +167,10 @@ impl Hasher for PointHasher {
     }
     fn write_u64(&mut self, v: u64) {
         self.0 = (self.0.rotate_left(21) ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+    fn write_u128(&mut self, v: u128) {
+        self.write_u64((v >> 64) as u64);
+        self.write_u64(v as u64);
     }
 }
 

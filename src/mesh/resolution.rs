@@ -141,6 +141,10 @@ pub fn depth_for(radius: f64, floor: f64, kind: SolidKind) -> u32 {
 
 type PointMap<V> = HashMap<u64, V, BuildHasherDefault<PointHasher>>;
 
+/// Whether an edge ([`extract::edge_key`]) crosses `φ = 0` twice ([`crossed_twice`], from
+/// its smaller packed end to the other).
+type EdgeMap = HashMap<u128, bool, BuildHasherDefault<PointHasher>>;
+
 /// `φ` at lattice points, computed once each.
 struct Values {
     lattice: Lattice,
@@ -241,39 +245,41 @@ pub fn refine(
             examiner.box_empty(lo, hi)
         })
         .collect();
-    let cube_empty: Vec<bool> = (0..n * n * n)
+    // Each cube's emptiness and, for the cubes not proven empty, φ's gradient at the centre
+    // and how far it strays over the cube (the cheap bound of Examiner::quiet), from one
+    // Taylor expansion about the cube's centre.
+    let (cube_empty, spreads): (Vec<bool>, Vec<Option<Spread>>) = (0..n * n * n)
         .into_par_iter()
         .map(|c| {
             let (x, y, z) = (c % n, c / n % n, c / (n * n));
             let block = x / BLOCK + blocks * (y / BLOCK + blocks * (z / BLOCK));
-            block_empty[block] || {
-                let (lo, hi) = cube_box(x, y, z, 1);
-                examiner.box_empty(lo, hi)
+            if block_empty[block] {
+                return (true, None);
             }
-        })
-        .collect();
-    // For the cubes not proven empty, φ's gradient at the centre and how far it strays
-    // over the cube (the cheap bound of Examiner::quiet).
-    let spreads: Vec<Option<Spread>> = (0..n * n * n)
-        .into_par_iter()
-        .map(|c| {
-            if cube_empty[c] {
-                return None;
-            }
-            let (x, y, z) = (c % n, c / n % n, c / (n * n));
             let (lo, hi) = cube_box(x, y, z, 1);
             let centre = 0.5 * (lo + hi);
-            let (value, gradient, spread) = examiner
+            let r = 0.5 * (hi - lo).max_element();
+            if examiner.outside_box(lo, hi) {
+                return (true, None);
+            }
+            let coef = examiner.taylor.coefficients(centre);
+            if examiner
                 .taylor
-                .gradient_spread(centre, 0.5 * (hi - lo).max_element());
+                .sums(&coef, centre, r)
+                .is_some_and(|sums| sums.proves_empty())
+            {
+                return (true, None);
+            }
+            let (value, gradient, spread) = examiner.taylor.spread(&coef, r);
             let f_sign = examiner.f_sign;
-            Some(Spread {
+            let spread = Spread {
                 gradient: f_sign * gradient,
                 spread,
                 margin: 1e-10 * (value.abs() + examiner.taylor.magnitude_bound(centre)),
-            })
+            };
+            (false, Some(spread))
         })
-        .collect();
+        .unzip();
     let examiner = Examiner {
         spreads,
         cube_side: side,
@@ -296,6 +302,7 @@ pub fn refine(
     let mut refined_for = [0usize; 3];
     let mut rounds = 0;
     let mut fresh = Vec::new();
+    let mut twice = EdgeMap::default();
     loop {
         if cancel.load(Ordering::Relaxed) {
             return None;
@@ -305,9 +312,34 @@ pub fn refine(
         }
         rounds += 1;
         values.fill(field, todo.iter().flat_map(|t| t.corners.into_iter()));
+        // Whether each edge of the crossed leaves is crossed twice (module doc, 2.): once
+        // for every edge, however many leaves share it, in any round.
+        let mut edges: Vec<u128> = todo
+            .par_iter()
+            .filter(|t| examiner.edges_matter(t, &values))
+            .flat_map_iter(|t| {
+                TET_EDGES.map(|(a, b)| extract::edge_key(t.corners[a], t.corners[b]))
+            })
+            .filter(|k| !twice.contains_key(k))
+            .collect();
+        edges.par_sort_unstable();
+        edges.dedup();
+        let crossed: Vec<bool> = edges
+            .par_iter()
+            .map(|&k| {
+                let (p, q) = (extract::unpack((k >> 64) as u64), extract::unpack(k as u64));
+                crossed_twice(
+                    field,
+                    lattice.position(p),
+                    lattice.position(q),
+                    examiner.shallow,
+                )
+            })
+            .collect();
+        twice.extend(edges.into_iter().zip(crossed));
         let verdicts: Vec<Option<Reason>> = todo
             .par_iter()
-            .map(|t| examiner.examine(t, &values))
+            .map(|t| examiner.examine(t, &values, &twice))
             .collect();
         fresh.clear();
         for (t, verdict) in todo.iter().zip(&verdicts) {
@@ -332,7 +364,11 @@ pub fn refine(
             .par_iter()
             .zip(before)
             .map(|(&c, old)| {
-                let old = if old.is_empty() { kuhn(c).to_vec() } else { old };
+                let old = if old.is_empty() {
+                    kuhn(c).to_vec()
+                } else {
+                    old
+                };
                 let (mut leaves, mut made, mut below) = (Vec::new(), Vec::new(), Vec::new());
                 for t in old {
                     if refinement.splits(&t) {
@@ -480,7 +516,7 @@ struct Examiner<'a> {
 }
 
 /// `∇φ` at a coarse cube's centre and, per axis, a bound on how far `∂_i φ` strays from it
-/// over the cube ([`Taylor::gradient_spread`]).
+/// over the cube ([`Taylor::spread`]).
 struct Spread {
     gradient: DVec3,
     spread: DVec3,
@@ -489,16 +525,18 @@ struct Spread {
 }
 
 impl Examiner<'_> {
-    /// Why `t` must be bisected, or `None` if it passes every check.
-    fn examine(&self, t: &Tet, values: &Values) -> Option<Reason> {
+    /// Whether `examine` asks whether `t`'s edges are crossed twice: its box meets the clip
+    /// ball and its corners' signs of `φ` differ.
+    fn edges_matter(&self, t: &Tet, values: &Values) -> bool {
+        !self.outside_ball(t) && common_sign(&t.corners.map(|p| values.get(p))).is_none()
+    }
+
+    /// Why `t` must be bisected, or `None` if it passes every check; `twice` holds
+    /// [`crossed_twice`] for its edges if [`Examiner::edges_matter`].
+    fn examine(&self, t: &Tet, values: &Values, twice: &EdgeMap) -> Option<Reason> {
         let field = self.field;
         let radius = field.radius();
-        let (lo, hi) = t.bounds();
-        let (lo, hi) = (self.lattice.position(lo), self.lattice.position(hi));
-        let centre = 0.5 * (lo + hi);
-        let half = 0.5 * (hi - lo);
-        let nearest = (centre.abs() - half).max(DVec3::ZERO);
-        if nearest.length_squared() >= radius * radius {
+        if self.outside_ball(t) {
             return None;
         }
         let points = t.corners.map(|p| self.lattice.position(p));
@@ -511,7 +549,7 @@ impl Examiner<'_> {
             }
             None => {
                 for (a, b) in TET_EDGES {
-                    if crossed_twice(field, points[a], points[b], self.shallow) {
+                    if twice[&extract::edge_key(t.corners[a], t.corners[b])] {
                         return Some(Reason::EdgeCrossedTwice);
                     }
                 }
@@ -615,16 +653,19 @@ impl Examiner<'_> {
     /// largest half-side).
     fn box_empty(&self, lo: DVec3, hi: DVec3) -> bool {
         let centre = 0.5 * (lo + hi);
+        self.outside_box(lo, hi)
+            || self
+                .taylor
+                .at(centre, 0.5 * (hi - lo).max_element())
+                .is_some_and(|sums| sums.proves_empty())
+    }
+
+    /// Whether the box `lo`–`hi` lies wholly outside the clip ball.
+    fn outside_box(&self, lo: DVec3, hi: DVec3) -> bool {
+        let centre = 0.5 * (lo + hi);
         let nearest = (centre.abs() - 0.5 * (hi - lo)).max(DVec3::ZERO);
         let radius = self.field.radius();
-        if nearest.length_squared() >= radius * radius {
-            return true;
-        }
-        self.taylor
-            .at(centre, 0.5 * (hi - lo).max_element())
-            .is_some_and(|sums| {
-                sums.value.abs() - sums.linear - sums.quadratic > 1e-10 * sums.magnitude
-            })
+        nearest.length_squared() >= radius * radius
     }
 
     /// Whether the box of `t` lies wholly outside the clip ball.
@@ -807,6 +848,14 @@ const BINOMIAL: [[f64; MAX_DEGREE + 1]; MAX_DEGREE + 1] = {
     table
 };
 
+impl TaylorSums {
+    /// Whether `|f(c)|` exceeds every other term on the cube (with a margin for rounding):
+    /// `f` has no zero in it.
+    fn proves_empty(&self) -> bool {
+        self.value.abs() - self.linear - self.quadratic > 1e-10 * self.magnitude
+    }
+}
+
 /// Taylor coefficients of `f` (the surface's polynomial) about a point, summed by degree.
 struct Taylor {
     terms: Vec<([usize; 3], f64)>,
@@ -855,19 +904,26 @@ impl Taylor {
     /// The sums of the Taylor coefficients' magnitudes of `f` about `c` for the cube of
     /// half-side `r` (the same for `φ = −f`); `None` if not finite.
     fn at(&self, c: DVec3, r: f64) -> Option<TaylorSums> {
+        self.sums(&self.coefficients(c), c, r)
+    }
+
+    /// [`Taylor::at`] from the coefficients about `c` ([`Taylor::coefficients`]).
+    fn sums(&self, coef: &[f64], c: DVec3, r: f64) -> Option<TaylorSums> {
         let d = self.degree + 1;
-        let coef = self.coefficients(c);
-        let mut by_degree = vec![0.0f64; 3 * d];
+        let mut by_degree = [0.0f64; 3 * (MAX_DEGREE + 1)];
+        // Only the coefficients of total degree ≤ f's can be nonzero (the others are exact
+        // zeros, which would add nothing), summed in the same order.
         for l in 0..d {
-            for j in 0..d {
-                for i in 0..d {
-                    by_degree[i + j + l] += coef[i + d * (j + d * l)].abs();
+            for j in 0..d - l {
+                let row = &coef[d * (j + d * l)..][..d - j - l];
+                for (i, a) in row.iter().enumerate() {
+                    by_degree[i + j + l] += a.abs();
                 }
             }
         }
         let (mut linear, mut quadratic) = (0.0, 0.0);
         let mut power = 1.0;
-        for (k, s) in by_degree.iter().enumerate() {
+        for (k, s) in by_degree[..3 * d].iter().enumerate() {
             let term = s * power;
             match k {
                 0 => {}
@@ -888,23 +944,25 @@ impl Taylor {
     }
 
     /// `f(c)`, `∇f(c)` and, for each axis `i`, a bound `L_i` on `|∂_i f(x) − ∂_i f(c)|` over
-    /// the cube of half-side `r` about `c`: `Σ_{|α|≥2, α_i≥1} |a_α| α_i r^{|α|−1}`.
-    fn gradient_spread(&self, c: DVec3, r: f64) -> (f64, DVec3, DVec3) {
+    /// the cube of half-side `r` about `c`: `Σ_{|α|≥2, α_i≥1} |a_α| α_i r^{|α|−1}`, from the
+    /// coefficients about `c` ([`Taylor::coefficients`]).
+    fn spread(&self, coef: &[f64], r: f64) -> (f64, DVec3, DVec3) {
         let d = self.degree + 1;
-        let coef = self.coefficients(c);
         let mut spread = [0.0f64; 3];
-        let mut powers = vec![1.0f64; 3 * d];
+        let mut powers = [1.0f64; 3 * (MAX_DEGREE + 1)];
         for k in 1..3 * d {
             powers[k] = powers[k - 1] * r;
         }
+        // As in `sums`: the coefficients beyond f's degree are exact zeros.
         for l in 0..d {
-            for j in 0..d {
-                for i in 0..d {
+            for j in 0..d - l {
+                let row = &coef[d * (j + d * l)..][..d - j - l];
+                for (i, c) in row.iter().enumerate() {
                     let total = i + j + l;
                     if total < 2 {
                         continue;
                     }
-                    let a = coef[i + d * (j + d * l)].abs() * powers[total - 1];
+                    let a = c.abs() * powers[total - 1];
                     spread[0] += a * i as f64;
                     spread[1] += a * j as f64;
                     spread[2] += a * l as f64;
@@ -924,23 +982,27 @@ impl Taylor {
         const N: usize = MAX_DEGREE + 1;
         let d = self.degree + 1;
         let mut coef = vec![0.0f64; d * d * d];
-        // table[a][i] = C(a, i)·x^(a−i): the coefficient of d^i in (x + d)^a.
-        let table = |x: f64| {
+        // Row `a` of a table (at `a·(a + 1)/2`) holds C(a, i)·x^(a−i) for `i ≤ a`: the
+        // coefficient of d^i in (x + d)^a.
+        let table = |x: f64, out: &mut [f64; N * (N + 1) / 2]| {
             let mut powers = [1.0f64; N];
             for i in 1..d {
                 powers[i] = powers[i - 1] * x;
             }
-            let mut out = [[0.0f64; N]; N];
-            for (a, row) in out.iter_mut().enumerate().take(d) {
-                for (i, o) in row.iter_mut().enumerate().take(a + 1) {
+            for a in 0..d {
+                let row = &mut out[a * (a + 1) / 2..][..=a];
+                for (i, o) in row.iter_mut().enumerate() {
                     *o = BINOMIAL[a][i] * powers[a - i];
                 }
             }
-            out
         };
-        let (tx, ty, tz) = (table(c.x), table(c.y), table(c.z));
+        let mut tables = [[0.0f64; N * (N + 1) / 2]; 3];
+        table(c.x, &mut tables[0]);
+        table(c.y, &mut tables[1]);
+        table(c.z, &mut tables[2]);
+        let row = |t: usize, a: usize| &tables[t][a * (a + 1) / 2..][..=a];
         for &([a, b, e], k) in &self.terms {
-            let (px, py, pz) = (&tx[a][..=a], &ty[b][..=b], &tz[e][..=e]);
+            let (px, py, pz) = (row(0, a), row(1, b), row(2, e));
             for (j, y) in py.iter().enumerate() {
                 for (l, z) in pz.iter().enumerate() {
                     let yz = k * y * z;
@@ -1051,10 +1113,7 @@ mod tests {
     fn the_marched_leaves_are_every_leaf_whose_labels_differ() {
         for (equation, radius) in [
             ("x^2 + y^2 + z^2 = 4", 1.0),
-            (
-                "(x^2 + y^2 + z^2 + 0.64 - 0.09)^2 = 2.56*(x^2 + y^2)",
-                1.0,
-            ),
+            ("(x^2 + y^2 + z^2 + 0.64 - 0.09)^2 = 2.56*(x^2 + y^2)", 1.0),
         ] {
             let f = field(equation, radius);
             let tolerance = 0.01;
