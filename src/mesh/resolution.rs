@@ -133,7 +133,11 @@ pub fn depth_for(radius: f64, floor: f64, kind: SolidKind) -> u32 {
         return 0;
     }
     let mut depth = 0;
-    while floor * f64::from(2u32 << depth) <= radius / FIRST_STEP_DIVISOR && depth < 12 {
+    let divisor: f64 = std::env::var("KARDIA_TMP_DIVISOR")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(FIRST_STEP_DIVISOR);
+    while floor * f64::from(2u32 << depth) <= radius / divisor && depth < 12 {
         depth += 1;
     }
     depth
@@ -287,18 +291,22 @@ pub fn refine(
         ..examiner
     };
     // Each coarse cube's leaves, in the order of `Refinement::leaves` (empty while they are
-    // still its six Kuhn tetrahedra). The leaves to examine are those not yet examined: at
-    // first the Kuhn tetrahedra of the cubes not proven empty, then the leaves each round's
-    // bisections make (below the finest level), wherever they are.
+    // still its six Kuhn tetrahedra), each with whether it is known to be free of `φ = 0`
+    // (module doc, 3.: in a cube proven empty, or proven itself or below a tetrahedron
+    // proven so, whose halves need no proof). The leaves to examine are those not yet
+    // examined: at first the Kuhn tetrahedra of the cubes not proven empty, then the leaves
+    // each round's bisections make (below the finest level), wherever they are; `todo`
+    // holds them as (cube, index among its leaves).
     let kuhn = |c: usize| {
         let (x, y, z) = (c % n, c / n % n, c / (n * n));
         kuhn_tetrahedra([x, y, z].map(|v| v as i32 * side), side)
     };
-    let mut cube_leaves: Vec<Vec<Tet>> = vec![Vec::new(); n * n * n];
-    let mut todo: Vec<Tet> = (0..n * n * n)
-        .filter(|&c| !cube_empty[c])
-        .flat_map(kuhn)
-        .collect();
+    let mut cube_leaves: Vec<Vec<(Tet, bool)>> = vec![Vec::new(); n * n * n];
+    let mut todo: Vec<(usize, usize)> = Vec::new();
+    for c in (0..n * n * n).filter(|&c| !cube_empty[c]) {
+        cube_leaves[c] = kuhn(c).map(|t| (t, false)).to_vec();
+        todo.extend((0..6).map(|i| (c, i)));
+    }
     let mut refined_for = [0usize; 3];
     let mut rounds = 0;
     let mut fresh = Vec::new();
@@ -311,13 +319,18 @@ pub fn refine(
             break;
         }
         rounds += 1;
-        values.fill(field, todo.iter().flat_map(|t| t.corners.into_iter()));
+        let leaf = |&(c, i): &(usize, usize)| cube_leaves[c][i];
+        values.fill(
+            field,
+            todo.iter().flat_map(|e| leaf(e).0.corners.into_iter()),
+        );
         // Whether each edge of the crossed leaves is crossed twice (module doc, 2.): once
         // for every edge, however many leaves share it, in any round.
         let mut edges: Vec<u128> = todo
             .par_iter()
-            .filter(|t| examiner.edges_matter(t, &values))
-            .flat_map_iter(|t| {
+            .map(leaf)
+            .filter(|(t, _)| examiner.edges_matter(t, &values))
+            .flat_map_iter(|(t, _)| {
                 TET_EDGES.map(|(a, b)| extract::edge_key(t.corners[a], t.corners[b]))
             })
             .filter(|k| !twice.contains_key(k))
@@ -337,14 +350,19 @@ pub fn refine(
             })
             .collect();
         twice.extend(edges.into_iter().zip(crossed));
-        let verdicts: Vec<Option<Reason>> = todo
+        let verdicts: Vec<(Option<Reason>, bool)> = todo
             .par_iter()
-            .map(|t| examiner.examine(t, &values, &twice))
+            .map(|e| {
+                let (t, quiet) = leaf(e);
+                examiner.examine(&t, quiet, &values, &twice)
+            })
             .collect();
         fresh.clear();
-        for (t, verdict) in todo.iter().zip(&verdicts) {
+        for (&(c, i), &(verdict, quiet)) in todo.iter().zip(&verdicts) {
+            let (t, known) = &mut cube_leaves[c][i];
+            *known = quiet;
             if let Some(reason) = verdict {
-                refined_for[*reason as usize] += 1;
+                refined_for[reason as usize] += 1;
                 refinement.mark_collecting(t.midpoint(), &mut fresh);
             }
         }
@@ -356,28 +374,32 @@ pub fn refine(
             .collect();
         dirty.sort_unstable();
         dirty.dedup();
-        let before: Vec<Vec<Tet>> = dirty
+        let before: Vec<Vec<(Tet, bool)>> = dirty
             .iter()
             .map(|&c| std::mem::take(&mut cube_leaves[c]))
             .collect();
-        let rebuilt: Vec<(Vec<Tet>, Vec<Tet>)> = dirty
+        let rebuilt: Vec<(Vec<(Tet, bool)>, Vec<usize>)> = dirty
             .par_iter()
             .zip(before)
             .map(|(&c, old)| {
                 let old = if old.is_empty() {
-                    kuhn(c).to_vec()
+                    kuhn(c).map(|t| (t, cube_empty[c])).to_vec()
                 } else {
                     old
                 };
                 let (mut leaves, mut made, mut below) = (Vec::new(), Vec::new(), Vec::new());
-                for t in old {
+                for (t, quiet) in old {
                     if refinement.splits(&t) {
                         below.clear();
                         refinement.expand(t, &mut below);
-                        leaves.extend_from_slice(&below);
-                        made.extend(below.iter().filter(|c| c.level < finest));
+                        for &b in &below {
+                            if b.level < finest {
+                                made.push(leaves.len());
+                            }
+                            leaves.push((b, quiet));
+                        }
                     } else {
-                        leaves.push(t);
+                        leaves.push((t, quiet));
                     }
                 }
                 (leaves, made)
@@ -386,7 +408,7 @@ pub fn refine(
         todo.clear();
         for (&c, (leaves, made)) in dirty.iter().zip(rebuilt) {
             cube_leaves[c] = leaves;
-            todo.extend(made);
+            todo.extend(made.into_iter().map(|i| (c, i)));
         }
         progress(rounds.min(total - 1), total);
     }
@@ -419,11 +441,11 @@ pub fn refine(
                 kept.extend(kuhn(c));
             }
         } else {
-            for t in leaves {
+            for (t, _) in leaves {
                 refined.leaves_by_level[t.level as usize] += 1;
             }
             if !skip {
-                kept.extend_from_slice(leaves);
+                kept.extend(leaves.iter().map(|&(t, _)| t));
             }
         }
     }
@@ -531,30 +553,47 @@ impl Examiner<'_> {
         !self.outside_ball(t) && common_sign(&t.corners.map(|p| values.get(p))).is_none()
     }
 
-    /// Why `t` must be bisected, or `None` if it passes every check; `twice` holds
-    /// [`crossed_twice`] for its edges if [`Examiner::edges_matter`].
-    fn examine(&self, t: &Tet, values: &Values, twice: &EdgeMap) -> Option<Reason> {
-        let field = self.field;
-        let radius = field.radius();
+    /// Why `t` must be bisected, or `None` if it passes every check, and whether it is now
+    /// known to be free of `φ = 0` (module doc, 3.); `twice` holds [`crossed_twice`] for its
+    /// edges if [`Examiner::edges_matter`]. A tetrahedron already `known_quiet` (in a cube
+    /// or below a tetrahedron proven so) needs no proof again: the virtual bisection of
+    /// [`Examiner::quiet`] for it is part of that for its ancestor.
+    fn examine(
+        &self,
+        t: &Tet,
+        known_quiet: bool,
+        values: &Values,
+        twice: &EdgeMap,
+    ) -> (Option<Reason>, bool) {
         if self.outside_ball(t) {
-            return None;
+            return (None, known_quiet);
         }
         let points = t.corners.map(|p| self.lattice.position(p));
         let phi = t.corners.map(|p| values.get(p));
-        match common_sign(&phi) {
+        let quiet = match common_sign(&phi) {
             Some(sign) => {
-                if !self.quiet(t, sign, phi) {
-                    return Some(Reason::SurfaceUnproven);
+                if !known_quiet && !self.quiet(t, sign, phi) {
+                    return (Some(Reason::SurfaceUnproven), false);
                 }
+                true
             }
             None => {
                 for (a, b) in TET_EDGES {
                     if twice[&extract::edge_key(t.corners[a], t.corners[b])] {
-                        return Some(Reason::EdgeCrossedTwice);
+                        return (Some(Reason::EdgeCrossedTwice), false);
                     }
                 }
+                false
             }
-        }
+        };
+        (self.deviation(points, phi), quiet)
+    }
+
+    /// [`Reason::Deviation`] if a triangle marching tetrahedra makes in the tetrahedron of
+    /// corners `points` (values `phi`) deviates beyond the share allowed (module doc, 1.).
+    fn deviation(&self, points: [DVec3; 4], phi: [f64; 4]) -> Option<Reason> {
+        let field = self.field;
+        let radius = field.radius();
         let r2 = radius * radius;
         let labels =
             std::array::from_fn::<bool, 4, _>(|i| points[i].length_squared() < r2 && phi[i] < 0.0);
@@ -860,6 +899,11 @@ impl TaylorSums {
 struct Taylor {
     terms: Vec<([usize; 3], f64)>,
     degree: usize,
+    /// Where the row of coefficients `a_(·,j,l)` (`i ≤ degree − j − l`) starts in
+    /// [`Taylor::coefficients`], at `j + d·l` (`d` the degree + 1).
+    rows: Vec<usize>,
+    /// How many coefficients of total degree ≤ `degree` there are.
+    size: usize,
 }
 
 impl Taylor {
@@ -891,6 +935,15 @@ struct TaylorSums {
 impl Taylor {
     fn new(field: &Field) -> Self {
         let f = field.surface_polynomial();
+        let d = f.degree + 1;
+        let mut rows = vec![usize::MAX; d * d];
+        let mut size = 0;
+        for l in 0..d {
+            for j in 0..d - l {
+                rows[j + d * l] = size;
+                size += d - j - l;
+            }
+        }
         Self {
             terms: f
                 .terms
@@ -898,6 +951,8 @@ impl Taylor {
                 .map(|t| (t.e.map(usize::from), t.c))
                 .collect(),
             degree: f.degree,
+            rows,
+            size,
         }
     }
 
@@ -911,11 +966,9 @@ impl Taylor {
     fn sums(&self, coef: &[f64], c: DVec3, r: f64) -> Option<TaylorSums> {
         let d = self.degree + 1;
         let mut by_degree = [0.0f64; 3 * (MAX_DEGREE + 1)];
-        // Only the coefficients of total degree ≤ f's can be nonzero (the others are exact
-        // zeros, which would add nothing), summed in the same order.
         for l in 0..d {
             for j in 0..d - l {
-                let row = &coef[d * (j + d * l)..][..d - j - l];
+                let row = &coef[self.rows[j + d * l]..][..d - j - l];
                 for (i, a) in row.iter().enumerate() {
                     by_degree[i + j + l] += a.abs();
                 }
@@ -933,7 +986,7 @@ impl Taylor {
             power *= r;
         }
         let value = coef[0];
-        let gradient = DVec3::new(coef[1], coef[d], coef[d * d]);
+        let gradient = self.gradient(coef);
         (linear + quadratic).is_finite().then_some(TaylorSums {
             value,
             gradient,
@@ -953,10 +1006,9 @@ impl Taylor {
         for k in 1..3 * d {
             powers[k] = powers[k - 1] * r;
         }
-        // As in `sums`: the coefficients beyond f's degree are exact zeros.
         for l in 0..d {
             for j in 0..d - l {
-                let row = &coef[d * (j + d * l)..][..d - j - l];
+                let row = &coef[self.rows[j + d * l]..][..d - j - l];
                 for (i, c) in row.iter().enumerate() {
                     let total = i + j + l;
                     if total < 2 {
@@ -969,44 +1021,42 @@ impl Taylor {
                 }
             }
         }
-        (
-            coef[0],
-            DVec3::new(coef[1], coef[d], coef[d * d]),
-            DVec3::from_array(spread),
-        )
+        (coef[0], self.gradient(coef), DVec3::from_array(spread))
     }
 
-    /// The Taylor coefficients of `f` about `c`: `a_(i,j,l)` at `i + d·(j + d·l)`, `d` the
-    /// degree + 1.
+    /// `∇f` at the centre: the coefficients of degree 1 ([`Taylor::coefficients`]).
+    fn gradient(&self, coef: &[f64]) -> DVec3 {
+        let d = self.degree + 1;
+        DVec3::new(coef[1], coef[self.rows[1]], coef[self.rows[d]])
+    }
+
+    /// The Taylor coefficients of `f` about `c`, those of total degree ≤ f's (the others
+    /// are zero): `a_(i,j,l)` at `rows[j + d·l] + i`, `d` the degree + 1 (by `l`, then `j`,
+    /// then `i`).
     fn coefficients(&self, c: DVec3) -> Vec<f64> {
         const N: usize = MAX_DEGREE + 1;
         let d = self.degree + 1;
-        let mut coef = vec![0.0f64; d * d * d];
-        // Row `a` of a table (at `a·(a + 1)/2`) holds C(a, i)·x^(a−i) for `i ≤ a`: the
-        // coefficient of d^i in (x + d)^a.
-        let table = |x: f64, out: &mut [f64; N * (N + 1) / 2]| {
+        let mut coef = vec![0.0f64; self.size];
+        // Row `a` of an axis's table (at `a·(a + 1)/2` within it) holds C(a, i)·x^(a−i) for
+        // `i ≤ a`: the coefficient of d^i in (x + d)^a.
+        let per_axis = d * (d + 1) / 2;
+        let mut tables = Vec::with_capacity(3 * per_axis);
+        for x in [c.x, c.y, c.z] {
             let mut powers = [1.0f64; N];
             for i in 1..d {
                 powers[i] = powers[i - 1] * x;
             }
             for a in 0..d {
-                let row = &mut out[a * (a + 1) / 2..][..=a];
-                for (i, o) in row.iter_mut().enumerate() {
-                    *o = BINOMIAL[a][i] * powers[a - i];
-                }
+                tables.extend((0..=a).map(|i| BINOMIAL[a][i] * powers[a - i]));
             }
-        };
-        let mut tables = [[0.0f64; N * (N + 1) / 2]; 3];
-        table(c.x, &mut tables[0]);
-        table(c.y, &mut tables[1]);
-        table(c.z, &mut tables[2]);
-        let row = |t: usize, a: usize| &tables[t][a * (a + 1) / 2..][..=a];
+        }
+        let row = |axis: usize, a: usize| &tables[axis * per_axis + a * (a + 1) / 2..][..=a];
         for &([a, b, e], k) in &self.terms {
             let (px, py, pz) = (row(0, a), row(1, b), row(2, e));
             for (j, y) in py.iter().enumerate() {
                 for (l, z) in pz.iter().enumerate() {
                     let yz = k * y * z;
-                    let row = &mut coef[d * (j + d * l)..][..=a];
+                    let row = &mut coef[self.rows[j + d * l]..][..=a];
                     for (o, x) in row.iter_mut().zip(px) {
                         *o += yz * x;
                     }
