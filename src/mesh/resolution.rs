@@ -33,6 +33,15 @@
 //! round examines the leaves made by the last (in parallel; the marks are a set, so the
 //! result does not depend on the number of threads).
 //!
+//! The work is kept to what can change the mesh: the leaves are kept per coarse cube, and a
+//! round rebuilds only the cubes holding an edge it marked; a leaf in a cube proven empty, or
+//! below a tetrahedron proven free of surface by 3., is not proven again; each edge's double
+//! crossing (2.) and each polygon edge's crossing (1.) are computed once, by edge, whatever
+//! the number of leaves sharing it, and the crossings are handed on to marching tetrahedra;
+//! and the cubes proven empty that lie wholly inside or wholly outside the clip ball, where
+//! every corner has the same label, are neither labelled nor marched (a cube proven empty
+//! that the sphere cuts holds cap triangles and is kept).
+//!
 //! What this proves: within the ball, no piece of the surface that sampling at the floor
 //! step would see lies inside a leaf whose corners agree (a small component, a bubble, a
 //! bulge through a face), and no edge of a crossed leaf passes through the surface twice but
@@ -45,7 +54,7 @@
 //! the floor step ([`super::extract::march`]).
 
 use super::bisection::{kuhn_tetrahedra, Point, PointHasher, Refinement, Tet, TET_EDGES};
-use super::extract::{self, marching_table, Grid, Lattice, TablePolygon};
+use super::extract::{self, marching_table, Crossings, Grid, Lattice, TablePolygon};
 use super::field::{Field, SolidKind, VertexKind};
 use super::TriangleMesh;
 use crate::geometry::DVec3;
@@ -133,11 +142,7 @@ pub fn depth_for(radius: f64, floor: f64, kind: SolidKind) -> u32 {
         return 0;
     }
     let mut depth = 0;
-    let divisor: f64 = std::env::var("KARDIA_TMP_DIVISOR")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(FIRST_STEP_DIVISOR);
-    while floor * f64::from(2u32 << depth) <= radius / divisor && depth < 12 {
+    while floor * f64::from(2u32 << depth) <= radius / FIRST_STEP_DIVISOR && depth < 12 {
         depth += 1;
     }
     depth
@@ -190,6 +195,9 @@ pub struct Adaptive {
     pub labels: Vec<u8>,
     /// Where the lattice lies in object space.
     pub lattice: Lattice,
+    /// The crossings of edges the examinations placed vertices on ([`Field::crossing`] from
+    /// the inside end), some of those marching tetrahedra needs.
+    pub crossings: Crossings,
     /// What was made.
     pub refined: Refined,
 }
@@ -311,6 +319,7 @@ pub fn refine(
     let mut rounds = 0;
     let mut fresh = Vec::new();
     let mut twice = EdgeMap::default();
+    let mut crossings = Crossings::default();
     loop {
         if cancel.load(Ordering::Relaxed) {
             return None;
@@ -350,11 +359,44 @@ pub fn refine(
             })
             .collect();
         twice.extend(edges.into_iter().zip(crossed));
-        let verdicts: Vec<(Option<Reason>, bool)> = todo
+        let checked: Vec<(Checked, bool)> = todo
             .par_iter()
             .map(|e| {
                 let (t, quiet) = leaf(e);
                 examiner.examine(&t, quiet, &values, &twice)
+            })
+            .collect();
+        // Where the boundary crosses each edge of the polygons of the leaves that passed
+        // (module doc, 1.): once for every edge, from its inside end, in any round (and
+        // again in marching tetrahedra).
+        let mut ends: Vec<(u128, Point, Point)> = todo
+            .par_iter()
+            .zip(&checked)
+            .filter_map(|(e, &(checked, _))| match checked {
+                Checked::Pass { case } => Some((leaf(e).0, examiner.table[case].as_ref()?)),
+                Checked::Bisect(_) => None,
+            })
+            .flat_map_iter(|(t, polygon)| {
+                polygon.iter().map(move |&[i, j]| {
+                    let (a, b) = (t.corners[i as usize], t.corners[j as usize]);
+                    (extract::edge_key(a, b), a, b)
+                })
+            })
+            .filter(|(k, _, _)| !crossings.contains_key(k))
+            .collect();
+        ends.par_sort_unstable_by_key(|e| e.0);
+        ends.dedup_by_key(|e| e.0);
+        let placed: Vec<(f64, VertexKind)> = ends
+            .par_iter()
+            .map(|&(_, a, b)| field.crossing(lattice.position(a), lattice.position(b)))
+            .collect();
+        crossings.extend(ends.into_iter().map(|e| e.0).zip(placed));
+        let verdicts: Vec<(Option<Reason>, bool)> = todo
+            .par_iter()
+            .zip(&checked)
+            .map(|(e, &(checked, quiet))| match checked {
+                Checked::Bisect(reason) => (Some(reason), quiet),
+                Checked::Pass { case } => (examiner.deviation(&leaf(e).0, case, &crossings), quiet),
             })
             .collect();
         fresh.clear();
@@ -473,6 +515,7 @@ pub fn refine(
         leaves,
         labels,
         lattice,
+        crossings,
         refined,
     })
 }
@@ -510,11 +553,22 @@ pub fn mesh_adaptive(
         adaptive.lattice,
         &adaptive.leaves,
         &adaptive.labels,
+        &adaptive.crossings,
         cancel,
     )?;
     let total = 3 * depth as usize + 2;
     progress(total, total);
     Some((mesh, kinds, adaptive.refined))
+}
+
+/// What the checks 2. and 3. of the module doc found for a tetrahedron.
+#[derive(Debug, Clone, Copy)]
+enum Checked {
+    /// It must be bisected.
+    Bisect(Reason),
+    /// It passes them; `case` holds its corners' labels (bit `k` for corner `k`, as in the
+    /// marching table), whose polygon's triangles check 1. measures.
+    Pass { case: usize },
 }
 
 /// The checks of the module doc for one tetrahedron.
@@ -564,46 +618,47 @@ impl Examiner<'_> {
         known_quiet: bool,
         values: &Values,
         twice: &EdgeMap,
-    ) -> (Option<Reason>, bool) {
+    ) -> (Checked, bool) {
         if self.outside_ball(t) {
-            return (None, known_quiet);
+            return (Checked::Pass { case: 0 }, known_quiet);
         }
         let points = t.corners.map(|p| self.lattice.position(p));
         let phi = t.corners.map(|p| values.get(p));
         let quiet = match common_sign(&phi) {
             Some(sign) => {
                 if !known_quiet && !self.quiet(t, sign, phi) {
-                    return (Some(Reason::SurfaceUnproven), false);
+                    return (Checked::Bisect(Reason::SurfaceUnproven), false);
                 }
                 true
             }
             None => {
                 for (a, b) in TET_EDGES {
                     if twice[&extract::edge_key(t.corners[a], t.corners[b])] {
-                        return (Some(Reason::EdgeCrossedTwice), false);
+                        return (Checked::Bisect(Reason::EdgeCrossedTwice), false);
                     }
                 }
                 false
             }
         };
-        (self.deviation(points, phi), quiet)
-    }
-
-    /// [`Reason::Deviation`] if a triangle marching tetrahedra makes in the tetrahedron of
-    /// corners `points` (values `phi`) deviates beyond the share allowed (module doc, 1.).
-    fn deviation(&self, points: [DVec3; 4], phi: [f64; 4]) -> Option<Reason> {
-        let field = self.field;
-        let radius = field.radius();
-        let r2 = radius * radius;
+        let r2 = self.field.radius() * self.field.radius();
         let labels =
             std::array::from_fn::<bool, 4, _>(|i| points[i].length_squared() < r2 && phi[i] < 0.0);
         let case = (0..4).fold(0usize, |m, i| m | usize::from(labels[i]) << i);
+        (Checked::Pass { case }, quiet)
+    }
+
+    /// [`Reason::Deviation`] if a triangle marching tetrahedra makes in `t` (its corners'
+    /// labels `case`, as in [`Checked::Pass`]) deviates beyond the share allowed (module doc,
+    /// 1.); `crossings` holds its polygon's edges' crossings.
+    fn deviation(&self, t: &Tet, case: usize, crossings: &Crossings) -> Option<Reason> {
+        let field = self.field;
         let polygon = self.table[case].as_ref()?;
         let placed: Vec<(DVec3, VertexKind)> = polygon
             .iter()
             .map(|&[i, j]| {
-                let (a, b) = (points[i as usize], points[j as usize]);
-                let (s, kind) = field.crossing(a, b);
+                let (p, q) = (t.corners[i as usize], t.corners[j as usize]);
+                let (a, b) = (self.lattice.position(p), self.lattice.position(q));
+                let (s, kind) = crossings[&extract::edge_key(p, q)];
                 (a + s * (b - a), kind)
             })
             .collect();
