@@ -150,6 +150,9 @@ pub fn depth_for(radius: f64, floor: f64, kind: SolidKind) -> u32 {
 
 type PointMap<V> = HashMap<u64, V, BuildHasherDefault<PointHasher>>;
 
+/// A coarse cube's leaves in order, each with whether it is known to be free of `φ = 0`.
+type CubeLeaves = Vec<(Tet, bool)>;
+
 /// Whether an edge ([`extract::edge_key`]) crosses `φ = 0` twice ([`crossed_twice`], from
 /// its smaller packed end to the other).
 type EdgeMap = HashMap<u128, bool, BuildHasherDefault<PointHasher>>;
@@ -309,7 +312,7 @@ pub fn refine(
         let (x, y, z) = (c % n, c / n % n, c / (n * n));
         kuhn_tetrahedra([x, y, z].map(|v| v as i32 * side), side)
     };
-    let mut cube_leaves: Vec<Vec<(Tet, bool)>> = vec![Vec::new(); n * n * n];
+    let mut cube_leaves: Vec<CubeLeaves> = vec![Vec::new(); n * n * n];
     let mut todo: Vec<(usize, usize)> = Vec::new();
     for c in (0..n * n * n).filter(|&c| !cube_empty[c]) {
         cube_leaves[c] = kuhn(c).map(|t| (t, false)).to_vec();
@@ -416,11 +419,11 @@ pub fn refine(
             .collect();
         dirty.sort_unstable();
         dirty.dedup();
-        let before: Vec<Vec<(Tet, bool)>> = dirty
+        let before: Vec<CubeLeaves> = dirty
             .iter()
             .map(|&c| std::mem::take(&mut cube_leaves[c]))
             .collect();
-        let rebuilt: Vec<(Vec<(Tet, bool)>, Vec<usize>)> = dirty
+        let rebuilt: Vec<(CubeLeaves, Vec<usize>)> = dirty
             .par_iter()
             .zip(before)
             .map(|(&c, old)| {
