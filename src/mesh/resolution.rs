@@ -805,12 +805,13 @@ impl Examiner<'_> {
 
 /// The largest first-order deviation of the triangle `corners` (vertex kinds `kinds`) from
 /// the boundary at its centroid and edge midpoints (object units; module doc, 1.): infinite
-/// where `∇φ` vanishes (a node).
+/// where `∇φ` vanishes (a node). `∇φ` is exact for the inside and outside
+/// ([`Field::value_and_gradient`]).
 pub fn triangle_deviation(field: &Field, corners: [DVec3; 3], kinds: [VertexKind; 3]) -> f64 {
     let h = 1e-7 * field.radius();
     let off_surface = |p: DVec3| {
-        let g = field.gradient(p, h).length();
-        let v = field.value(p).abs();
+        let (v, g) = field.value_and_gradient(p, h);
+        let (v, g) = (v.abs(), g.length());
         if v == 0.0 {
             0.0
         } else if g > 0.0 {
