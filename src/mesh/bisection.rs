@@ -151,7 +151,7 @@ pub struct Refinement {
     marked: HashSet<u64, BuildHasherDefault<PointHasher>>,
 }
 
-/// A hasher for lattice points and packed lattice points (a multiply per word; the keys are
+/// A hasher for lattice points, packed lattice points and edges of them (a multiply per word; the keys are
 /// well spread integers, and the tables are not exposed to chosen input).
 #[derive(Default)]
 pub struct PointHasher(u64);
@@ -167,6 +167,10 @@ impl Hasher for PointHasher {
     }
     fn write_u64(&mut self, v: u64) {
         self.0 = (self.0.rotate_left(21) ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+    fn write_u128(&mut self, v: u128) {
+        self.write_u64((v >> 64) as u64);
+        self.write_u64(v as u64);
     }
 }
 
@@ -306,11 +310,18 @@ impl Refinement {
     /// Marks the refinement edge of midpoint `m` and, recursively, every diamond it needs
     /// refined first; returns how many edges were newly marked.
     pub fn mark(&mut self, m: Point) -> usize {
+        let mut fresh = Vec::new();
+        self.mark_collecting(m, &mut fresh);
+        fresh.len()
+    }
+
+    /// [`Refinement::mark`], appending to `fresh` the midpoint of every edge newly marked
+    /// (the only tetrahedra that may split are those whose refinement edge is among them).
+    pub fn mark_collecting(&mut self, m: Point, fresh: &mut Vec<Point>) {
         let mut stack = vec![m];
-        let mut added = 0;
         while let Some(p) = stack.pop() {
             if self.marked.insert(pack(p)) {
-                added += 1;
+                fresh.push(p);
                 stack.extend(
                     self.parents(p)
                         .into_iter()
@@ -318,7 +329,6 @@ impl Refinement {
                 );
             }
         }
-        added
     }
 
     /// Whether `t` is bisected: below the finest level with its refinement edge marked.

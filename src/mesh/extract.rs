@@ -13,12 +13,13 @@
 //! clip sphere.
 
 pub use super::bisection::{pack, unpack};
-use super::bisection::{Point, Tet, AXIS_ORDERS};
+use super::bisection::{Point, PointHasher, Tet, AXIS_ORDERS};
 use super::field::{Field, VertexKind};
 use super::TriangleMesh;
 use crate::geometry::DVec3;
 use rayon::prelude::*;
 use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 /// The six tetrahedra of the unit cube (corner offsets as bits x = 1, y = 2, z = 4),
@@ -259,6 +260,7 @@ pub fn march_cancellable(
         ends,
         position,
         |v| labels[v],
+        |_| None,
         cancelled,
     );
     tick();
@@ -271,8 +273,10 @@ pub fn march_cancellable(
 /// edge placed on the exact boundary ([`Field::crossing`]); a side joining a surface vertex
 /// to a cap vertex split at the crease point in the face the two edges span (the same face
 /// of both tetrahedra that share it, so the split is the same in both); each polygon fanned
-/// from its first crease vertex or else its first vertex (see the module doc). `None` once
-/// `cancelled()` (read before each vertex is placed).
+/// from its first crease vertex or else its first vertex (see the module doc); `known(key)`,
+/// where `Some`, is the edge's crossing already found (as [`Field::crossing`] would find
+/// it). `None` once `cancelled()` (read before each vertex is placed).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn assemble<K, P>(
     field: &Field,
     polygons: &[[K; 4]],
@@ -280,6 +284,7 @@ pub(crate) fn assemble<K, P>(
     ends: impl Fn(K) -> (P, P) + Sync,
     position: impl Fn(P) -> DVec3 + Sync,
     inside: impl Fn(P) -> bool + Sync,
+    known: impl Fn(K) -> Option<(f64, VertexKind)> + Sync,
     cancelled: impl Fn() -> bool + Sync,
 ) -> Option<(TriangleMesh, Vec<VertexKind>)>
 where
@@ -304,7 +309,7 @@ where
             let (lower, upper) = ends(k);
             let (p, q) = (position(lower), position(upper));
             let (a, b) = if inside(lower) { (p, q) } else { (q, p) };
-            let (s, kind) = field.crossing(a, b);
+            let (s, kind) = known(k).unwrap_or_else(|| field.crossing(a, b));
             Some((a + s * (b - a), kind))
         })
         .collect::<Option<_>>()?;
@@ -433,13 +438,15 @@ impl Lattice {
 /// refinement (object space, with each vertex's kind), on `lattice`; `labels[i]`: bit `k` set
 /// when corner `k` of leaf `i` is inside ([`Field::inside`] at its position; the same for a
 /// lattice point in every leaf). Closed, 2-manifold, outward and free of self-intersections
-/// as on a uniform grid (module doc): the leaves share whole faces. `None` once `cancel` is
-/// set.
+/// as on a uniform grid (module doc): the leaves share whole faces. An edge in `crossings`
+/// takes its crossing from there (it must be that edge's [`Field::crossing`] from its inside
+/// end). `None` once `cancel` is set.
 pub fn march_leaves(
     field: &Field,
     lattice: Lattice,
     leaves: &[Tet],
     labels: &[u8],
+    crossings: &Crossings,
     cancel: &AtomicBool,
 ) -> Option<(TriangleMesh, Vec<VertexKind>)> {
     let cancelled = || cancel.load(Ordering::Relaxed);
@@ -488,9 +495,14 @@ pub fn march_leaves(
         ends,
         |p| lattice.position(p),
         inside,
+        |k| crossings.get(&k).copied(),
         cancelled,
     )
 }
+
+/// Where the boundary crosses edges of lattice points ([`edge_key`]): [`Field::crossing`]
+/// from the edge's inside end to its outside end, as [`march_leaves`] would place it.
+pub type Crossings = HashMap<u128, (f64, VertexKind), BuildHasherDefault<PointHasher>>;
 
 /// An edge of lattice points as one key: the two packed ends, the smaller first.
 pub fn edge_key(a: Point, b: Point) -> u128 {

@@ -33,6 +33,15 @@
 //! round examines the leaves made by the last (in parallel; the marks are a set, so the
 //! result does not depend on the number of threads).
 //!
+//! The work is kept to what can change the mesh: the leaves are kept per coarse cube, and a
+//! round rebuilds only the cubes holding an edge it marked; a leaf in a cube proven empty, or
+//! below a tetrahedron proven free of surface by 3., is not proven again; each edge's double
+//! crossing (2.) and each polygon edge's crossing (1.) are computed once, by edge, whatever
+//! the number of leaves sharing it, and the crossings are handed on to marching tetrahedra;
+//! and the cubes proven empty that lie wholly inside or wholly outside the clip ball, where
+//! every corner has the same label, are neither labelled nor marched (a cube proven empty
+//! that the sphere cuts holds cap triangles and is kept).
+//!
 //! What this proves: within the ball, no piece of the surface that sampling at the floor
 //! step would see lies inside a leaf whose corners agree (a small component, a bubble, a
 //! bulge through a face), and no edge of a crossed leaf passes through the surface twice but
@@ -44,8 +53,8 @@
 //! `φ` (degree twice `f`'s, a square less a sum of squares) is meshed on the uniform grid of
 //! the floor step ([`super::extract::march`]).
 
-use super::bisection::{Point, PointHasher, Refinement, Tet, TET_EDGES};
-use super::extract::{self, marching_table, Grid, Lattice, TablePolygon};
+use super::bisection::{kuhn_tetrahedra, Point, PointHasher, Refinement, Tet, TET_EDGES};
+use super::extract::{self, marching_table, Crossings, Grid, Lattice, TablePolygon};
 use super::field::{Field, SolidKind, VertexKind};
 use super::TriangleMesh;
 use crate::geometry::DVec3;
@@ -141,6 +150,13 @@ pub fn depth_for(radius: f64, floor: f64, kind: SolidKind) -> u32 {
 
 type PointMap<V> = HashMap<u64, V, BuildHasherDefault<PointHasher>>;
 
+/// A coarse cube's leaves in order, each with whether it is known to be free of `φ = 0`.
+type CubeLeaves = Vec<(Tet, bool)>;
+
+/// Whether an edge ([`extract::edge_key`]) crosses `φ = 0` twice ([`crossed_twice`], from
+/// its smaller packed end to the other).
+type EdgeMap = HashMap<u128, bool, BuildHasherDefault<PointHasher>>;
+
 /// `φ` at lattice points, computed once each.
 struct Values {
     lattice: Lattice,
@@ -173,12 +189,18 @@ impl Values {
 pub struct Adaptive {
     /// The marked edges.
     pub refinement: Refinement,
-    /// The leaves, in a fixed order (whatever the number of threads).
+    /// The leaves the boundary passes through (their corners' labels differ), in the order
+    /// of [`Refinement::leaves`] (whatever the number of threads); the others hold no
+    /// triangle.
     pub leaves: Vec<Tet>,
-    /// Each leaf's labels: bit `k` set when its corner `k` is inside ([`Field::inside`]).
+    /// Each of those leaves' labels: bit `k` set when its corner `k` is inside
+    /// ([`Field::inside`]).
     pub labels: Vec<u8>,
     /// Where the lattice lies in object space.
     pub lattice: Lattice,
+    /// The crossings of edges the examinations placed vertices on ([`Field::crossing`] from
+    /// the inside end), some of those marching tetrahedra needs.
+    pub crossings: Crossings,
     /// What was made.
     pub refined: Refined,
 }
@@ -238,97 +260,242 @@ pub fn refine(
             examiner.box_empty(lo, hi)
         })
         .collect();
-    let cube_empty: Vec<bool> = (0..n * n * n)
+    // Each cube's emptiness and, for the cubes not proven empty, φ's gradient at the centre
+    // and how far it strays over the cube (the cheap bound of Examiner::quiet), from one
+    // Taylor expansion about the cube's centre.
+    let (cube_empty, spreads): (Vec<bool>, Vec<Option<Spread>>) = (0..n * n * n)
         .into_par_iter()
         .map(|c| {
             let (x, y, z) = (c % n, c / n % n, c / (n * n));
             let block = x / BLOCK + blocks * (y / BLOCK + blocks * (z / BLOCK));
-            block_empty[block] || {
-                let (lo, hi) = cube_box(x, y, z, 1);
-                examiner.box_empty(lo, hi)
+            if block_empty[block] {
+                return (true, None);
             }
-        })
-        .collect();
-    // For the cubes not proven empty, φ's gradient at the centre and how far it strays
-    // over the cube (the cheap bound of Examiner::quiet).
-    let spreads: Vec<Option<Spread>> = (0..n * n * n)
-        .into_par_iter()
-        .map(|c| {
-            if cube_empty[c] {
-                return None;
-            }
-            let (x, y, z) = (c % n, c / n % n, c / (n * n));
             let (lo, hi) = cube_box(x, y, z, 1);
             let centre = 0.5 * (lo + hi);
-            let (value, gradient, spread) = examiner
+            let r = 0.5 * (hi - lo).max_element();
+            if examiner.outside_box(lo, hi) {
+                return (true, None);
+            }
+            let coef = examiner.taylor.coefficients(centre);
+            if examiner
                 .taylor
-                .gradient_spread(centre, 0.5 * (hi - lo).max_element());
+                .sums(&coef, centre, r)
+                .is_some_and(|sums| sums.proves_empty())
+            {
+                return (true, None);
+            }
+            let (value, gradient, spread) = examiner.taylor.spread(&coef, r);
             let f_sign = examiner.f_sign;
-            Some(Spread {
+            let spread = Spread {
                 gradient: f_sign * gradient,
                 spread,
                 margin: 1e-10 * (value.abs() + examiner.taylor.magnitude_bound(centre)),
-            })
+            };
+            (false, Some(spread))
         })
-        .collect();
+        .unzip();
     let examiner = Examiner {
         spreads,
         cube_side: side,
         cells: n,
         ..examiner
     };
-    let mut leaves: Vec<(Tet, bool)> = refinement
-        .coarse()
-        .into_iter()
-        .enumerate()
-        .map(|(i, t)| (t, cube_empty[i / 6]))
-        .collect();
+    // Each coarse cube's leaves, in the order of `Refinement::leaves` (empty while they are
+    // still its six Kuhn tetrahedra), each with whether it is known to be free of `φ = 0`
+    // (module doc, 3.: in a cube proven empty, or proven itself or below a tetrahedron
+    // proven so, whose halves need no proof). The leaves to examine are those not yet
+    // examined: at first the Kuhn tetrahedra of the cubes not proven empty, then the leaves
+    // each round's bisections make (below the finest level), wherever they are; `todo`
+    // holds them as (cube, index among its leaves).
+    let kuhn = |c: usize| {
+        let (x, y, z) = (c % n, c / n % n, c / (n * n));
+        kuhn_tetrahedra([x, y, z].map(|v| v as i32 * side), side)
+    };
+    let mut cube_leaves: Vec<CubeLeaves> = vec![Vec::new(); n * n * n];
+    let mut todo: Vec<(usize, usize)> = Vec::new();
+    for c in (0..n * n * n).filter(|&c| !cube_empty[c]) {
+        cube_leaves[c] = kuhn(c).map(|t| (t, false)).to_vec();
+        todo.extend((0..6).map(|i| (c, i)));
+    }
     let mut refined_for = [0usize; 3];
     let mut rounds = 0;
+    let mut fresh = Vec::new();
+    let mut twice = EdgeMap::default();
+    let mut crossings = Crossings::default();
     loop {
         if cancel.load(Ordering::Relaxed) {
             return None;
         }
-        let todo: Vec<usize> = (0..leaves.len())
-            .filter(|&i| !leaves[i].1 && leaves[i].0.level < finest)
-            .collect();
         if todo.is_empty() {
             break;
         }
         rounds += 1;
+        let leaf = |&(c, i): &(usize, usize)| cube_leaves[c][i];
         values.fill(
             field,
-            todo.iter().flat_map(|&i| leaves[i].0.corners.into_iter()),
+            todo.iter().flat_map(|e| leaf(e).0.corners.into_iter()),
         );
-        let verdicts: Vec<Option<Reason>> = todo
+        // Whether each edge of the crossed leaves is crossed twice (module doc, 2.): once
+        // for every edge, however many leaves share it, in any round.
+        let mut edges: Vec<u128> = todo
             .par_iter()
-            .map(|&i| examiner.examine(&leaves[i].0, &values))
+            .map(leaf)
+            .filter(|(t, _)| examiner.edges_matter(t, &values))
+            .flat_map_iter(|(t, _)| {
+                TET_EDGES.map(|(a, b)| extract::edge_key(t.corners[a], t.corners[b]))
+            })
+            .filter(|k| !twice.contains_key(k))
             .collect();
-        for (&i, verdict) in todo.iter().zip(&verdicts) {
-            leaves[i].1 = true;
+        edges.par_sort_unstable();
+        edges.dedup();
+        let crossed: Vec<bool> = edges
+            .par_iter()
+            .map(|&k| {
+                let (p, q) = (extract::unpack((k >> 64) as u64), extract::unpack(k as u64));
+                crossed_twice(
+                    field,
+                    lattice.position(p),
+                    lattice.position(q),
+                    examiner.shallow,
+                )
+            })
+            .collect();
+        twice.extend(edges.into_iter().zip(crossed));
+        let checked: Vec<(Checked, bool)> = todo
+            .par_iter()
+            .map(|e| {
+                let (t, quiet) = leaf(e);
+                examiner.examine(&t, quiet, &values, &twice)
+            })
+            .collect();
+        // Where the boundary crosses each edge of the polygons of the leaves that passed
+        // (module doc, 1.): once for every edge, from its inside end, in any round (and
+        // again in marching tetrahedra).
+        let mut ends: Vec<(u128, Point, Point)> = todo
+            .par_iter()
+            .zip(&checked)
+            .filter_map(|(e, &(checked, _))| match checked {
+                Checked::Pass { case } => Some((leaf(e).0, examiner.table[case].as_ref()?)),
+                Checked::Bisect(_) => None,
+            })
+            .flat_map_iter(|(t, polygon)| {
+                polygon.iter().map(move |&[i, j]| {
+                    let (a, b) = (t.corners[i as usize], t.corners[j as usize]);
+                    (extract::edge_key(a, b), a, b)
+                })
+            })
+            .filter(|(k, _, _)| !crossings.contains_key(k))
+            .collect();
+        ends.par_sort_unstable_by_key(|e| e.0);
+        ends.dedup_by_key(|e| e.0);
+        let placed: Vec<(f64, VertexKind)> = ends
+            .par_iter()
+            .map(|&(_, a, b)| field.crossing(lattice.position(a), lattice.position(b)))
+            .collect();
+        crossings.extend(ends.into_iter().map(|e| e.0).zip(placed));
+        let verdicts: Vec<(Option<Reason>, bool)> = todo
+            .par_iter()
+            .zip(&checked)
+            .map(|(e, &(checked, quiet))| match checked {
+                Checked::Bisect(reason) => (Some(reason), quiet),
+                Checked::Pass { case } => (examiner.deviation(&leaf(e).0, case, &crossings), quiet),
+            })
+            .collect();
+        fresh.clear();
+        for (&(c, i), &(verdict, quiet)) in todo.iter().zip(&verdicts) {
+            let (t, known) = &mut cube_leaves[c][i];
+            *known = quiet;
             if let Some(reason) = verdict {
-                refined_for[*reason as usize] += 1;
-                refinement.mark(leaves[i].0.midpoint());
+                refined_for[reason as usize] += 1;
+                refinement.mark_collecting(t.midpoint(), &mut fresh);
             }
         }
-        let mut next = Vec::with_capacity(leaves.len());
-        let mut below = Vec::new();
-        for &(t, examined) in &leaves {
-            if refinement.splits(&t) {
-                below.clear();
-                refinement.expand(t, &mut below);
-                next.extend(below.iter().map(|&c| (c, false)));
-            } else {
-                next.push((t, examined));
-            }
+        // Only a leaf whose refinement edge was just marked splits, and it lies in a coarse
+        // cube whose closed box holds that edge's midpoint.
+        let mut dirty: Vec<usize> = fresh
+            .iter()
+            .flat_map(|&m| cubes_holding(m, side, n))
+            .collect();
+        dirty.sort_unstable();
+        dirty.dedup();
+        let before: Vec<CubeLeaves> = dirty
+            .iter()
+            .map(|&c| std::mem::take(&mut cube_leaves[c]))
+            .collect();
+        let rebuilt: Vec<(CubeLeaves, Vec<usize>)> = dirty
+            .par_iter()
+            .zip(before)
+            .map(|(&c, old)| {
+                let old = if old.is_empty() {
+                    kuhn(c).map(|t| (t, cube_empty[c])).to_vec()
+                } else {
+                    old
+                };
+                let (mut leaves, mut made, mut below) = (Vec::new(), Vec::new(), Vec::new());
+                for (t, quiet) in old {
+                    if refinement.splits(&t) {
+                        below.clear();
+                        refinement.expand(t, &mut below);
+                        for &b in &below {
+                            if b.level < finest {
+                                made.push(leaves.len());
+                            }
+                            leaves.push((b, quiet));
+                        }
+                    } else {
+                        leaves.push((t, quiet));
+                    }
+                }
+                (leaves, made)
+            })
+            .collect();
+        todo.clear();
+        for (&c, (leaves, made)) in dirty.iter().zip(rebuilt) {
+            cube_leaves[c] = leaves;
+            todo.extend(made.into_iter().map(|i| (c, i)));
         }
-        leaves = next;
         progress(rounds.min(total - 1), total);
     }
-    let leaves: Vec<Tet> = leaves.into_iter().map(|(t, _)| t).collect();
-    values.fill(field, leaves.iter().flat_map(|t| t.corners.into_iter()));
+    // The cubes proven empty that lie wholly inside or wholly outside the clip ball (with a
+    // margin for the rounding of the corners' positions): every corner of their leaves has
+    // the same label, so they hold no triangle and are neither labelled nor marched.
     let r2 = field.radius() * field.radius();
-    let labels: Vec<u8> = leaves
+    let uniform = |c: usize| {
+        let (x, y, z) = (c % n, c / n % n, c / (n * n));
+        let (lo, hi) = cube_box(x, y, z, 1);
+        let (centre, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
+        let nearest = (centre.abs() - half).max(DVec3::ZERO).length_squared();
+        let farthest = (centre.abs() + half).length_squared();
+        nearest > r2 * (1.0 + 1e-9) || farthest < r2 * (1.0 - 1e-9)
+    };
+    let mut refined = Refined {
+        coarse,
+        depth,
+        leaves_by_level: vec![0; finest as usize + 1],
+        crossed_by_level: vec![0; finest as usize + 1],
+        refined_for,
+        rounds,
+    };
+    let mut kept: Vec<Tet> = Vec::new();
+    for (c, leaves) in cube_leaves.iter().enumerate() {
+        let skip = cube_empty[c] && uniform(c);
+        if leaves.is_empty() {
+            refined.leaves_by_level[0] += 6;
+            if !skip {
+                kept.extend(kuhn(c));
+            }
+        } else {
+            for (t, _) in leaves {
+                refined.leaves_by_level[t.level as usize] += 1;
+            }
+            if !skip {
+                kept.extend(leaves.iter().map(|&(t, _)| t));
+            }
+        }
+    }
+    values.fill(field, kept.iter().flat_map(|t| t.corners.into_iter()));
+    let labels: Vec<u8> = kept
         .par_iter()
         .map(|t| {
             (0..4).fold(0u8, |m, k| {
@@ -338,26 +505,37 @@ pub fn refine(
             })
         })
         .collect();
-    let mut refined = Refined {
-        coarse,
-        depth,
-        leaves_by_level: vec![0; finest as usize + 1],
-        crossed_by_level: vec![0; finest as usize + 1],
-        refined_for,
-        rounds,
-    };
-    for (t, &m) in leaves.iter().zip(&labels) {
-        refined.leaves_by_level[t.level as usize] += 1;
-        if m != 0 && m != 15 {
-            refined.crossed_by_level[t.level as usize] += 1;
-        }
+    let (leaves, labels): (Vec<Tet>, Vec<u8>) = kept
+        .into_iter()
+        .zip(labels)
+        .filter(|&(_, m)| m != 0 && m != 15)
+        .unzip();
+    for t in &leaves {
+        refined.crossed_by_level[t.level as usize] += 1;
     }
     Some(Adaptive {
         refinement,
         leaves,
         labels,
         lattice,
+        crossings,
         refined,
+    })
+}
+
+/// The coarse cubes (x fastest, `n` a side of `side` lattice units) whose closed box holds
+/// the lattice point `m`: one, or two, four or eight where `m` lies on their faces.
+fn cubes_holding(m: Point, side: i32, n: usize) -> impl Iterator<Item = usize> {
+    let range = |v: i32| {
+        let c = (v / side) as usize;
+        let first = if v % side == 0 && c > 0 { c - 1 } else { c };
+        first..=c.min(n - 1)
+    };
+    let (rx, ry, rz) = (range(m[0]), range(m[1]), range(m[2]));
+    rz.flat_map(move |z| {
+        let rx = rx.clone();
+        ry.clone()
+            .flat_map(move |y| rx.clone().map(move |x| x + n * (y + n * z)))
     })
 }
 
@@ -378,11 +556,22 @@ pub fn mesh_adaptive(
         adaptive.lattice,
         &adaptive.leaves,
         &adaptive.labels,
+        &adaptive.crossings,
         cancel,
     )?;
     let total = 3 * depth as usize + 2;
     progress(total, total);
     Some((mesh, kinds, adaptive.refined))
+}
+
+/// What the checks 2. and 3. of the module doc found for a tetrahedron.
+#[derive(Debug, Clone, Copy)]
+enum Checked {
+    /// It must be bisected.
+    Bisect(Reason),
+    /// It passes them; `case` holds its corners' labels (bit `k` for corner `k`, as in the
+    /// marching table), whose polygon's triangles check 1. measures.
+    Pass { case: usize },
 }
 
 /// The checks of the module doc for one tetrahedron.
@@ -406,7 +595,7 @@ struct Examiner<'a> {
 }
 
 /// `∇φ` at a coarse cube's centre and, per axis, a bound on how far `∂_i φ` strays from it
-/// over the cube ([`Taylor::gradient_spread`]).
+/// over the cube ([`Taylor::spread`]).
 struct Spread {
     gradient: DVec3,
     spread: DVec3,
@@ -415,44 +604,64 @@ struct Spread {
 }
 
 impl Examiner<'_> {
-    /// Why `t` must be bisected, or `None` if it passes every check.
-    fn examine(&self, t: &Tet, values: &Values) -> Option<Reason> {
-        let field = self.field;
-        let radius = field.radius();
-        let (lo, hi) = t.bounds();
-        let (lo, hi) = (self.lattice.position(lo), self.lattice.position(hi));
-        let centre = 0.5 * (lo + hi);
-        let half = 0.5 * (hi - lo);
-        let nearest = (centre.abs() - half).max(DVec3::ZERO);
-        if nearest.length_squared() >= radius * radius {
-            return None;
+    /// Whether `examine` asks whether `t`'s edges are crossed twice: its box meets the clip
+    /// ball and its corners' signs of `φ` differ.
+    fn edges_matter(&self, t: &Tet, values: &Values) -> bool {
+        !self.outside_ball(t) && common_sign(&t.corners.map(|p| values.get(p))).is_none()
+    }
+
+    /// Why `t` must be bisected, or `None` if it passes every check, and whether it is now
+    /// known to be free of `φ = 0` (module doc, 3.); `twice` holds [`crossed_twice`] for its
+    /// edges if [`Examiner::edges_matter`]. A tetrahedron already `known_quiet` (in a cube
+    /// or below a tetrahedron proven so) needs no proof again: the virtual bisection of
+    /// [`Examiner::quiet`] for it is part of that for its ancestor.
+    fn examine(
+        &self,
+        t: &Tet,
+        known_quiet: bool,
+        values: &Values,
+        twice: &EdgeMap,
+    ) -> (Checked, bool) {
+        if self.outside_ball(t) {
+            return (Checked::Pass { case: 0 }, known_quiet);
         }
         let points = t.corners.map(|p| self.lattice.position(p));
         let phi = t.corners.map(|p| values.get(p));
-        match common_sign(&phi) {
+        let quiet = match common_sign(&phi) {
             Some(sign) => {
-                if !self.quiet(t, sign, phi) {
-                    return Some(Reason::SurfaceUnproven);
+                if !known_quiet && !self.quiet(t, sign, phi) {
+                    return (Checked::Bisect(Reason::SurfaceUnproven), false);
                 }
+                true
             }
             None => {
                 for (a, b) in TET_EDGES {
-                    if crossed_twice(field, points[a], points[b], self.shallow) {
-                        return Some(Reason::EdgeCrossedTwice);
+                    if twice[&extract::edge_key(t.corners[a], t.corners[b])] {
+                        return (Checked::Bisect(Reason::EdgeCrossedTwice), false);
                     }
                 }
+                false
             }
-        }
-        let r2 = radius * radius;
+        };
+        let r2 = self.field.radius() * self.field.radius();
         let labels =
             std::array::from_fn::<bool, 4, _>(|i| points[i].length_squared() < r2 && phi[i] < 0.0);
         let case = (0..4).fold(0usize, |m, i| m | usize::from(labels[i]) << i);
+        (Checked::Pass { case }, quiet)
+    }
+
+    /// [`Reason::Deviation`] if a triangle marching tetrahedra makes in `t` (its corners'
+    /// labels `case`, as in [`Checked::Pass`]) deviates beyond the share allowed (module doc,
+    /// 1.); `crossings` holds its polygon's edges' crossings.
+    fn deviation(&self, t: &Tet, case: usize, crossings: &Crossings) -> Option<Reason> {
+        let field = self.field;
         let polygon = self.table[case].as_ref()?;
         let placed: Vec<(DVec3, VertexKind)> = polygon
             .iter()
             .map(|&[i, j]| {
-                let (a, b) = (points[i as usize], points[j as usize]);
-                let (s, kind) = field.crossing(a, b);
+                let (p, q) = (t.corners[i as usize], t.corners[j as usize]);
+                let (a, b) = (self.lattice.position(p), self.lattice.position(q));
+                let (s, kind) = crossings[&extract::edge_key(p, q)];
                 (a + s * (b - a), kind)
             })
             .collect();
@@ -541,16 +750,19 @@ impl Examiner<'_> {
     /// largest half-side).
     fn box_empty(&self, lo: DVec3, hi: DVec3) -> bool {
         let centre = 0.5 * (lo + hi);
+        self.outside_box(lo, hi)
+            || self
+                .taylor
+                .at(centre, 0.5 * (hi - lo).max_element())
+                .is_some_and(|sums| sums.proves_empty())
+    }
+
+    /// Whether the box `lo`–`hi` lies wholly outside the clip ball.
+    fn outside_box(&self, lo: DVec3, hi: DVec3) -> bool {
+        let centre = 0.5 * (lo + hi);
         let nearest = (centre.abs() - 0.5 * (hi - lo)).max(DVec3::ZERO);
         let radius = self.field.radius();
-        if nearest.length_squared() >= radius * radius {
-            return true;
-        }
-        self.taylor
-            .at(centre, 0.5 * (hi - lo).max_element())
-            .is_some_and(|sums| {
-                sums.value.abs() - sums.linear - sums.quadratic > 1e-10 * sums.magnitude
-            })
+        nearest.length_squared() >= radius * radius
     }
 
     /// Whether the box of `t` lies wholly outside the clip ball.
@@ -593,12 +805,13 @@ impl Examiner<'_> {
 
 /// The largest first-order deviation of the triangle `corners` (vertex kinds `kinds`) from
 /// the boundary at its centroid and edge midpoints (object units; module doc, 1.): infinite
-/// where `∇φ` vanishes (a node).
+/// where `∇φ` vanishes (a node). `∇φ` is exact for the inside and outside
+/// ([`Field::value_and_gradient`]).
 pub fn triangle_deviation(field: &Field, corners: [DVec3; 3], kinds: [VertexKind; 3]) -> f64 {
     let h = 1e-7 * field.radius();
     let off_surface = |p: DVec3| {
-        let g = field.gradient(p, h).length();
-        let v = field.value(p).abs();
+        let (v, g) = field.value_and_gradient(p, h);
+        let (v, g) = (v.abs(), g.length());
         if v == 0.0 {
             0.0
         } else if g > 0.0 {
@@ -733,10 +946,23 @@ const BINOMIAL: [[f64; MAX_DEGREE + 1]; MAX_DEGREE + 1] = {
     table
 };
 
+impl TaylorSums {
+    /// Whether `|f(c)|` exceeds every other term on the cube (with a margin for rounding):
+    /// `f` has no zero in it.
+    fn proves_empty(&self) -> bool {
+        self.value.abs() - self.linear - self.quadratic > 1e-10 * self.magnitude
+    }
+}
+
 /// Taylor coefficients of `f` (the surface's polynomial) about a point, summed by degree.
 struct Taylor {
     terms: Vec<([usize; 3], f64)>,
     degree: usize,
+    /// Where the row of coefficients `a_(·,j,l)` (`i ≤ degree − j − l`) starts in
+    /// [`Taylor::coefficients`], at `j + d·l` (`d` the degree + 1).
+    rows: Vec<usize>,
+    /// How many coefficients of total degree ≤ `degree` there are.
+    size: usize,
 }
 
 impl Taylor {
@@ -768,6 +994,15 @@ struct TaylorSums {
 impl Taylor {
     fn new(field: &Field) -> Self {
         let f = field.surface_polynomial();
+        let d = f.degree + 1;
+        let mut rows = vec![usize::MAX; d * d];
+        let mut size = 0;
+        for l in 0..d {
+            for j in 0..d - l {
+                rows[j + d * l] = size;
+                size += d - j - l;
+            }
+        }
         Self {
             terms: f
                 .terms
@@ -775,25 +1010,32 @@ impl Taylor {
                 .map(|t| (t.e.map(usize::from), t.c))
                 .collect(),
             degree: f.degree,
+            rows,
+            size,
         }
     }
 
     /// The sums of the Taylor coefficients' magnitudes of `f` about `c` for the cube of
     /// half-side `r` (the same for `φ = −f`); `None` if not finite.
     fn at(&self, c: DVec3, r: f64) -> Option<TaylorSums> {
+        self.sums(&self.coefficients(c), c, r)
+    }
+
+    /// [`Taylor::at`] from the coefficients about `c` ([`Taylor::coefficients`]).
+    fn sums(&self, coef: &[f64], c: DVec3, r: f64) -> Option<TaylorSums> {
         let d = self.degree + 1;
-        let coef = self.coefficients(c);
-        let mut by_degree = vec![0.0f64; 3 * d];
+        let mut by_degree = [0.0f64; 3 * (MAX_DEGREE + 1)];
         for l in 0..d {
-            for j in 0..d {
-                for i in 0..d {
-                    by_degree[i + j + l] += coef[i + d * (j + d * l)].abs();
+            for j in 0..d - l {
+                let row = &coef[self.rows[j + d * l]..][..d - j - l];
+                for (i, a) in row.iter().enumerate() {
+                    by_degree[i + j + l] += a.abs();
                 }
             }
         }
         let (mut linear, mut quadratic) = (0.0, 0.0);
         let mut power = 1.0;
-        for (k, s) in by_degree.iter().enumerate() {
+        for (k, s) in by_degree[..3 * d].iter().enumerate() {
             let term = s * power;
             match k {
                 0 => {}
@@ -803,7 +1045,7 @@ impl Taylor {
             power *= r;
         }
         let value = coef[0];
-        let gradient = DVec3::new(coef[1], coef[d], coef[d * d]);
+        let gradient = self.gradient(coef);
         (linear + quadratic).is_finite().then_some(TaylorSums {
             value,
             gradient,
@@ -814,63 +1056,66 @@ impl Taylor {
     }
 
     /// `f(c)`, `∇f(c)` and, for each axis `i`, a bound `L_i` on `|∂_i f(x) − ∂_i f(c)|` over
-    /// the cube of half-side `r` about `c`: `Σ_{|α|≥2, α_i≥1} |a_α| α_i r^{|α|−1}`.
-    fn gradient_spread(&self, c: DVec3, r: f64) -> (f64, DVec3, DVec3) {
+    /// the cube of half-side `r` about `c`: `Σ_{|α|≥2, α_i≥1} |a_α| α_i r^{|α|−1}`, from the
+    /// coefficients about `c` ([`Taylor::coefficients`]).
+    fn spread(&self, coef: &[f64], r: f64) -> (f64, DVec3, DVec3) {
         let d = self.degree + 1;
-        let coef = self.coefficients(c);
         let mut spread = [0.0f64; 3];
-        let mut powers = vec![1.0f64; 3 * d];
+        let mut powers = [1.0f64; 3 * (MAX_DEGREE + 1)];
         for k in 1..3 * d {
             powers[k] = powers[k - 1] * r;
         }
         for l in 0..d {
-            for j in 0..d {
-                for i in 0..d {
+            for j in 0..d - l {
+                let row = &coef[self.rows[j + d * l]..][..d - j - l];
+                for (i, c) in row.iter().enumerate() {
                     let total = i + j + l;
                     if total < 2 {
                         continue;
                     }
-                    let a = coef[i + d * (j + d * l)].abs() * powers[total - 1];
+                    let a = c.abs() * powers[total - 1];
                     spread[0] += a * i as f64;
                     spread[1] += a * j as f64;
                     spread[2] += a * l as f64;
                 }
             }
         }
-        (
-            coef[0],
-            DVec3::new(coef[1], coef[d], coef[d * d]),
-            DVec3::from_array(spread),
-        )
+        (coef[0], self.gradient(coef), DVec3::from_array(spread))
     }
 
-    /// The Taylor coefficients of `f` about `c`: `a_(i,j,l)` at `i + d·(j + d·l)`, `d` the
-    /// degree + 1.
+    /// `∇f` at the centre: the coefficients of degree 1 ([`Taylor::coefficients`]).
+    fn gradient(&self, coef: &[f64]) -> DVec3 {
+        let d = self.degree + 1;
+        DVec3::new(coef[1], coef[self.rows[1]], coef[self.rows[d]])
+    }
+
+    /// The Taylor coefficients of `f` about `c`, those of total degree ≤ f's (the others
+    /// are zero): `a_(i,j,l)` at `rows[j + d·l] + i`, `d` the degree + 1 (by `l`, then `j`,
+    /// then `i`).
     fn coefficients(&self, c: DVec3) -> Vec<f64> {
         const N: usize = MAX_DEGREE + 1;
         let d = self.degree + 1;
-        let mut coef = vec![0.0f64; d * d * d];
-        // table[a][i] = C(a, i)·x^(a−i): the coefficient of d^i in (x + d)^a.
-        let table = |x: f64| {
+        let mut coef = vec![0.0f64; self.size];
+        // Row `a` of an axis's table (at `a·(a + 1)/2` within it) holds C(a, i)·x^(a−i) for
+        // `i ≤ a`: the coefficient of d^i in (x + d)^a.
+        let per_axis = d * (d + 1) / 2;
+        let mut tables = Vec::with_capacity(3 * per_axis);
+        for x in [c.x, c.y, c.z] {
             let mut powers = [1.0f64; N];
             for i in 1..d {
                 powers[i] = powers[i - 1] * x;
             }
-            let mut out = [[0.0f64; N]; N];
-            for (a, row) in out.iter_mut().enumerate().take(d) {
-                for (i, o) in row.iter_mut().enumerate().take(a + 1) {
-                    *o = BINOMIAL[a][i] * powers[a - i];
-                }
+            for a in 0..d {
+                tables.extend((0..=a).map(|i| BINOMIAL[a][i] * powers[a - i]));
             }
-            out
-        };
-        let (tx, ty, tz) = (table(c.x), table(c.y), table(c.z));
+        }
+        let row = |axis: usize, a: usize| &tables[axis * per_axis + a * (a + 1) / 2..][..=a];
         for &([a, b, e], k) in &self.terms {
-            let (px, py, pz) = (&tx[a][..=a], &ty[b][..=b], &tz[e][..=e]);
+            let (px, py, pz) = (row(0, a), row(1, b), row(2, e));
             for (j, y) in py.iter().enumerate() {
                 for (l, z) in pz.iter().enumerate() {
                     let yz = k * y * z;
-                    let row = &mut coef[d * (j + d * l)..][..=a];
+                    let row = &mut coef[self.rows[j + d * l]..][..=a];
                     for (o, x) in row.iter_mut().zip(px) {
                         *o += yz * x;
                     }
@@ -967,6 +1212,42 @@ mod tests {
         assert!(refined.refined_for[Reason::Deviation as usize] > 0);
         let finest = refined.crossed_by_level.len() - 1;
         assert!(refined.crossed_by_level[finest] < refined.crossed() / 2);
+    }
+
+    /// `refine` hands marching tetrahedra only the leaves of cubes that may hold a triangle:
+    /// they must be exactly the leaves of the whole refinement whose labels differ, here for
+    /// a solid wholly inside a clip ball (every triangle a cap's, in cubes proven empty of
+    /// surface that the sphere cuts) and a torus the sphere clips.
+    #[test]
+    fn the_marched_leaves_are_every_leaf_whose_labels_differ() {
+        for (equation, radius) in [
+            ("x^2 + y^2 + z^2 = 4", 1.0),
+            ("(x^2 + y^2 + z^2 + 0.64 - 0.09)^2 = 2.56*(x^2 + y^2)", 1.0),
+        ] {
+            let f = field(equation, radius);
+            let tolerance = 0.01;
+            let floor = 2.0 * tolerance;
+            let depth = depth_for(f.radius(), floor, SolidKind::Inside);
+            let coarse = Grid::covering(f.radius(), floor * f64::from(1u32 << depth));
+            let cancel = AtomicBool::new(false);
+            let a = refine(&f, coarse, depth, tolerance, &|_, _| {}, &cancel).unwrap();
+            let all = a.refinement.leaves();
+            let label = |t: &Tet| {
+                (0..4).fold(0u8, |m, k| {
+                    m | u8::from(f.inside(a.lattice.position(t.corners[k]))) << k
+                })
+            };
+            let (crossed, labels): (Vec<Tet>, Vec<u8>) = all
+                .iter()
+                .map(|t| (*t, label(t)))
+                .filter(|&(_, m)| m != 0 && m != 15)
+                .unzip();
+            assert!(crossed.len() > 100, "{equation}: {}", crossed.len());
+            assert_eq!(a.leaves, crossed, "{equation}");
+            assert_eq!(a.labels, labels, "{equation}");
+            assert_eq!(a.refined.leaves(), all.len(), "{equation}");
+            assert_eq!(a.refined.crossed(), crossed.len(), "{equation}");
+        }
     }
 
     /// A ball of radius 0.06 (with the unit ball) wholly inside one cube of the coarsest grid,

@@ -596,10 +596,14 @@ fn the_tetrahedra_are_fine_only_where_the_surface_needs_it() {
     let in_coarse_cubes: usize = refined.crossed_by_level[..3].iter().sum();
     assert!(in_coarse_cubes * 2 > refined.crossed(), "{refined:?}");
     assert!(refined.crossed_by_level[finest] > 0, "{refined:?}");
-    // Conforming, and filling the domain.
+    // Conforming, and filling the domain: all the leaves, of which `refine` hands on only
+    // those the boundary passes through.
+    let leaves = adaptive.refinement.leaves();
+    assert_eq!(leaves.len(), refined.leaves());
+    assert_eq!(adaptive.leaves.len(), refined.crossed());
     let mut faces: HashMap<[Point; 3], u32> = HashMap::new();
     let mut volume = 0i64;
-    for t in &adaptive.leaves {
+    for t in &leaves {
         volume += t.orientation().abs();
         let c = t.corners;
         for skip in 0..4 {
