@@ -95,6 +95,9 @@ pub struct Coarsened {
     pub flips: usize,
     /// Passes over the edges made.
     pub passes: usize,
+    /// Passes (of collapses or of flips) undone and made again because the test of their
+    /// steps' new triangles at the end found a crossing (see the module doc).
+    pub redone: usize,
 }
 
 /// Space one checking thread reuses from check to check (no allocation per collapse).
@@ -127,6 +130,41 @@ impl Verdict {
     };
 }
 
+/// Where each step's new triangles are tested for crossings as the step is checked; elsewhere
+/// the test waits for the end of the pass ([`Work::crossings_made`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+struct Careful {
+    /// Everywhere (for the rest of the pass in hand).
+    everywhere: bool,
+    /// Where a new fan's box overlaps one of these boxes (about crossings found before).
+    boxes: Vec<Box32>,
+}
+
+impl Careful {
+    /// Whether a step whose new triangles lie in `fan` is tested as it is checked.
+    fn covers(&self, fan: &Box32) -> bool {
+        self.everywhere || self.boxes.iter().any(|b| b.overlaps(fan))
+    }
+}
+
+/// What the steps of a pass changed, to undo the pass: each changed triangle and fan as it
+/// was when the pass began, and the vertices removed.
+#[derive(Default)]
+struct UndoLog {
+    /// The pass each triangle was last logged in (0: never).
+    triangle_pass: Vec<u32>,
+    /// The pass each vertex's fan was last logged in.
+    fan_pass: Vec<u32>,
+    /// The pass in hand (from 1).
+    pass: u32,
+    /// Triangles as they were: index, corners, whether live.
+    triangles: Vec<(u32, [u32; 3], bool)>,
+    /// Fans as they were: vertex, its triangles.
+    fans: Vec<(u32, Vec<u32>)>,
+    /// Vertices removed in the pass.
+    removed: Vec<u32>,
+}
+
 /// The mesh being coarsened: triangles with a live flag and the triangles about each vertex.
 struct Work<'a> {
     field: &'a Field,
@@ -145,6 +183,10 @@ struct Work<'a> {
     /// The unit normal of `φ = 0` (`∇φ/|∇φ|`, zero where `∇φ` vanishes) at each vertex on the
     /// surface; zero at the others.
     surface_normals: Vec<DVec3>,
+    /// Where steps are tested for crossings one by one (elsewhere at the end of the pass).
+    careful: Careful,
+    /// What the pass in hand changed.
+    log: UndoLog,
 }
 
 impl Work<'_> {
@@ -218,8 +260,13 @@ impl Work<'_> {
     /// Whether any of the triangles `scratch.new` (replacing the live triangles for which
     /// `replaced` holds, which are left out) would meet a live triangle near it, or another
     /// of them, other than in the corners and sides they share; with the box of the new
-    /// triangles (every triangle whose box overlaps it was read).
-    fn would_cross(&self, scratch: &mut Scratch, replaced: impl Fn(u32) -> bool) -> (bool, Box32) {
+    /// triangles (every triangle whose box overlaps it was read). Outside the careful region
+    /// ([`Work::careful`]) the test is left to the end of the pass: `(false, None)`.
+    fn would_cross(
+        &self,
+        scratch: &mut Scratch,
+        replaced: impl Fn(u32) -> bool,
+    ) -> (bool, Option<Box32>) {
         let Scratch {
             new,
             new_corners,
@@ -231,6 +278,9 @@ impl Work<'_> {
         boxes.clear();
         boxes.extend(new_corners.iter().map(Box32::around));
         let all = boxes.iter().fold(boxes[0], |a, &b| a.union(b));
+        if !self.careful.covers(&all) {
+            return (false, None);
+        }
         let near = self.grid.any_near(&all, |b| {
             if !b.bounds.overlaps(&all) {
                 return false;
@@ -254,18 +304,18 @@ impl Work<'_> {
             false
         });
         if near {
-            return (true, all);
+            return (true, Some(all));
         }
         for i in 0..new.len() {
             for j in i + 1..new.len() {
                 if boxes[i].overlaps(&boxes[j])
                     && check::corners_meet(new[i], new_corners[i], new[j], new_corners[j])
                 {
-                    return (true, all);
+                    return (true, Some(all));
                 }
             }
         }
-        (false, all)
+        (false, Some(all))
     }
 
     /// The edge `a b` of live triangle `t` (its `k`-th side), with the triangle on its other
@@ -342,15 +392,17 @@ impl Work<'_> {
         scratch.new.clear();
         scratch.new.extend([new1, new2]);
         let (crossed, near) = self.would_cross(scratch, |x| x == t || x == t2);
-        Verdict {
-            ok: !crossed,
-            near: Some(near),
-        }
+        Verdict { ok: !crossed, near }
     }
 
     /// Flips the edge of [`Work::check_flip`] (which must have allowed it, on this mesh).
     fn apply_flip(&mut self, t: u32, k: usize) {
         let (a, b, c, t2, d) = self.flip_quad(t, k).unwrap();
+        self.log_triangle(t);
+        self.log_triangle(t2);
+        for w in [a, b, c, d] {
+            self.log_fan(w);
+        }
         let (new1, new2) = ([a, d, c], [d, b, c]);
         self.grid.remove(t);
         self.grid.remove(t2);
@@ -362,6 +414,118 @@ impl Work<'_> {
         self.around[b as usize].retain(|&x| x != t);
         self.around[c as usize].push(t2);
         self.around[d as usize].push(t);
+    }
+
+    /// Keeps triangle `t` as it is in the undo log, if the pass has not changed it yet.
+    fn log_triangle(&mut self, t: u32) {
+        let log = &mut self.log;
+        if log.triangle_pass[t as usize] != log.pass {
+            log.triangle_pass[t as usize] = log.pass;
+            log.triangles
+                .push((t, self.triangles[t as usize], self.alive[t as usize]));
+        }
+    }
+
+    /// Keeps the fan of vertex `w` as it is in the undo log, if the pass has not changed it.
+    fn log_fan(&mut self, w: u32) {
+        let log = &mut self.log;
+        if log.fan_pass[w as usize] != log.pass {
+            log.fan_pass[w as usize] = log.pass;
+            log.fans.push((w, self.around[w as usize].clone()));
+        }
+    }
+
+    /// Starts a new pass of the undo log (forgetting the last one's changes).
+    fn begin_pass(&mut self) {
+        let log = &mut self.log;
+        log.pass += 1;
+        log.triangles.clear();
+        log.fans.clear();
+        log.removed.clear();
+    }
+
+    /// The boxes of the pairs of live triangles, one of them changed in this pass, that meet
+    /// other than in the corners and sides they share (by the exact test of
+    /// [`super::check`]); empty if none do.
+    fn crossings_made(&self) -> Vec<Box32> {
+        let mut found = Vec::new();
+        for &(t, ..) in &self.log.triangles {
+            if !self.alive[t as usize] {
+                continue;
+            }
+            let tri = self.triangles[t as usize];
+            let p = self.corners(tri);
+            let bounds = Box32::around(&p);
+            self.grid.any_near(&bounds, |b| {
+                let other = b.triangle;
+                // A pair of changed triangles is tested once, from the lower index.
+                let changed = self.log.triangle_pass[other as usize] == self.log.pass;
+                if other == t || (changed && other < t) || !b.bounds.overlaps(&bounds) {
+                    return false;
+                }
+                let q = self.triangles[other as usize];
+                if check::corners_meet(tri, p, q, self.corners(q)) {
+                    found.push(bounds.union(b.bounds));
+                }
+                false
+            });
+        }
+        found
+    }
+
+    /// Undoes every step made since [`Work::begin_pass`], and starts the pass again.
+    fn undo_pass(&mut self) {
+        let mut log = std::mem::take(&mut self.log);
+        for &(t, tri, alive) in &log.triangles {
+            self.grid.remove(t);
+            self.triangles[t as usize] = tri;
+            self.alive[t as usize] = alive;
+            if alive {
+                self.grid.insert(t, &self.corners(tri));
+            }
+        }
+        for (w, fan) in log.fans.drain(..) {
+            self.around[w as usize] = fan;
+        }
+        for &u in &log.removed {
+            self.removed[u as usize] = false;
+        }
+        self.removed_count -= log.removed.len();
+        self.log = log;
+        self.begin_pass();
+    }
+
+    /// Makes each of `steps` that every condition allows, in order (as [`Work::make`]), the
+    /// crossing test of a step made only where [`Work::careful`] covers it and of the rest
+    /// once the steps are made; if that finds a crossing, the pass is undone and made again
+    /// with the region about each crossing found added to the careful one (at the third
+    /// time, everywhere). How many steps were made, and how many times the pass was redone;
+    /// `None` if `cancel` stopped it.
+    fn make_pass(
+        &mut self,
+        steps: &[Step],
+        cancel: &AtomicBool,
+        checking: Checking,
+    ) -> Option<(usize, usize)> {
+        let mut redone = 0;
+        loop {
+            self.begin_pass();
+            let made = make(self, steps, cancel, checking)?;
+            if self.careful.everywhere {
+                self.careful.everywhere = false;
+                return Some((made, redone));
+            }
+            let crossings = self.crossings_made();
+            if crossings.is_empty() {
+                return Some((made, redone));
+            }
+            self.undo_pass();
+            redone += 1;
+            // About each crossing, a box as large again on every side.
+            let grown = crossings.iter().map(|b| b.grown(b.extent()));
+            self.careful.boxes.extend(grown);
+            self.careful.everywhere = redone >= REDOS_BEFORE_EVERYWHERE;
+        }
     }
 
     /// The two triangles on the edge `u v` (in `u`'s fan) and their corners off it, if there
@@ -480,16 +644,21 @@ impl Work<'_> {
         }
         let (crossed, near) =
             self.would_cross(scratch, |x| self.triangles[x as usize].contains(&u));
-        Verdict {
-            ok: !crossed,
-            near: Some(near),
-        }
+        Verdict { ok: !crossed, near }
     }
 
     /// Collapses `u` into `v` (which [`Work::check_collapse`] must have allowed, on this
     /// mesh): the two triangles on the edge go, the rest of `u`'s fan turns to `v`.
     fn apply_collapse(&mut self, u: u32, v: u32) {
         let (shared, _) = self.edge_wings(u, v).unwrap();
+        for k in 0..self.around[u as usize].len() {
+            let t = self.around[u as usize][k];
+            self.log_triangle(t);
+            for w in self.triangles[t as usize] {
+                self.log_fan(w);
+            }
+        }
+        self.log.removed.push(u);
         for &t in &self.around[u as usize] {
             self.grid.remove(t);
         }
@@ -657,6 +826,10 @@ fn make(work: &mut Work, steps: &[Step], cancel: &AtomicBool, checking: Checking
     rayon::scope(|_| work.make(steps, cancel, checking))
 }
 
+/// Times a pass is redone with a larger careful region ([`Work::make_pass`]) before the
+/// crossing test is made step by step everywhere.
+const REDOS_BEFORE_EVERYWHERE: usize = 2;
+
 /// The fewest steps checked together by [`Work::make`].
 const BATCH: usize = 1024;
 
@@ -742,6 +915,12 @@ pub(crate) fn coarsen_checking(
         h,
         grid,
         surface_normals,
+        careful: Careful::default(),
+        log: UndoLog {
+            triangle_pass: vec![0; mesh.triangles.len()],
+            fan_pass: vec![0; n],
+            ..UndoLog::default()
+        },
     };
     let mut done = Coarsened::default();
     for _ in 0..MAX_PASSES {
@@ -762,14 +941,17 @@ pub(crate) fn coarsen_checking(
             .iter()
             .map(|&(_, a, b)| Step::Collapse(a, b))
             .collect();
-        let collapsed = make(&mut work, &steps, cancel, checking)?;
+        let (collapsed, redone) = work.make_pass(&steps, cancel, checking)?;
         done.collapses += collapsed;
+        done.redone += redone;
         // Flips toward thicker triangles, which free further collapses.
         let steps: Vec<Step> = (0..work.triangles.len() as u32)
             .filter(|&t| work.alive[t as usize])
             .flat_map(|t| (0..3).map(move |k| Step::Flip(t, k)))
             .collect();
-        done.flips += make(&mut work, &steps, cancel, checking)?;
+        let (flipped, redone) = work.make_pass(&steps, cancel, checking)?;
+        done.flips += flipped;
+        done.redone += redone;
         done.passes += 1;
         pass_done(done.passes);
         let alive_vertices = n - done.collapses;
@@ -853,6 +1035,8 @@ mod tests {
                 .iter()
                 .map(|&p| field.gradient(p, h).normalize())
                 .collect(),
+            careful: Careful::default(),
+            log: UndoLog::default(),
         };
         let (along, across) = (mesh.corners(0), mesh.corners(1));
         assert!(quality(along) < MIN_QUALITY && quality(along) > THIN_QUALITY);

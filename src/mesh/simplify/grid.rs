@@ -66,8 +66,16 @@ impl Box32 {
             && other.lo[2] <= self.hi[2]
     }
 
+    /// The box grown by `by` (≥ 0) on every side, rounded outward.
+    pub(super) fn grown(self, by: f64) -> Self {
+        Self {
+            lo: self.lo.map(|x| down(f64::from(x) - by)),
+            hi: self.hi.map(|x| up(f64::from(x) + by)),
+        }
+    }
+
     /// The largest side.
-    fn extent(&self) -> f64 {
+    pub(super) fn extent(&self) -> f64 {
         (0..3)
             .map(|k| f64::from(self.hi[k]) - f64::from(self.lo[k]))
             .fold(0.0, f64::max)
