@@ -495,6 +495,58 @@ impl Work<'_> {
         self.begin_pass();
     }
 
+    /// Makes `steps` again from the state in which `last` (the record of the last time they
+    /// were made) began, now that the careful region has grown: the same mesh as
+    /// [`Work::make`], but a step is checked only if its footprint holds a vertex whose fan
+    /// may differ from that of the last time (a step checked again and made, or made the last
+    /// time and not now, marks both its footprints so) or the box of its footprint's points
+    /// (which holds its new triangles) meets the careful region; the others are made as the
+    /// last time. Records this time in `record`; how many steps were made, or `None` if
+    /// `cancel` stopped it.
+    fn remake(
+        &mut self,
+        steps: &[Step],
+        last: &Record,
+        record: &mut Record,
+        cancel: &AtomicBool,
+    ) -> Option<usize> {
+        record.clear(steps.len());
+        let mut differs = vec![false; self.vertices.len()];
+        let mut scratch = Scratch::default();
+        let mut footprint = Vec::new();
+        let mut made = 0;
+        for (i, &step) in steps.iter().enumerate() {
+            if i % BATCH == 0 && cancel.load(Ordering::Relaxed) {
+                return None;
+            }
+            self.footprint(step, &mut footprint);
+            let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+            for &w in &footprint {
+                let p = self.vertices[w as usize];
+                (lo, hi) = (lo.min(p), hi.max(p));
+            }
+            let before = last.footprint(i);
+            let fresh = footprint.iter().any(|&w| differs[w as usize])
+                || self.careful.covers(&Box32::around(&[lo, hi, hi]));
+            let ok = if fresh {
+                self.check(step, &mut scratch).ok
+            } else {
+                before.is_some()
+            };
+            if fresh && (ok || before.is_some()) {
+                for &w in footprint.iter().chain(before.into_iter().flatten()) {
+                    differs[w as usize] = true;
+                }
+            }
+            if ok {
+                record.made(i, &footprint);
+                self.apply(step);
+                made += 1;
+            }
+        }
+        Some(made)
+    }
+
     /// Makes each of `steps` that every condition allows, in order (as [`Work::make`]), the
     /// crossing test of a step made only where [`Work::careful`] covers it and of the rest
     /// once the steps are made; if that finds a crossing, the pass is undone and made again
@@ -508,9 +560,15 @@ impl Work<'_> {
         checking: Checking,
     ) -> Option<(usize, usize)> {
         let mut redone = 0;
+        let (mut last, mut record) = (Record::default(), Record::default());
         loop {
             self.begin_pass();
-            let made = make(self, steps, cancel, checking)?;
+            let made = if redone == 0 || self.careful.everywhere {
+                make(self, steps, cancel, checking, &mut record)?
+            } else {
+                self.remake(steps, &last, &mut record, cancel)?
+            };
+            std::mem::swap(&mut last, &mut record);
             if self.careful.everywhere {
                 self.careful.everywhere = false;
                 return Some((made, redone));
@@ -740,7 +798,14 @@ impl Work<'_> {
     /// triangles' box a changed triangle overlaps, being checked again on the mesh as it is
     /// then. Either way the result is the same as one by one, for any number of threads;
     /// `checking` says which way is taken.
-    fn make(&mut self, steps: &[Step], cancel: &AtomicBool, checking: Checking) -> Option<usize> {
+    fn make(
+        &mut self,
+        steps: &[Step],
+        cancel: &AtomicBool,
+        checking: Checking,
+        record: &mut Record,
+    ) -> Option<usize> {
+        record.clear(steps.len());
         let mut scratch = Scratch::default();
         let mut made = 0;
         let parallel = rayon::current_num_threads() > 1 && checking != Checking::Serial;
@@ -758,12 +823,15 @@ impl Work<'_> {
             // size of the mesh.
             let live = self.vertices.len() - self.removed_count;
             let length = (live / 64).max(BATCH);
+            let first = begun;
             let batch = &steps[begun..(begun + length).min(steps.len())];
             begun += batch.len();
             stamp += 1;
             if !parallel {
-                for &step in batch {
+                for (i, &step) in (first..).zip(batch) {
                     if self.check(step, &mut scratch).ok {
+                        self.footprint(step, &mut footprint);
+                        record.made(i, &footprint);
                         self.apply(step);
                         made += 1;
                     }
@@ -777,7 +845,7 @@ impl Work<'_> {
                 .with_min_len(BATCH / 16)
                 .map_init(Scratch::default, |scratch, &step| this.check(step, scratch))
                 .collect();
-            for (&step, verdict) in batch.iter().zip(verdicts) {
+            for ((i, &step), verdict) in (first..).zip(batch).zip(verdicts) {
                 self.footprint(step, &mut footprint);
                 let stale = footprint.iter().any(|&w| changed_at[w as usize] == stamp)
                     || verdict
@@ -795,6 +863,7 @@ impl Work<'_> {
                         changed = changed.union(Box32::around(&[self.vertices[w as usize]; 3]));
                     }
                     changed_boxes.push(changed);
+                    record.made(i, &footprint);
                     self.apply(step);
                     made += 1;
                 }
@@ -822,8 +891,46 @@ enum Step {
 
 /// [`Work::make`] on a thread of the pool (so each batch's parallel checks are split there,
 /// not handed over from outside it and waited for).
-fn make(work: &mut Work, steps: &[Step], cancel: &AtomicBool, checking: Checking) -> Option<usize> {
-    rayon::scope(|_| work.make(steps, cancel, checking))
+fn make(
+    work: &mut Work,
+    steps: &[Step],
+    cancel: &AtomicBool,
+    checking: Checking,
+    record: &mut Record,
+) -> Option<usize> {
+    rayon::scope(|_| work.make(steps, cancel, checking, record))
+}
+
+/// Which steps of a pass were made, each with its footprint ([`Work::footprint`]) as it was
+/// made, so that the pass can be made again ([`Work::remake`]) checking only the steps a
+/// change could reach.
+#[derive(Default)]
+struct Record {
+    /// Per step, its footprint's range in `footprints` if it was made.
+    made: Vec<Option<(u32, u32)>>,
+    /// The footprints of the steps made, one after another.
+    footprints: Vec<u32>,
+}
+
+impl Record {
+    /// Forgets every step, for a pass of `steps` steps.
+    fn clear(&mut self, steps: usize) {
+        self.made.clear();
+        self.made.resize(steps, None);
+        self.footprints.clear();
+    }
+
+    /// Notes that step `i` was made with the footprint `footprint`.
+    fn made(&mut self, i: usize, footprint: &[u32]) {
+        let start = self.footprints.len() as u32;
+        self.footprints.extend_from_slice(footprint);
+        self.made[i] = Some((start, self.footprints.len() as u32));
+    }
+
+    /// Step `i`'s footprint, if it was made.
+    fn footprint(&self, i: usize) -> Option<&[u32]> {
+        self.made[i].map(|(a, b)| &self.footprints[a as usize..b as usize])
+    }
 }
 
 /// Times a pass is redone with a larger careful region ([`Work::make_pass`]) before the

@@ -165,8 +165,9 @@ impl TriangleGrid {
     /// The index along a side of the cell holding coordinate `x` at a level.
     #[inline]
     fn index(&self, x: f64, level: &Level) -> usize {
-        let i = ((x - self.lo) / level.side).floor();
-        (i.max(0.0) as usize).min(level.dims - 1)
+        // Truncation is the floor here: what is negative (or NaN) goes to 0 either way.
+        let i = ((x - self.lo) / level.side).max(0.0);
+        (i as usize).min(level.dims - 1)
     }
 
     /// Keeps triangle `triangle` (below the count given to [`TriangleGrid::new`], not kept
