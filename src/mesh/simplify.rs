@@ -449,6 +449,31 @@ impl Work<'_> {
     /// [`super::check`]); empty if none do.
     fn crossings_made(&self) -> Vec<Box32> {
         let mut found = Vec::new();
+        // Changed triangles in the order they were logged (a fan's together), in groups
+        // near each other, so that one walk of the grid serves a group.
+        let mut group: Vec<(u32, [u32; 3], [DVec3; 3], Box32)> = Vec::new();
+        let mut test = |group: &[(u32, [u32; 3], [DVec3; 3], Box32)]| {
+            let all = group.iter().fold(group[0].3, |a, m| a.union(m.3));
+            self.grid.any_near(&all, |b| {
+                if !b.bounds.overlaps(&all) {
+                    return false;
+                }
+                let other = b.triangle;
+                // A pair of changed triangles is tested once, from the lower index.
+                let changed = self.log.triangle_pass[other as usize] == self.log.pass;
+                for &(t, tri, p, bounds) in group {
+                    if other == t || (changed && other < t) || !b.bounds.overlaps(&bounds) {
+                        continue;
+                    }
+                    let q = self.triangles[other as usize];
+                    if check::corners_meet(tri, p, q, self.corners(q)) {
+                        found.push(bounds.union(b.bounds));
+                    }
+                }
+                false
+            });
+        };
+        let mut first_extent = 0.0;
         for &(t, ..) in &self.log.triangles {
             if !self.alive[t as usize] {
                 continue;
@@ -456,19 +481,20 @@ impl Work<'_> {
             let tri = self.triangles[t as usize];
             let p = self.corners(tri);
             let bounds = Box32::around(&p);
-            self.grid.any_near(&bounds, |b| {
-                let other = b.triangle;
-                // A pair of changed triangles is tested once, from the lower index.
-                let changed = self.log.triangle_pass[other as usize] == self.log.pass;
-                if other == t || (changed && other < t) || !b.bounds.overlaps(&bounds) {
-                    return false;
+            if let Some(&(.., start)) = group.first() {
+                let joined = group.iter().fold(start, |a, m| a.union(m.3)).union(bounds);
+                if group.len() >= CROSSING_GROUP || joined.extent() > 2.0 * first_extent {
+                    test(&group);
+                    group.clear();
                 }
-                let q = self.triangles[other as usize];
-                if check::corners_meet(tri, p, q, self.corners(q)) {
-                    found.push(bounds.union(b.bounds));
-                }
-                false
-            });
+            }
+            if group.is_empty() {
+                first_extent = bounds.extent();
+            }
+            group.push((t, tri, p, bounds));
+        }
+        if !group.is_empty() {
+            test(&group);
         }
         found
     }
@@ -932,6 +958,10 @@ impl Record {
         self.made[i].map(|(a, b)| &self.footprints[a as usize..b as usize])
     }
 }
+
+/// The most changed triangles tested for crossings with one walk of the grid at the end of a
+/// pass ([`Work::crossings_made`]).
+const CROSSING_GROUP: usize = 6;
 
 /// Times a pass is redone with a larger careful region ([`Work::make_pass`]) before the
 /// crossing test is made step by step everywhere.
