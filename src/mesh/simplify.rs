@@ -25,8 +25,17 @@
 //! - no new triangle meets a triangle near it (or another new one) other than in the corners
 //!   and sides they share, by the exact test of [`super::check`]; the triangles' boxes are
 //!   kept (as `f32` rounded outward) in a hierarchy of loose grids of dense arrays, updated
-//!   as triangles change, so each new fan is tested only against the triangles whose boxes
-//!   overlap it.
+//!   as triangles change, so a triangle is tested only against those whose boxes overlap it.
+//!
+//! The last condition is tested optimistically: a pass makes its steps without it (except in
+//! the careful region, below), then tests each triangle it changed, once, as the pass left
+//! it. A crossing found there is rare; the pass is then undone (from a log of the triangles
+//! and fans it changed) and made again with the test made step by step wherever a step's new
+//! triangles meet a box about a crossing found (as large again on every side; the region
+//! only grows, and at the third time the test is made everywhere for that pass), each step
+//! the difference from the last time cannot reach being made as recorded then, unchecked.
+//! So the mesh each pass leaves has no crossing (where the one it began with had none), and
+//! the result is deterministic.
 //!
 //! Edges are tried shortest first, in passes until a pass removes few vertices; after each
 //! pass, edges are flipped to the other diagonal of their two triangles where that makes
@@ -35,7 +44,8 @@
 //! neighbours or fewer. With more than one thread, the steps (collapses, then flips) are
 //! checked in parallel in batches against the mesh as each batch begins and made in order,
 //! a verdict that an earlier step of its batch could have changed being checked again: the
-//! result is the same as one step after another, for any number of threads. The check of the finished mesh ([`super::check::verify`]) stays the
+//! result is the same as one step after another, for any number of threads (a pass made
+//! again is made one by one). The check of the finished mesh ([`super::check::verify`]) stays the
 //! guarantee: the caller falls back to a smaller budget, then to the uncoarsened mesh, if it
 //! ever finds a crossing.
 
@@ -970,6 +980,73 @@ const REDOS_BEFORE_EVERYWHERE: usize = 2;
 /// The fewest steps checked together by [`Work::make`].
 const BATCH: usize = 1024;
 
+impl<'a> Work<'a> {
+    /// The work of coarsening `mesh` (with each vertex's kind) within `budget`: every
+    /// triangle live and in the grid, nothing logged, the careful region empty.
+    fn new(
+        field: &'a Field,
+        mesh: &'a TriangleMesh,
+        kinds: &'a [VertexKind],
+        budget: f64,
+    ) -> Work<'a> {
+        let n = mesh.vertices.len();
+        let mut around: Vec<Vec<u32>> = vec![Vec::new(); n];
+        for (t, tri) in mesh.triangles.iter().enumerate() {
+            for &v in tri {
+                around[v as usize].push(t as u32);
+            }
+        }
+        // The finest cells about twice the triangles' mean longest side at the start.
+        let mut longest = 0.0;
+        for t in 0..mesh.triangles.len() {
+            let [a, b, c] = mesh.corners(t);
+            longest += (b - a).length().max((c - b).length()).max((a - c).length());
+        }
+        let cell = 2.0 * longest / mesh.triangles.len().max(1) as f64;
+        let mut grid = TriangleGrid::new(
+            field.radius() * (1.0 + 1e-9),
+            cell.max(1e-12),
+            mesh.triangles.len(),
+        );
+        for t in 0..mesh.triangles.len() {
+            grid.insert(t as u32, &mesh.corners(t));
+        }
+        let h = 1e-7 * field.radius();
+        let surface_normals: Vec<DVec3> = mesh
+            .vertices
+            .par_iter()
+            .zip(kinds.par_iter())
+            .map(|(&p, k)| {
+                if k.on_surface() {
+                    field.value_and_gradient(p, h).1.normalize_or_zero()
+                } else {
+                    DVec3::ZERO
+                }
+            })
+            .collect();
+        Work {
+            field,
+            vertices: &mesh.vertices,
+            kinds,
+            triangles: mesh.triangles.clone(),
+            alive: vec![true; mesh.triangles.len()],
+            around,
+            removed: vec![false; n],
+            removed_count: 0,
+            budget,
+            h,
+            grid,
+            surface_normals,
+            careful: Careful::default(),
+            log: UndoLog {
+                triangle_pass: vec![0; mesh.triangles.len()],
+                fan_pass: vec![0; n],
+                ..UndoLog::default()
+            },
+        }
+    }
+}
+
 /// Coarsens `mesh` (object space, with each vertex's kind) by half-edge collapses within
 /// `budget` of the exact boundary (object units; see the module doc), in place: removed
 /// vertices are dropped and the kinds kept in step. Gives up (`None`, the mesh untouched)
@@ -1005,60 +1082,7 @@ pub(crate) fn coarsen_checking(
     checking: Checking,
 ) -> Option<Coarsened> {
     let n = mesh.vertices.len();
-    let mut around: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        for &v in tri {
-            around[v as usize].push(t as u32);
-        }
-    }
-    // The finest cells about twice the triangles' mean longest side at the start.
-    let mut longest = 0.0;
-    for t in 0..mesh.triangles.len() {
-        let [a, b, c] = mesh.corners(t);
-        longest += (b - a).length().max((c - b).length()).max((a - c).length());
-    }
-    let cell = 2.0 * longest / mesh.triangles.len().max(1) as f64;
-    let mut grid = TriangleGrid::new(
-        field.radius() * (1.0 + 1e-9),
-        cell.max(1e-12),
-        mesh.triangles.len(),
-    );
-    for t in 0..mesh.triangles.len() {
-        grid.insert(t as u32, &mesh.corners(t));
-    }
-    let h = 1e-7 * field.radius();
-    let surface_normals: Vec<DVec3> = mesh
-        .vertices
-        .par_iter()
-        .zip(kinds.par_iter())
-        .map(|(&p, k)| {
-            if k.on_surface() {
-                field.value_and_gradient(p, h).1.normalize_or_zero()
-            } else {
-                DVec3::ZERO
-            }
-        })
-        .collect();
-    let mut work = Work {
-        field,
-        vertices: &mesh.vertices,
-        kinds,
-        triangles: mesh.triangles.clone(),
-        alive: vec![true; mesh.triangles.len()],
-        around,
-        removed: vec![false; n],
-        removed_count: 0,
-        budget,
-        h,
-        grid,
-        surface_normals,
-        careful: Careful::default(),
-        log: UndoLog {
-            triangle_pass: vec![0; mesh.triangles.len()],
-            fan_pass: vec![0; n],
-            ..UndoLog::default()
-        },
-    };
+    let mut work = Work::new(field, mesh, kinds, budget);
     let mut done = Coarsened::default();
     for _ in 0..MAX_PASSES {
         // Every live edge in both directions, shortest first.
@@ -1226,6 +1250,111 @@ mod tests {
         assert!(one.2.collapses > 1000 && one.2.flips > 0, "{:?}", one.2);
         check::verify(&one.0).unwrap();
         assert!(one == two, "the meshes differ between 1 and 2 threads");
+    }
+
+    /// The extracted mesh of the unit sphere (clip radius 3, grid step 0.1).
+    fn sphere_mesh(field: &Field) -> (TriangleMesh, Vec<VertexKind>) {
+        extract::march(field, extract::Grid::covering(3.0, 0.1), &|_, _| {})
+    }
+
+    /// Every shortest-first collapse of the live edges, as a pass makes them.
+    fn collapses(work: &Work) -> Vec<Step> {
+        let mut steps = Vec::new();
+        for (t, tri) in work.triangles.iter().enumerate() {
+            if work.alive[t] {
+                steps.extend((0..3).map(|k| Step::Collapse(tri[k], tri[(k + 1) % 3])));
+            }
+        }
+        steps
+    }
+
+    #[test]
+    fn undoing_a_pass_gives_back_the_mesh_as_it_began() {
+        let field = Field::new(
+            &expand("x^2 + y^2 + z^2 = 1").unwrap(),
+            3.0,
+            SolidKind::Inside,
+        );
+        let (mesh, kinds) = sphere_mesh(&field);
+        let mut work = Work::new(&field, &mesh, &kinds, 0.05);
+        let fans = |work: &Work| {
+            work.around
+                .iter()
+                .map(|f| {
+                    let mut f = f.clone();
+                    f.sort_unstable();
+                    f
+                })
+                .collect::<Vec<_>>()
+        };
+        let before = (work.triangles.clone(), fans(&work), work.removed.clone());
+        work.begin_pass();
+        let steps = collapses(&work);
+        let made = make(
+            &mut work,
+            &steps,
+            &AtomicBool::new(false),
+            Checking::Serial,
+            &mut Record::default(),
+        )
+        .unwrap();
+        assert!(made > 100, "{made}");
+        assert!(work.removed_count == made && !work.log.triangles.is_empty());
+        work.undo_pass();
+        assert_eq!(work.removed_count, 0);
+        assert!(work.alive.iter().all(|&a| a));
+        assert!((work.triangles.clone(), fans(&work), work.removed.clone()) == before);
+        // The grid holds every triangle again, with its box as it began.
+        let everywhere = Box32::around(&[DVec3::splat(-3.0), DVec3::splat(3.0), DVec3::ZERO]);
+        let mut kept = Vec::new();
+        work.grid.any_near(&everywhere, |b| {
+            kept.push((b.triangle, b.bounds));
+            false
+        });
+        kept.sort_unstable_by_key(|k| k.0);
+        assert_eq!(kept.len(), mesh.triangles.len());
+        for (t, bounds) in kept {
+            assert_eq!(bounds, Box32::around(&mesh.corners(t as usize)));
+        }
+    }
+
+    #[test]
+    fn the_end_of_pass_test_finds_the_crossings_of_changed_triangles() {
+        // Two spheres of radius 1, 1.5 apart, pass through each other; 3 apart, they do not.
+        let field = Field::new(
+            &expand("x^2 + y^2 + z^2 = 1").unwrap(),
+            3.0,
+            SolidKind::Inside,
+        );
+        let (one, one_kinds) = sphere_mesh(&field);
+        let two_spheres = |apart: f64| {
+            let mut mesh = one.clone();
+            let count = one.vertices.len() as u32;
+            mesh.vertices
+                .extend(one.vertices.iter().map(|&p| p + DVec3::X * apart));
+            mesh.triangles
+                .extend(one.triangles.iter().map(|t| t.map(|v| v + count)));
+            mesh
+        };
+        let kinds = [one_kinds.clone(), one_kinds].concat();
+        for (apart, crossing) in [(1.5, true), (3.0, false)] {
+            let mesh = two_spheres(apart);
+            let mut work = Work::new(&field, &mesh, &kinds, 0.05);
+            work.begin_pass();
+            assert!(work.crossings_made().is_empty(), "nothing changed yet");
+            // The second sphere's triangles marked changed, as if a pass had made them.
+            for t in one.triangles.len()..mesh.triangles.len() {
+                work.log_triangle(t as u32);
+            }
+            let found = work.crossings_made();
+            assert_eq!(
+                !found.is_empty(),
+                crossing,
+                "{apart}: {} found",
+                found.len()
+            );
+            assert_eq!(!check::crossing_triangles(&mesh).is_empty(), crossing);
+        }
     }
 
     #[test]
