@@ -209,13 +209,14 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
         match part.coarsened {
             Some(c) => outln!(
                 "    coarsened where flat: {} triangles from marching tetrahedra's {} ({} \
-                 collapses and {} flips in {} passes, each new triangle within {:.3e} of the \
-                 surface)",
+                 collapses and {} flips in {} passes, {} of them redone for a crossing, each new \
+                 triangle within {:.3e} of the surface)",
                 part.mesh.triangles.len(),
                 part.extracted_triangles,
                 c.done.collapses,
                 c.done.flips,
                 c.done.passes,
+                c.done.redone,
                 c.budget
             ),
             None => outln!(

@@ -160,7 +160,12 @@ fn orient(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {
 /// Whether the segment `p q` crosses the triangle `a b c` at a point inside both (strict:
 /// touching at an end, an edge or a corner does not count).
 fn segment_crosses(p: DVec3, q: DVec3, [a, b, c]: [DVec3; 3]) -> bool {
-    let (sp, sq) = (orient(a, b, c, p), orient(a, b, c, q));
+    segment_crosses_sided(p, q, orient(a, b, c, p), orient(a, b, c, q), [a, b, c])
+}
+
+/// [`segment_crosses`] given `sp = orient(a, b, c, p)` and `sq = orient(a, b, c, q)` (the
+/// same answer, for callers that share those among the edges of a triangle).
+fn segment_crosses_sided(p: DVec3, q: DVec3, sp: f64, sq: f64, [a, b, c]: [DVec3; 3]) -> bool {
     if sp * sq >= 0.0 || (sp * sq).is_nan() {
         return false;
     }
@@ -278,10 +283,20 @@ pub fn corners_meet(ti: [u32; 3], pi: [DVec3; 3], tj: [u32; 3], pj: [DVec3; 3]) 
     }
     let shared = &shared[..count];
     match count {
-        0 => (0..3).any(|k| {
-            segment_crosses(pi[k], pi[(k + 1) % 3], pj)
-                || segment_crosses(pj[k], pj[(k + 1) % 3], pi)
-        }),
+        0 => {
+            // Each corner's side of the other triangle's plane, once: `orient` of it (the
+            // same arithmetic, so the same answer as testing edge by edge).
+            let sides = |[a, b, c]: [DVec3; 3], p: [DVec3; 3]| {
+                let normal = (b - a).cross(c - a);
+                p.map(|x| normal.dot(x - a))
+            };
+            let (of_i, of_j) = (sides(pj, pi), sides(pi, pj));
+            (0..3).any(|k| {
+                let l = (k + 1) % 3;
+                segment_crosses_sided(pi[k], pi[l], of_i[k], of_i[l], pj)
+                    || segment_crosses_sided(pj[k], pj[l], of_j[k], of_j[l], pi)
+            })
+        }
         1 => {
             // Only the edges opposite the shared corner can cross the other triangle.
             let opposite = |t: [u32; 3], p: [DVec3; 3]| {

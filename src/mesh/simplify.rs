@@ -25,8 +25,17 @@
 //! - no new triangle meets a triangle near it (or another new one) other than in the corners
 //!   and sides they share, by the exact test of [`super::check`]; the triangles' boxes are
 //!   kept (as `f32` rounded outward) in a hierarchy of loose grids of dense arrays, updated
-//!   as triangles change, so each new fan is tested only against the triangles whose boxes
-//!   overlap it.
+//!   as triangles change, so a triangle is tested only against those whose boxes overlap it.
+//!
+//! The last condition is tested optimistically: a pass makes its steps without it (except in
+//! the careful region, below), then tests each triangle it changed, once, as the pass left
+//! it. A crossing found there is rare; the pass is then undone (from a log of the triangles
+//! and fans it changed) and made again with the test made step by step wherever a step's new
+//! triangles meet a box about a crossing found (as large again on every side; the region
+//! only grows, and at the third time the test is made everywhere for that pass), each step
+//! the difference from the last time cannot reach being made as recorded then, unchecked.
+//! So the mesh each pass leaves has no crossing (where the one it began with had none), and
+//! the result is deterministic.
 //!
 //! Edges are tried shortest first, in passes until a pass removes few vertices; after each
 //! pass, edges are flipped to the other diagonal of their two triangles where that makes
@@ -35,7 +44,8 @@
 //! neighbours or fewer. With more than one thread, the steps (collapses, then flips) are
 //! checked in parallel in batches against the mesh as each batch begins and made in order,
 //! a verdict that an earlier step of its batch could have changed being checked again: the
-//! result is the same as one step after another, for any number of threads. The check of the finished mesh ([`super::check::verify`]) stays the
+//! result is the same as one step after another, for any number of threads (a pass made
+//! again is made one by one). The check of the finished mesh ([`super::check::verify`]) stays the
 //! guarantee: the caller falls back to a smaller budget, then to the uncoarsened mesh, if it
 //! ever finds a crossing.
 
@@ -95,6 +105,9 @@ pub struct Coarsened {
     pub flips: usize,
     /// Passes over the edges made.
     pub passes: usize,
+    /// Passes (of collapses or of flips) undone and made again because the test of their
+    /// steps' new triangles at the end found a crossing (see the module doc).
+    pub redone: usize,
 }
 
 /// Space one checking thread reuses from check to check (no allocation per collapse).
@@ -127,6 +140,41 @@ impl Verdict {
     };
 }
 
+/// Where each step's new triangles are tested for crossings as the step is checked; elsewhere
+/// the test waits for the end of the pass ([`Work::crossings_made`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+struct Careful {
+    /// Everywhere (for the rest of the pass in hand).
+    everywhere: bool,
+    /// Where a new fan's box overlaps one of these boxes (about crossings found before).
+    boxes: Vec<Box32>,
+}
+
+impl Careful {
+    /// Whether a step whose new triangles lie in `fan` is tested as it is checked.
+    fn covers(&self, fan: &Box32) -> bool {
+        self.everywhere || self.boxes.iter().any(|b| b.overlaps(fan))
+    }
+}
+
+/// What the steps of a pass changed, to undo the pass: each changed triangle and fan as it
+/// was when the pass began, and the vertices removed.
+#[derive(Default)]
+struct UndoLog {
+    /// The pass each triangle was last logged in (0: never).
+    triangle_pass: Vec<u32>,
+    /// The pass each vertex's fan was last logged in.
+    fan_pass: Vec<u32>,
+    /// The pass in hand (from 1).
+    pass: u32,
+    /// Triangles as they were: index, corners, whether live.
+    triangles: Vec<(u32, [u32; 3], bool)>,
+    /// Fans as they were: vertex, its triangles.
+    fans: Vec<(u32, Vec<u32>)>,
+    /// Vertices removed in the pass.
+    removed: Vec<u32>,
+}
+
 /// The mesh being coarsened: triangles with a live flag and the triangles about each vertex.
 struct Work<'a> {
     field: &'a Field,
@@ -145,6 +193,10 @@ struct Work<'a> {
     /// The unit normal of `φ = 0` (`∇φ/|∇φ|`, zero where `∇φ` vanishes) at each vertex on the
     /// surface; zero at the others.
     surface_normals: Vec<DVec3>,
+    /// Where steps are tested for crossings one by one (elsewhere at the end of the pass).
+    careful: Careful,
+    /// What the pass in hand changed.
+    log: UndoLog,
 }
 
 impl Work<'_> {
@@ -218,8 +270,13 @@ impl Work<'_> {
     /// Whether any of the triangles `scratch.new` (replacing the live triangles for which
     /// `replaced` holds, which are left out) would meet a live triangle near it, or another
     /// of them, other than in the corners and sides they share; with the box of the new
-    /// triangles (every triangle whose box overlaps it was read).
-    fn would_cross(&self, scratch: &mut Scratch, replaced: impl Fn(u32) -> bool) -> (bool, Box32) {
+    /// triangles (every triangle whose box overlaps it was read). Outside the careful region
+    /// ([`Work::careful`]) the test is left to the end of the pass: `(false, None)`.
+    fn would_cross(
+        &self,
+        scratch: &mut Scratch,
+        replaced: impl Fn(u32) -> bool,
+    ) -> (bool, Option<Box32>) {
         let Scratch {
             new,
             new_corners,
@@ -231,6 +288,9 @@ impl Work<'_> {
         boxes.clear();
         boxes.extend(new_corners.iter().map(Box32::around));
         let all = boxes.iter().fold(boxes[0], |a, &b| a.union(b));
+        if !self.careful.covers(&all) {
+            return (false, None);
+        }
         let near = self.grid.any_near(&all, |b| {
             if !b.bounds.overlaps(&all) {
                 return false;
@@ -254,18 +314,18 @@ impl Work<'_> {
             false
         });
         if near {
-            return (true, all);
+            return (true, Some(all));
         }
         for i in 0..new.len() {
             for j in i + 1..new.len() {
                 if boxes[i].overlaps(&boxes[j])
                     && check::corners_meet(new[i], new_corners[i], new[j], new_corners[j])
                 {
-                    return (true, all);
+                    return (true, Some(all));
                 }
             }
         }
-        (false, all)
+        (false, Some(all))
     }
 
     /// The edge `a b` of live triangle `t` (its `k`-th side), with the triangle on its other
@@ -342,15 +402,17 @@ impl Work<'_> {
         scratch.new.clear();
         scratch.new.extend([new1, new2]);
         let (crossed, near) = self.would_cross(scratch, |x| x == t || x == t2);
-        Verdict {
-            ok: !crossed,
-            near: Some(near),
-        }
+        Verdict { ok: !crossed, near }
     }
 
     /// Flips the edge of [`Work::check_flip`] (which must have allowed it, on this mesh).
     fn apply_flip(&mut self, t: u32, k: usize) {
         let (a, b, c, t2, d) = self.flip_quad(t, k).unwrap();
+        self.log_triangle(t);
+        self.log_triangle(t2);
+        for w in [a, b, c, d] {
+            self.log_fan(w);
+        }
         let (new1, new2) = ([a, d, c], [d, b, c]);
         self.grid.remove(t);
         self.grid.remove(t2);
@@ -362,6 +424,202 @@ impl Work<'_> {
         self.around[b as usize].retain(|&x| x != t);
         self.around[c as usize].push(t2);
         self.around[d as usize].push(t);
+    }
+
+    /// Keeps triangle `t` as it is in the undo log, if the pass has not changed it yet.
+    fn log_triangle(&mut self, t: u32) {
+        let log = &mut self.log;
+        if log.triangle_pass[t as usize] != log.pass {
+            log.triangle_pass[t as usize] = log.pass;
+            log.triangles
+                .push((t, self.triangles[t as usize], self.alive[t as usize]));
+        }
+    }
+
+    /// Keeps the fan of vertex `w` as it is in the undo log, if the pass has not changed it.
+    fn log_fan(&mut self, w: u32) {
+        let log = &mut self.log;
+        if log.fan_pass[w as usize] != log.pass {
+            log.fan_pass[w as usize] = log.pass;
+            log.fans.push((w, self.around[w as usize].clone()));
+        }
+    }
+
+    /// Starts a new pass of the undo log (forgetting the last one's changes).
+    fn begin_pass(&mut self) {
+        let log = &mut self.log;
+        log.pass += 1;
+        log.triangles.clear();
+        log.fans.clear();
+        log.removed.clear();
+    }
+
+    /// The boxes of the pairs of live triangles, one of them changed in this pass, that meet
+    /// other than in the corners and sides they share (by the exact test of
+    /// [`super::check`]); empty if none do.
+    fn crossings_made(&self) -> Vec<Box32> {
+        let mut found = Vec::new();
+        // Changed triangles in the order they were logged (a fan's together), in groups
+        // near each other, so that one walk of the grid serves a group.
+        let mut group: Vec<(u32, [u32; 3], [DVec3; 3], Box32)> = Vec::new();
+        let mut test = |group: &[(u32, [u32; 3], [DVec3; 3], Box32)]| {
+            let all = group.iter().fold(group[0].3, |a, m| a.union(m.3));
+            self.grid.any_near(&all, |b| {
+                if !b.bounds.overlaps(&all) {
+                    return false;
+                }
+                let other = b.triangle;
+                // A pair of changed triangles is tested once, from the lower index.
+                let changed = self.log.triangle_pass[other as usize] == self.log.pass;
+                for &(t, tri, p, bounds) in group {
+                    if other == t || (changed && other < t) || !b.bounds.overlaps(&bounds) {
+                        continue;
+                    }
+                    let q = self.triangles[other as usize];
+                    if check::corners_meet(tri, p, q, self.corners(q)) {
+                        found.push(bounds.union(b.bounds));
+                    }
+                }
+                false
+            });
+        };
+        let mut first_extent = 0.0;
+        for &(t, ..) in &self.log.triangles {
+            if !self.alive[t as usize] {
+                continue;
+            }
+            let tri = self.triangles[t as usize];
+            let p = self.corners(tri);
+            let bounds = Box32::around(&p);
+            if let Some(&(.., start)) = group.first() {
+                let joined = group.iter().fold(start, |a, m| a.union(m.3)).union(bounds);
+                if group.len() >= CROSSING_GROUP || joined.extent() > 2.0 * first_extent {
+                    test(&group);
+                    group.clear();
+                }
+            }
+            if group.is_empty() {
+                first_extent = bounds.extent();
+            }
+            group.push((t, tri, p, bounds));
+        }
+        if !group.is_empty() {
+            test(&group);
+        }
+        found
+    }
+
+    /// Undoes every step made since [`Work::begin_pass`], and starts the pass again.
+    fn undo_pass(&mut self) {
+        let mut log = std::mem::take(&mut self.log);
+        for &(t, tri, alive) in &log.triangles {
+            self.grid.remove(t);
+            self.triangles[t as usize] = tri;
+            self.alive[t as usize] = alive;
+            if alive {
+                self.grid.insert(t, &self.corners(tri));
+            }
+        }
+        for (w, fan) in log.fans.drain(..) {
+            self.around[w as usize] = fan;
+        }
+        for &u in &log.removed {
+            self.removed[u as usize] = false;
+        }
+        self.removed_count -= log.removed.len();
+        self.log = log;
+        self.begin_pass();
+    }
+
+    /// Makes `steps` again from the state in which `last` (the record of the last time they
+    /// were made) began, now that the careful region has grown: the same mesh as
+    /// [`Work::make`], but a step is checked only if its footprint holds a vertex whose fan
+    /// may differ from that of the last time (a step checked again and made, or made the last
+    /// time and not now, marks both its footprints so) or the box of its footprint's points
+    /// (which holds its new triangles) meets the careful region; the others are made as the
+    /// last time. Records this time in `record`; how many steps were made, or `None` if
+    /// `cancel` stopped it.
+    fn remake(
+        &mut self,
+        steps: &[Step],
+        last: &Record,
+        record: &mut Record,
+        cancel: &AtomicBool,
+    ) -> Option<usize> {
+        record.clear(steps.len());
+        let mut differs = vec![false; self.vertices.len()];
+        let mut scratch = Scratch::default();
+        let mut footprint = Vec::new();
+        let mut made = 0;
+        for (i, &step) in steps.iter().enumerate() {
+            if i % BATCH == 0 && cancel.load(Ordering::Relaxed) {
+                return None;
+            }
+            self.footprint(step, &mut footprint);
+            let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+            for &w in &footprint {
+                let p = self.vertices[w as usize];
+                (lo, hi) = (lo.min(p), hi.max(p));
+            }
+            let before = last.footprint(i);
+            let fresh = footprint.iter().any(|&w| differs[w as usize])
+                || self.careful.covers(&Box32::around(&[lo, hi, hi]));
+            let ok = if fresh {
+                self.check(step, &mut scratch).ok
+            } else {
+                before.is_some()
+            };
+            if fresh && (ok || before.is_some()) {
+                for &w in footprint.iter().chain(before.into_iter().flatten()) {
+                    differs[w as usize] = true;
+                }
+            }
+            if ok {
+                record.made(i, &footprint);
+                self.apply(step);
+                made += 1;
+            }
+        }
+        Some(made)
+    }
+
+    /// Makes each of `steps` that every condition allows, in order (as [`Work::make`]), the
+    /// crossing test of a step made only where [`Work::careful`] covers it and of the rest
+    /// once the steps are made; if that finds a crossing, the pass is undone and made again
+    /// with the region about each crossing found added to the careful one (at the third
+    /// time, everywhere). How many steps were made, and how many times the pass was redone;
+    /// `None` if `cancel` stopped it.
+    fn make_pass(
+        &mut self,
+        steps: &[Step],
+        cancel: &AtomicBool,
+        checking: Checking,
+    ) -> Option<(usize, usize)> {
+        let mut redone = 0;
+        let (mut last, mut record) = (Record::default(), Record::default());
+        loop {
+            self.begin_pass();
+            let made = if redone == 0 || self.careful.everywhere {
+                make(self, steps, cancel, checking, &mut record)?
+            } else {
+                self.remake(steps, &last, &mut record, cancel)?
+            };
+            std::mem::swap(&mut last, &mut record);
+            if self.careful.everywhere {
+                self.careful.everywhere = false;
+                return Some((made, redone));
+            }
+            let crossings = self.crossings_made();
+            if crossings.is_empty() {
+                return Some((made, redone));
+            }
+            self.undo_pass();
+            redone += 1;
+            // About each crossing, a box as large again on every side.
+            let grown = crossings.iter().map(|b| b.grown(b.extent()));
+            self.careful.boxes.extend(grown);
+            self.careful.everywhere = redone >= REDOS_BEFORE_EVERYWHERE;
+        }
     }
 
     /// The two triangles on the edge `u v` (in `u`'s fan) and their corners off it, if there
@@ -480,16 +738,21 @@ impl Work<'_> {
         }
         let (crossed, near) =
             self.would_cross(scratch, |x| self.triangles[x as usize].contains(&u));
-        Verdict {
-            ok: !crossed,
-            near: Some(near),
-        }
+        Verdict { ok: !crossed, near }
     }
 
     /// Collapses `u` into `v` (which [`Work::check_collapse`] must have allowed, on this
     /// mesh): the two triangles on the edge go, the rest of `u`'s fan turns to `v`.
     fn apply_collapse(&mut self, u: u32, v: u32) {
         let (shared, _) = self.edge_wings(u, v).unwrap();
+        for k in 0..self.around[u as usize].len() {
+            let t = self.around[u as usize][k];
+            self.log_triangle(t);
+            for w in self.triangles[t as usize] {
+                self.log_fan(w);
+            }
+        }
+        self.log.removed.push(u);
         for &t in &self.around[u as usize] {
             self.grid.remove(t);
         }
@@ -571,7 +834,14 @@ impl Work<'_> {
     /// triangles' box a changed triangle overlaps, being checked again on the mesh as it is
     /// then. Either way the result is the same as one by one, for any number of threads;
     /// `checking` says which way is taken.
-    fn make(&mut self, steps: &[Step], cancel: &AtomicBool, checking: Checking) -> Option<usize> {
+    fn make(
+        &mut self,
+        steps: &[Step],
+        cancel: &AtomicBool,
+        checking: Checking,
+        record: &mut Record,
+    ) -> Option<usize> {
+        record.clear(steps.len());
         let mut scratch = Scratch::default();
         let mut made = 0;
         let parallel = rayon::current_num_threads() > 1 && checking != Checking::Serial;
@@ -589,12 +859,15 @@ impl Work<'_> {
             // size of the mesh.
             let live = self.vertices.len() - self.removed_count;
             let length = (live / 64).max(BATCH);
+            let first = begun;
             let batch = &steps[begun..(begun + length).min(steps.len())];
             begun += batch.len();
             stamp += 1;
             if !parallel {
-                for &step in batch {
+                for (i, &step) in (first..).zip(batch) {
                     if self.check(step, &mut scratch).ok {
+                        self.footprint(step, &mut footprint);
+                        record.made(i, &footprint);
                         self.apply(step);
                         made += 1;
                     }
@@ -608,7 +881,7 @@ impl Work<'_> {
                 .with_min_len(BATCH / 16)
                 .map_init(Scratch::default, |scratch, &step| this.check(step, scratch))
                 .collect();
-            for (&step, verdict) in batch.iter().zip(verdicts) {
+            for ((i, &step), verdict) in (first..).zip(batch).zip(verdicts) {
                 self.footprint(step, &mut footprint);
                 let stale = footprint.iter().any(|&w| changed_at[w as usize] == stamp)
                     || verdict
@@ -626,6 +899,7 @@ impl Work<'_> {
                         changed = changed.union(Box32::around(&[self.vertices[w as usize]; 3]));
                     }
                     changed_boxes.push(changed);
+                    record.made(i, &footprint);
                     self.apply(step);
                     made += 1;
                 }
@@ -653,12 +927,125 @@ enum Step {
 
 /// [`Work::make`] on a thread of the pool (so each batch's parallel checks are split there,
 /// not handed over from outside it and waited for).
-fn make(work: &mut Work, steps: &[Step], cancel: &AtomicBool, checking: Checking) -> Option<usize> {
-    rayon::scope(|_| work.make(steps, cancel, checking))
+fn make(
+    work: &mut Work,
+    steps: &[Step],
+    cancel: &AtomicBool,
+    checking: Checking,
+    record: &mut Record,
+) -> Option<usize> {
+    rayon::scope(|_| work.make(steps, cancel, checking, record))
 }
+
+/// Which steps of a pass were made, each with its footprint ([`Work::footprint`]) as it was
+/// made, so that the pass can be made again ([`Work::remake`]) checking only the steps a
+/// change could reach.
+#[derive(Default)]
+struct Record {
+    /// Per step, its footprint's range in `footprints` if it was made.
+    made: Vec<Option<(u32, u32)>>,
+    /// The footprints of the steps made, one after another.
+    footprints: Vec<u32>,
+}
+
+impl Record {
+    /// Forgets every step, for a pass of `steps` steps.
+    fn clear(&mut self, steps: usize) {
+        self.made.clear();
+        self.made.resize(steps, None);
+        self.footprints.clear();
+    }
+
+    /// Notes that step `i` was made with the footprint `footprint`.
+    fn made(&mut self, i: usize, footprint: &[u32]) {
+        let start = self.footprints.len() as u32;
+        self.footprints.extend_from_slice(footprint);
+        self.made[i] = Some((start, self.footprints.len() as u32));
+    }
+
+    /// Step `i`'s footprint, if it was made.
+    fn footprint(&self, i: usize) -> Option<&[u32]> {
+        self.made[i].map(|(a, b)| &self.footprints[a as usize..b as usize])
+    }
+}
+
+/// The most changed triangles tested for crossings with one walk of the grid at the end of a
+/// pass ([`Work::crossings_made`]).
+const CROSSING_GROUP: usize = 6;
+
+/// Times a pass is redone with a larger careful region ([`Work::make_pass`]) before the
+/// crossing test is made step by step everywhere.
+const REDOS_BEFORE_EVERYWHERE: usize = 2;
 
 /// The fewest steps checked together by [`Work::make`].
 const BATCH: usize = 1024;
+
+impl<'a> Work<'a> {
+    /// The work of coarsening `mesh` (with each vertex's kind) within `budget`: every
+    /// triangle live and in the grid, nothing logged, the careful region empty.
+    fn new(
+        field: &'a Field,
+        mesh: &'a TriangleMesh,
+        kinds: &'a [VertexKind],
+        budget: f64,
+    ) -> Work<'a> {
+        let n = mesh.vertices.len();
+        let mut around: Vec<Vec<u32>> = vec![Vec::new(); n];
+        for (t, tri) in mesh.triangles.iter().enumerate() {
+            for &v in tri {
+                around[v as usize].push(t as u32);
+            }
+        }
+        // The finest cells about twice the triangles' mean longest side at the start.
+        let mut longest = 0.0;
+        for t in 0..mesh.triangles.len() {
+            let [a, b, c] = mesh.corners(t);
+            longest += (b - a).length().max((c - b).length()).max((a - c).length());
+        }
+        let cell = 2.0 * longest / mesh.triangles.len().max(1) as f64;
+        let mut grid = TriangleGrid::new(
+            field.radius() * (1.0 + 1e-9),
+            cell.max(1e-12),
+            mesh.triangles.len(),
+        );
+        for t in 0..mesh.triangles.len() {
+            grid.insert(t as u32, &mesh.corners(t));
+        }
+        let h = 1e-7 * field.radius();
+        let surface_normals: Vec<DVec3> = mesh
+            .vertices
+            .par_iter()
+            .zip(kinds.par_iter())
+            .map(|(&p, k)| {
+                if k.on_surface() {
+                    field.value_and_gradient(p, h).1.normalize_or_zero()
+                } else {
+                    DVec3::ZERO
+                }
+            })
+            .collect();
+        Work {
+            field,
+            vertices: &mesh.vertices,
+            kinds,
+            triangles: mesh.triangles.clone(),
+            alive: vec![true; mesh.triangles.len()],
+            around,
+            removed: vec![false; n],
+            removed_count: 0,
+            budget,
+            h,
+            grid,
+            surface_normals,
+            careful: Careful::default(),
+            log: UndoLog {
+                triangle_pass: vec![0; mesh.triangles.len()],
+                fan_pass: vec![0; n],
+                ..UndoLog::default()
+            },
+        }
+    }
+}
 
 /// Coarsens `mesh` (object space, with each vertex's kind) by half-edge collapses within
 /// `budget` of the exact boundary (object units; see the module doc), in place: removed
@@ -695,54 +1082,7 @@ pub(crate) fn coarsen_checking(
     checking: Checking,
 ) -> Option<Coarsened> {
     let n = mesh.vertices.len();
-    let mut around: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        for &v in tri {
-            around[v as usize].push(t as u32);
-        }
-    }
-    // The finest cells about twice the triangles' mean longest side at the start.
-    let mut longest = 0.0;
-    for t in 0..mesh.triangles.len() {
-        let [a, b, c] = mesh.corners(t);
-        longest += (b - a).length().max((c - b).length()).max((a - c).length());
-    }
-    let cell = 2.0 * longest / mesh.triangles.len().max(1) as f64;
-    let mut grid = TriangleGrid::new(
-        field.radius() * (1.0 + 1e-9),
-        cell.max(1e-12),
-        mesh.triangles.len(),
-    );
-    for t in 0..mesh.triangles.len() {
-        grid.insert(t as u32, &mesh.corners(t));
-    }
-    let h = 1e-7 * field.radius();
-    let surface_normals: Vec<DVec3> = mesh
-        .vertices
-        .par_iter()
-        .zip(kinds.par_iter())
-        .map(|(&p, k)| {
-            if k.on_surface() {
-                field.value_and_gradient(p, h).1.normalize_or_zero()
-            } else {
-                DVec3::ZERO
-            }
-        })
-        .collect();
-    let mut work = Work {
-        field,
-        vertices: &mesh.vertices,
-        kinds,
-        triangles: mesh.triangles.clone(),
-        alive: vec![true; mesh.triangles.len()],
-        around,
-        removed: vec![false; n],
-        removed_count: 0,
-        budget,
-        h,
-        grid,
-        surface_normals,
-    };
+    let mut work = Work::new(field, mesh, kinds, budget);
     let mut done = Coarsened::default();
     for _ in 0..MAX_PASSES {
         // Every live edge in both directions, shortest first.
@@ -762,14 +1102,17 @@ pub(crate) fn coarsen_checking(
             .iter()
             .map(|&(_, a, b)| Step::Collapse(a, b))
             .collect();
-        let collapsed = make(&mut work, &steps, cancel, checking)?;
+        let (collapsed, redone) = work.make_pass(&steps, cancel, checking)?;
         done.collapses += collapsed;
+        done.redone += redone;
         // Flips toward thicker triangles, which free further collapses.
         let steps: Vec<Step> = (0..work.triangles.len() as u32)
             .filter(|&t| work.alive[t as usize])
             .flat_map(|t| (0..3).map(move |k| Step::Flip(t, k)))
             .collect();
-        done.flips += make(&mut work, &steps, cancel, checking)?;
+        let (flipped, redone) = work.make_pass(&steps, cancel, checking)?;
+        done.flips += flipped;
+        done.redone += redone;
         done.passes += 1;
         pass_done(done.passes);
         let alive_vertices = n - done.collapses;
@@ -853,6 +1196,8 @@ mod tests {
                 .iter()
                 .map(|&p| field.gradient(p, h).normalize())
                 .collect(),
+            careful: Careful::default(),
+            log: UndoLog::default(),
         };
         let (along, across) = (mesh.corners(0), mesh.corners(1));
         assert!(quality(along) < MIN_QUALITY && quality(along) > THIN_QUALITY);
@@ -905,6 +1250,111 @@ mod tests {
         assert!(one.2.collapses > 1000 && one.2.flips > 0, "{:?}", one.2);
         check::verify(&one.0).unwrap();
         assert!(one == two, "the meshes differ between 1 and 2 threads");
+    }
+
+    /// The extracted mesh of the unit sphere (clip radius 3, grid step 0.1).
+    fn sphere_mesh(field: &Field) -> (TriangleMesh, Vec<VertexKind>) {
+        extract::march(field, extract::Grid::covering(3.0, 0.1), &|_, _| {})
+    }
+
+    /// Every shortest-first collapse of the live edges, as a pass makes them.
+    fn collapses(work: &Work) -> Vec<Step> {
+        let mut steps = Vec::new();
+        for (t, tri) in work.triangles.iter().enumerate() {
+            if work.alive[t] {
+                steps.extend((0..3).map(|k| Step::Collapse(tri[k], tri[(k + 1) % 3])));
+            }
+        }
+        steps
+    }
+
+    #[test]
+    fn undoing_a_pass_gives_back_the_mesh_as_it_began() {
+        let field = Field::new(
+            &expand("x^2 + y^2 + z^2 = 1").unwrap(),
+            3.0,
+            SolidKind::Inside,
+        );
+        let (mesh, kinds) = sphere_mesh(&field);
+        let mut work = Work::new(&field, &mesh, &kinds, 0.05);
+        let fans = |work: &Work| {
+            work.around
+                .iter()
+                .map(|f| {
+                    let mut f = f.clone();
+                    f.sort_unstable();
+                    f
+                })
+                .collect::<Vec<_>>()
+        };
+        let before = (work.triangles.clone(), fans(&work), work.removed.clone());
+        work.begin_pass();
+        let steps = collapses(&work);
+        let made = make(
+            &mut work,
+            &steps,
+            &AtomicBool::new(false),
+            Checking::Serial,
+            &mut Record::default(),
+        )
+        .unwrap();
+        assert!(made > 100, "{made}");
+        assert!(work.removed_count == made && !work.log.triangles.is_empty());
+        work.undo_pass();
+        assert_eq!(work.removed_count, 0);
+        assert!(work.alive.iter().all(|&a| a));
+        assert!((work.triangles.clone(), fans(&work), work.removed.clone()) == before);
+        // The grid holds every triangle again, with its box as it began.
+        let everywhere = Box32::around(&[DVec3::splat(-3.0), DVec3::splat(3.0), DVec3::ZERO]);
+        let mut kept = Vec::new();
+        work.grid.any_near(&everywhere, |b| {
+            kept.push((b.triangle, b.bounds));
+            false
+        });
+        kept.sort_unstable_by_key(|k| k.0);
+        assert_eq!(kept.len(), mesh.triangles.len());
+        for (t, bounds) in kept {
+            assert_eq!(bounds, Box32::around(&mesh.corners(t as usize)));
+        }
+    }
+
+    #[test]
+    fn the_end_of_pass_test_finds_the_crossings_of_changed_triangles() {
+        // Two spheres of radius 1, 1.5 apart, pass through each other; 3 apart, they do not.
+        let field = Field::new(
+            &expand("x^2 + y^2 + z^2 = 1").unwrap(),
+            3.0,
+            SolidKind::Inside,
+        );
+        let (one, one_kinds) = sphere_mesh(&field);
+        let two_spheres = |apart: f64| {
+            let mut mesh = one.clone();
+            let count = one.vertices.len() as u32;
+            mesh.vertices
+                .extend(one.vertices.iter().map(|&p| p + DVec3::X * apart));
+            mesh.triangles
+                .extend(one.triangles.iter().map(|t| t.map(|v| v + count)));
+            mesh
+        };
+        let kinds = [one_kinds.clone(), one_kinds].concat();
+        for (apart, crossing) in [(1.5, true), (3.0, false)] {
+            let mesh = two_spheres(apart);
+            let mut work = Work::new(&field, &mesh, &kinds, 0.05);
+            work.begin_pass();
+            assert!(work.crossings_made().is_empty(), "nothing changed yet");
+            // The second sphere's triangles marked changed, as if a pass had made them.
+            for t in one.triangles.len()..mesh.triangles.len() {
+                work.log_triangle(t as u32);
+            }
+            let found = work.crossings_made();
+            assert_eq!(
+                !found.is_empty(),
+                crossing,
+                "{apart}: {} found",
+                found.len()
+            );
+            assert_eq!(!check::crossing_triangles(&mesh).is_empty(), crossing);
+        }
     }
 
     #[test]

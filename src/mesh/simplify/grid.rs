@@ -66,8 +66,16 @@ impl Box32 {
             && other.lo[2] <= self.hi[2]
     }
 
+    /// The box grown by `by` (≥ 0) on every side, rounded outward.
+    pub(super) fn grown(self, by: f64) -> Self {
+        Self {
+            lo: self.lo.map(|x| down(f64::from(x) - by)),
+            hi: self.hi.map(|x| up(f64::from(x) + by)),
+        }
+    }
+
     /// The largest side.
-    fn extent(&self) -> f64 {
+    pub(super) fn extent(&self) -> f64 {
         (0..3)
             .map(|k| f64::from(self.hi[k]) - f64::from(self.lo[k]))
             .fold(0.0, f64::max)
@@ -157,8 +165,9 @@ impl TriangleGrid {
     /// The index along a side of the cell holding coordinate `x` at a level.
     #[inline]
     fn index(&self, x: f64, level: &Level) -> usize {
-        let i = ((x - self.lo) / level.side).floor();
-        (i.max(0.0) as usize).min(level.dims - 1)
+        // Truncation is the floor here: what is negative (or NaN) goes to 0 either way.
+        let i = ((x - self.lo) / level.side).max(0.0);
+        (i as usize).min(level.dims - 1)
     }
 
     /// Keeps triangle `triangle` (below the count given to [`TriangleGrid::new`], not kept
