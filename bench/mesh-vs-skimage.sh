@@ -14,7 +14,8 @@
 #
 # ONLY=REGEX runs only the surfaces whose name matches; SCALES="1 0.5 0.25" compares at
 # those shares of kardia's default tolerance (1% of the clip radius; default "1"), both
-# meshes measured at the grid step of that tolerance; NMAX=N caps scikit-image's grid
+# meshes measured at the grid step of that tolerance; REPEAT=N times each side N times,
+# interleaved, and compares the medians (default 3); NMAX=N caps scikit-image's grid
 # (default 400: 400³ samples are 512 MB); KEEP=DIR keeps the meshes in DIR. Makes its own
 # virtual environment .venv-bench-mesh (scikit-image, numpy, trimesh), never the system Python.
 set -euo pipefail

@@ -8,7 +8,8 @@ prints them: without its own accuracy measurement, check and file) is read from 
 inside the clip ball: the sampled field is max(f, x² + y² + z² − R²)) on an n³ grid of
 samples, n growing by 1.25× until its mesh is as close to the exact surface as kardia's.
 Both meshes are measured the same way, by `kardia mesh --measure` (the root finder's
-two-sided Hausdorff estimate at the grid step of the tolerance compared). The time of
+two-sided Hausdorff estimate at the grid step of the tolerance compared). The times compared are
+medians of REPEAT (3) interleaved runs of each. The time of
 scikit-image is sampling plus marching (not the interpreter's start or the file written);
 peak memory is each process's maximum resident size (for scikit-image the whole Python
 process, numpy and scikit-image included).
@@ -17,6 +18,7 @@ process, numpy and scikit-image included).
 import json
 import os
 import re
+import statistics
 import subprocess
 import sys
 import time
@@ -104,6 +106,7 @@ def main():
     kardia, work = sys.argv[1], sys.argv[2]
     only = os.environ.get("ONLY")
     nmax = int(os.environ.get("NMAX", "400"))
+    repeat = max(1, int(os.environ.get("REPEAT", "3")))
     # Shares of kardia's default tolerance (1% of the clip radius), finest last.
     scales = sorted((float(s) for s in os.environ.get("SCALES", "1").split()), reverse=True)
     rows = []
@@ -149,6 +152,18 @@ def main():
                 n = min(nmax, int(n * 1.25))
             # A finer tolerance needs at least this grid.
             n_start = n
+            # The times compared: medians of REPEAT runs of each, interleaved (the machine
+            # is shared and noisy), the runs above counting as the first.
+            k_times, s_times = [k_meshing], [s["time"]]
+            for _ in range(repeat - 1):
+                out, _, _ = timed(
+                    [kardia, "mesh", "--preset", *preset, "--tolerance", repr(tolerance), "--quiet", "-o", k_path]
+                )
+                k_times.append(float(re.search(r"meshing ([\d.]+) s", out).group(1)))
+                out, _, _ = timed([sys.executable, __file__, "--skimage", name, str(n), s_path])
+                s_times.append(json.loads(out)["time"])
+            k_meshing, s["time"] = statistics.median(k_times), statistics.median(s_times)
+            print(f"  medians of {repeat}: kardia {k_meshing:.3f} s, skimage {s['time']:.3f} s", flush=True)
             rows.append(
                 (
                     name + (" (surface→mesh)" if by_s2m else ""),
