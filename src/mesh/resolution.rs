@@ -733,16 +733,18 @@ impl Examiner<'_> {
             return self.proven_empty(t, sign, phi);
         };
         let points = t.corners.map(|p| self.lattice.position(p));
-        (0..4).any(|v| {
-            let least = points
-                .iter()
-                .map(|&w| {
-                    let d = w - points[v];
-                    sign * s.gradient.dot(d) - s.spread.dot(d.abs())
-                })
-                .fold(f64::INFINITY, f64::min);
-            sign * phi[v] + least.min(0.0) > s.margin
-        })
+        // least[v] = min over corners w of s·g·(w − v) − Σ L_i |w_i − v_i| (and 0, for w = v).
+        // Each pair is computed once: swapping v and w negates the linear part exactly and
+        // leaves the spread part unchanged.
+        let mut least = [0.0f64; 4];
+        for (v, w) in TET_EDGES {
+            let d = points[w] - points[v];
+            let linear = sign * s.gradient.dot(d);
+            let spread = s.spread.dot(d.abs());
+            least[v] = least[v].min(linear - spread);
+            least[w] = least[w].min(-linear - spread);
+        }
+        (0..4).any(|v| sign * phi[v] + least[v] > s.margin)
     }
 
     /// Whether the box `lo`–`hi` is proven free of `φ = 0` inside the clip ball: wholly
