@@ -676,13 +676,16 @@ impl Examiner<'_> {
     }
 
     /// Whether the tetrahedron `t`, whose corners (values `phi`) all have the sign `sign` of
-    /// `φ`, holds no surface the floor would see (module doc, 3.): proven by the Taylor bound,
-    /// or else bisected (without changing the mesh) into the tetrahedra below it, each proven
-    /// the same way, down to the finest level, where corners of the same sign are accepted. A
-    /// tetrahedron below it whose new corner has the other sign fails.
+    /// `φ`, holds no surface the floor would see (module doc, 3.): proven by the cheap bound
+    /// ([`Examiner::gradient_bound`]), or else bisected (without changing the mesh) into the
+    /// tetrahedra below it, each proven by the cheap bound, down to the finest level, where
+    /// corners of the same sign are accepted, or else by the Taylor bound about its centre.
+    /// A tetrahedron below it whose new corner has the other sign fails the bisection.
     fn quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
         // The Taylor bound about the tetrahedron's own centre is dearer than the virtual
-        // bisection usually is, so it is tried last; the order does not change the answer.
+        // bisection usually is, so it is tried last. The order does not change the answer:
+        // the bisection fails only at a point of `t` where `s·φ ≤ 0` (or NaN), and the Taylor
+        // bound, rigorous over `t` with a margin for rounding, then fails too.
         t.level >= self.finest
             || self.gradient_bound(t, sign, &phi)
             || self.split_quiet(t, sign, phi)
