@@ -509,7 +509,7 @@ impl Work<'_> {
         found
     }
 
-    /// Undoes every step made since [`Work::begin_pass`], and starts the pass again.
+    /// Undoes every step made since [`Work::begin_pass`] (the caller begins the pass again).
     fn undo_pass(&mut self) {
         let mut log = std::mem::take(&mut self.log);
         for &(t, tri, alive) in &log.triangles {
@@ -528,7 +528,6 @@ impl Work<'_> {
         }
         self.removed_count -= log.removed.len();
         self.log = log;
-        self.begin_pass();
     }
 
     /// Makes `steps` again from the state in which `last` (the record of the last time they
