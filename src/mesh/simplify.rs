@@ -190,7 +190,8 @@ struct Work<'a> {
     /// The vertices the steps may change a triangle about (every one when `None`): a
     /// region's side ([`regions`]); a step with any other vertex in its footprint is refused.
     own: Option<&'a [bool]>,
-    /// How many vertices the steps may remove or keep: those of `own`, or all.
+    /// How many vertices were removed when the work began and how many of `own` (or of all)
+    /// were not, together: `own_count - removed_count` own vertices are left.
     own_count: usize,
     budget: f64,
     h: f64,
@@ -1125,7 +1126,13 @@ impl<'a> Work<'a> {
             }
         }
         let removed_count = removed.iter().filter(|&&r| r).count();
-        let own_count = own.map_or(n, |own| own.iter().filter(|&&o| o).count());
+        // Counting the removed ones too, so that `own_count - removed_count` is how many own
+        // vertices are left.
+        let own_count = removed_count
+            + match own {
+                Some(own) => (0..n).filter(|&v| own[v] && !removed[v]).count(),
+                None => n - removed_count,
+            };
         Work {
             field,
             vertices,
@@ -1172,6 +1179,9 @@ fn passes(
             }
             for k in 0..3 {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                if work.own.is_some_and(|own| !own[a as usize]) {
+                    continue; // Refused by `Work::owns` whatever the mesh.
+                }
                 let length = (work.vertices[a as usize] - work.vertices[b as usize]).length();
                 edges.push((length, a, b));
             }
@@ -1237,10 +1247,23 @@ pub(crate) fn coarsen_checking(
     checking: Checking,
 ) -> Option<Coarsened> {
     let n = mesh.vertices.len();
-    // A large mesh's two sides of a plane first, at once, then the whole (see [`regions`]).
+    // A large mesh's two sides of a plane first, at once, then the steps about the seam
+    // (see [`regions`]).
+    let seam;
     let (mut work, mut done) = match regions::Cut::of(mesh, regions::MIN_SPLIT_TRIANGLES) {
         Some(cut) => {
-            regions::coarsen_sides(field, mesh, kinds, budget, cut, cancel, pass_done, checking)?
+            let (start, band, done) = regions::coarsen_sides(
+                field, mesh, kinds, budget, cut, cancel, pass_done, checking,
+            )?;
+            seam = band;
+            let start = Start {
+                own: Some(&seam),
+                ..start
+            };
+            (
+                Work::starting(field, &mesh.vertices, kinds, budget, start),
+                done,
+            )
         }
         None => (Work::new(field, mesh, kinds, budget), Coarsened::default()),
     };
