@@ -48,6 +48,14 @@
 //! again is made one by one). The check of the finished mesh ([`super::check::verify`]) stays the
 //! guarantee: the caller falls back to a smaller budget, then to the uncoarsened mesh, if it
 //! ever finds a crossing.
+//!
+//! A mesh of at least [`regions::MIN_SPLIT_TRIANGLES`] triangles is first split by a plane
+//! (across its widest axis, at the median vertex): the two sides are coarsened at once
+//! ([`regions`]), each on its own work whose steps may change only triangles with every corner
+//! on its side ([`Work::own`]), so that neither reads what the other changes and their new
+//! triangles lie in disjoint half spaces; then the passes above run on the whole mesh,
+//! confined to a band about the seam the sides could not touch. The split depends on the mesh
+//! alone, so the result is still the same for any number of threads.
 
 mod grid;
 mod regions;
@@ -1216,7 +1224,8 @@ fn passes(
 /// `budget` of the exact boundary (object units; see the module doc), in place: removed
 /// vertices are dropped and the kinds kept in step. Gives up (`None`, the mesh untouched)
 /// once `cancel` is set (read between batches of collapses). `pass_done(k)` is called as
-/// pass `k` (1 to at most [`MAX_PASSES`]) ends. The steps are checked one by one unless the
+/// pass `k` (1 to at most [`MAX_PASSES`]; for a mesh split in two, as both sides have ended
+/// pass `k`, then as each pass about the seam ends) ends. The steps are checked one by one unless the
 /// environment variable `KARDIA_COARSEN_CHECKS` is `parallel` (batches checked in parallel):
 /// the mesh is the same either way, for any number of threads (on two cores, busy or quiet,
 /// one by one was the faster).
