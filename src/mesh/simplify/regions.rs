@@ -352,8 +352,8 @@ mod tests {
                     assert_eq!(work.alive[t], owner == Owner::Both, "{side:?}: {t}");
                 }
             }
-            for v in 0..mesh.vertices.len() {
-                assert!(!work.removed[v] || own[v], "{side:?}: {v} removed");
+            for (v, (&removed, &own)) in work.removed.iter().zip(&own).enumerate() {
+                assert!(!removed || own, "{side:?}: {v} removed");
             }
         }
     }
