@@ -48,8 +48,17 @@
 //! again is made one by one). The check of the finished mesh ([`super::check::verify`]) stays the
 //! guarantee: the caller falls back to a smaller budget, then to the uncoarsened mesh, if it
 //! ever finds a crossing.
+//!
+//! A mesh of at least [`regions::MIN_SPLIT_TRIANGLES`] triangles is first split by a plane
+//! (across its widest axis, at the median vertex): the two sides are coarsened at once
+//! ([`regions`]), each on its own work whose steps may change only triangles with every corner
+//! on its side ([`Work::own`]), so that neither reads what the other changes and their new
+//! triangles lie in disjoint half spaces; then the passes above run on the whole mesh,
+//! confined to a band about the seam the sides could not touch. The split depends on the mesh
+//! alone, so the result is still the same for any number of threads.
 
 mod grid;
+mod regions;
 
 use super::field::{Field, VertexKind};
 use super::{check, TriangleMesh};
@@ -186,6 +195,12 @@ struct Work<'a> {
     removed: Vec<bool>,
     /// How many vertices are removed.
     removed_count: usize,
+    /// The vertices the steps may change a triangle about (every one when `None`): a
+    /// region's side ([`regions`]); a step with any other vertex in its footprint is refused.
+    own: Option<&'a [bool]>,
+    /// How many vertices were removed when the work began and how many of `own` (or of all)
+    /// were not, together: `own_count - removed_count` own vertices are left.
+    own_count: usize,
     budget: f64,
     h: f64,
     /// Every live triangle's box, for the local crossing test.
@@ -784,6 +799,9 @@ impl Work<'_> {
 
     /// Whether `step` may be made on the mesh as it is.
     fn check(&self, step: Step, scratch: &mut Scratch) -> Verdict {
+        if !self.owns(step) {
+            return Verdict::REFUSED;
+        }
         match step {
             Step::Collapse(u, v) => self.check_collapse(u, v, scratch),
             Step::Flip(t, k) if self.alive[t as usize] => {
@@ -793,8 +811,44 @@ impl Work<'_> {
         }
     }
 
+    /// Whether every triangle `step` changes or makes has all its corners in [`Work::own`]
+    /// (always, with no `own`): for a collapse of `u`, `u` and all its neighbours are own;
+    /// for a flip, the four corners of its two triangles. An own vertex's whole fan is in the
+    /// work, so what the check reads about them is exact.
+    fn owns(&self, step: Step) -> bool {
+        let Some(own) = self.own else {
+            return true;
+        };
+        let is_own = |w: u32| own[w as usize];
+        match step {
+            Step::Collapse(u, _) => {
+                is_own(u)
+                    && self.around[u as usize]
+                        .iter()
+                        .all(|&t| self.triangles[t as usize].iter().all(|&w| is_own(w)))
+            }
+            Step::Flip(t, k) => {
+                self.alive[t as usize]
+                    && self.triangles[t as usize].iter().all(|&w| is_own(w))
+                    && self
+                        .flip_quad(t, usize::from(k))
+                        .is_some_and(|(.., d)| is_own(d))
+            }
+        }
+    }
+
+    /// How many vertices the steps may remove are left: those of [`Work::own`] (or all) not
+    /// removed.
+    fn live_vertices(&self) -> usize {
+        self.own_count - self.removed_count
+    }
+
     /// Makes `step` (which [`Work::check`] must have allowed, on this mesh).
     fn apply(&mut self, step: Step) {
+        debug_assert!(
+            self.owns(step),
+            "{step:?} reaches beyond the work's own vertices"
+        );
         match step {
             Step::Collapse(u, v) => self.apply_collapse(u, v),
             Step::Flip(t, k) => self.apply_flip(t, usize::from(k)),
@@ -856,7 +910,7 @@ impl Work<'_> {
             // Batches a sixty-fourth of the live vertices long: each step made marks a
             // handful of vertices changed, so about as few verdicts go stale whatever the
             // size of the mesh.
-            let live = self.vertices.len() - self.removed_count;
+            let live = self.live_vertices();
             let length = (live / 64).max(BATCH);
             let first = begun;
             let batch = &steps[begun..(begun + length).min(steps.len())];
@@ -979,6 +1033,37 @@ const REDOS_BEFORE_EVERYWHERE: usize = 2;
 /// The fewest steps checked together by [`Work::make`].
 const BATCH: usize = 1024;
 
+/// Where a [`Work`] starts: the triangles (indexed as in the whole mesh) with which of them
+/// are its own or shared, the vertices already removed, and the vertices its steps may touch.
+struct Start<'a> {
+    /// Every triangle of the mesh, by its index there.
+    triangles: Vec<[u32; 3]>,
+    /// Which of them are in the work (live); the others it never reads nor changes.
+    alive: Vec<bool>,
+    /// The vertices removed before the work begins.
+    removed: Vec<bool>,
+    /// [`Work::surface_normals`].
+    surface_normals: Vec<DVec3>,
+    /// [`Work::own`].
+    own: Option<&'a [bool]>,
+}
+
+/// The unit normal of `φ = 0` at each surface vertex of `vertices` (zero at the others).
+fn surface_normals(field: &Field, vertices: &[DVec3], kinds: &[VertexKind]) -> Vec<DVec3> {
+    let h = 1e-7 * field.radius();
+    vertices
+        .par_iter()
+        .zip(kinds.par_iter())
+        .map(|(&p, k)| {
+            if k.on_surface() {
+                field.value_and_gradient(p, h).1.normalize_or_zero()
+            } else {
+                DVec3::ZERO
+            }
+        })
+        .collect()
+}
+
 impl<'a> Work<'a> {
     /// The work of coarsening `mesh` (with each vertex's kind) within `budget`: every
     /// triangle live and in the grid, nothing logged, the careful region empty.
@@ -988,102 +1073,112 @@ impl<'a> Work<'a> {
         kinds: &'a [VertexKind],
         budget: f64,
     ) -> Work<'a> {
-        let n = mesh.vertices.len();
+        let start = Start {
+            triangles: mesh.triangles.clone(),
+            alive: vec![true; mesh.triangles.len()],
+            removed: vec![false; mesh.vertices.len()],
+            surface_normals: surface_normals(field, &mesh.vertices, kinds),
+            own: None,
+        };
+        Work::starting(field, &mesh.vertices, kinds, budget, start)
+    }
+
+    /// The work of coarsening the live triangles of `start` (on `vertices`, with each
+    /// vertex's kind) within `budget`: each of them in the grid, nothing logged, the careful
+    /// region empty.
+    fn starting(
+        field: &'a Field,
+        vertices: &'a [DVec3],
+        kinds: &'a [VertexKind],
+        budget: f64,
+        start: Start<'a>,
+    ) -> Work<'a> {
+        let Start {
+            triangles,
+            alive,
+            removed,
+            surface_normals,
+            own,
+        } = start;
+        let n = vertices.len();
+        let corners = |tri: &[u32; 3]| tri.map(|v| vertices[v as usize]);
+        let live = || {
+            triangles
+                .iter()
+                .zip(&alive)
+                .filter(|(_, &a)| a)
+                .map(|(t, _)| t)
+        };
         let mut around: Vec<Vec<u32>> = vec![Vec::new(); n];
-        for (t, tri) in mesh.triangles.iter().enumerate() {
-            for &v in tri {
-                around[v as usize].push(t as u32);
+        for (t, tri) in triangles.iter().enumerate() {
+            if alive[t] {
+                for &v in tri {
+                    around[v as usize].push(t as u32);
+                }
             }
         }
         // The finest cells about twice the triangles' mean longest side at the start.
         let mut longest = 0.0;
-        for t in 0..mesh.triangles.len() {
-            let [a, b, c] = mesh.corners(t);
+        for [a, b, c] in live().map(corners) {
             longest += (b - a).length().max((c - b).length()).max((a - c).length());
         }
-        let cell = 2.0 * longest / mesh.triangles.len().max(1) as f64;
+        let cell = 2.0 * longest / live().count().max(1) as f64;
         let mut grid = TriangleGrid::new(
             field.radius() * (1.0 + 1e-9),
             cell.max(1e-12),
-            mesh.triangles.len(),
+            triangles.len(),
         );
-        for t in 0..mesh.triangles.len() {
-            grid.insert(t as u32, &mesh.corners(t));
+        for (t, tri) in triangles.iter().enumerate() {
+            if alive[t] {
+                grid.insert(t as u32, &corners(tri));
+            }
         }
-        let h = 1e-7 * field.radius();
-        let surface_normals: Vec<DVec3> = mesh
-            .vertices
-            .par_iter()
-            .zip(kinds.par_iter())
-            .map(|(&p, k)| {
-                if k.on_surface() {
-                    field.value_and_gradient(p, h).1.normalize_or_zero()
-                } else {
-                    DVec3::ZERO
-                }
-            })
-            .collect();
+        let removed_count = removed.iter().filter(|&&r| r).count();
+        // Counting the removed ones too, so that `own_count - removed_count` is how many own
+        // vertices are left.
+        let own_count = removed_count
+            + match own {
+                Some(own) => (0..n).filter(|&v| own[v] && !removed[v]).count(),
+                None => n - removed_count,
+            };
         Work {
             field,
-            vertices: &mesh.vertices,
+            vertices,
             kinds,
-            triangles: mesh.triangles.clone(),
-            alive: vec![true; mesh.triangles.len()],
-            around,
-            removed: vec![false; n],
-            removed_count: 0,
-            budget,
-            h,
-            grid,
-            surface_normals,
-            careful: Careful::default(),
             log: UndoLog {
-                triangle_pass: vec![0; mesh.triangles.len()],
+                triangle_pass: vec![0; triangles.len()],
                 fan_pass: vec![0; n],
                 ..UndoLog::default()
             },
+            triangles,
+            alive,
+            around,
+            removed,
+            removed_count,
+            own,
+            own_count,
+            budget,
+            h: 1e-7 * field.radius(),
+            grid,
+            surface_normals,
+            careful: Careful::default(),
         }
     }
 }
 
-/// Coarsens `mesh` (object space, with each vertex's kind) by half-edge collapses within
-/// `budget` of the exact boundary (object units; see the module doc), in place: removed
-/// vertices are dropped and the kinds kept in step. Gives up (`None`, the mesh untouched)
-/// once `cancel` is set (read between batches of collapses). `pass_done(k)` is called as
-/// pass `k` (1 to at most [`MAX_PASSES`]) ends. The steps are checked one by one unless the
-/// environment variable `KARDIA_COARSEN_CHECKS` is `parallel` (batches checked in parallel):
-/// the mesh is the same either way, for any number of threads (on two cores, busy or quiet,
-/// one by one was the faster).
-pub fn coarsen(
-    field: &Field,
-    mesh: &mut TriangleMesh,
-    kinds: &mut Vec<VertexKind>,
-    budget: f64,
+/// Makes at most `limit` passes over `work`'s edges (collapses shortest first, then flips),
+/// until a pass removes fewer than a fiftieth of the vertices left, adding what they did to
+/// `done` and calling `pass_done` with `done.passes` as each ends; `None` if `cancel`
+/// stopped them.
+fn passes(
+    work: &mut Work,
+    done: &mut Coarsened,
+    limit: usize,
     cancel: &AtomicBool,
-    pass_done: &dyn Fn(usize),
-) -> Option<Coarsened> {
-    let checking = match std::env::var("KARDIA_COARSEN_CHECKS").as_deref() {
-        Ok("parallel") => Checking::Parallel,
-        _ => Checking::Serial,
-    };
-    coarsen_checking(field, mesh, kinds, budget, cancel, pass_done, checking)
-}
-
-/// [`coarsen`], checking the steps of each batch as `checking` says (the result is the same
-/// every way).
-pub(crate) fn coarsen_checking(
-    field: &Field,
-    mesh: &mut TriangleMesh,
-    kinds: &mut Vec<VertexKind>,
-    budget: f64,
-    cancel: &AtomicBool,
-    pass_done: &dyn Fn(usize),
+    pass_done: &(dyn Fn(usize) + Sync),
     checking: Checking,
-) -> Option<Coarsened> {
-    let n = mesh.vertices.len();
-    let mut work = Work::new(field, mesh, kinds, budget);
-    let mut done = Coarsened::default();
-    for _ in 0..MAX_PASSES {
+) -> Option<()> {
+    for _ in 0..limit {
         // Every live edge in both directions, shortest first.
         let mut edges: Vec<(f64, u32, u32)> = Vec::new();
         for (t, tri) in work.triangles.iter().enumerate() {
@@ -1092,6 +1187,9 @@ pub(crate) fn coarsen_checking(
             }
             for k in 0..3 {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                if work.own.is_some_and(|own| !own[a as usize]) {
+                    continue; // Refused by `Work::owns` whatever the mesh.
+                }
                 let length = (work.vertices[a as usize] - work.vertices[b as usize]).length();
                 edges.push((length, a, b));
             }
@@ -1114,11 +1212,72 @@ pub(crate) fn coarsen_checking(
         done.redone += redone;
         done.passes += 1;
         pass_done(done.passes);
-        let alive_vertices = n - done.collapses;
+        let alive_vertices = work.live_vertices();
         if collapsed * 50 < alive_vertices {
             break;
         }
     }
+    Some(())
+}
+
+/// Coarsens `mesh` (object space, with each vertex's kind) by half-edge collapses within
+/// `budget` of the exact boundary (object units; see the module doc), in place: removed
+/// vertices are dropped and the kinds kept in step. Gives up (`None`, the mesh untouched)
+/// once `cancel` is set (read between batches of collapses). `pass_done(k)` is called as
+/// pass `k` (1 to at most [`MAX_PASSES`]; for a mesh split in two, as both sides have ended
+/// pass `k`, then as each pass about the seam ends) ends. The steps are checked one by one unless the
+/// environment variable `KARDIA_COARSEN_CHECKS` is `parallel` (batches checked in parallel):
+/// the mesh is the same either way, for any number of threads (on two cores, busy or quiet,
+/// one by one was the faster).
+pub fn coarsen(
+    field: &Field,
+    mesh: &mut TriangleMesh,
+    kinds: &mut Vec<VertexKind>,
+    budget: f64,
+    cancel: &AtomicBool,
+    pass_done: &(dyn Fn(usize) + Sync),
+) -> Option<Coarsened> {
+    let checking = match std::env::var("KARDIA_COARSEN_CHECKS").as_deref() {
+        Ok("parallel") => Checking::Parallel,
+        _ => Checking::Serial,
+    };
+    coarsen_checking(field, mesh, kinds, budget, cancel, pass_done, checking)
+}
+
+/// [`coarsen`], checking the steps of each batch as `checking` says (the result is the same
+/// every way).
+pub(crate) fn coarsen_checking(
+    field: &Field,
+    mesh: &mut TriangleMesh,
+    kinds: &mut Vec<VertexKind>,
+    budget: f64,
+    cancel: &AtomicBool,
+    pass_done: &(dyn Fn(usize) + Sync),
+    checking: Checking,
+) -> Option<Coarsened> {
+    let n = mesh.vertices.len();
+    // A large mesh's two sides of a plane first, at once, then the steps about the seam
+    // (see [`regions`]).
+    let seam;
+    let (mut work, mut done) = match regions::Cut::of(mesh, regions::MIN_SPLIT_TRIANGLES) {
+        Some(cut) => {
+            let (start, band, done) = regions::coarsen_sides(
+                field, mesh, kinds, budget, cut, cancel, pass_done, checking,
+            )?;
+            seam = band;
+            let start = Start {
+                own: Some(&seam),
+                ..start
+            };
+            (
+                Work::starting(field, &mesh.vertices, kinds, budget, start),
+                done,
+            )
+        }
+        None => (Work::new(field, mesh, kinds, budget), Coarsened::default()),
+    };
+    let limit = MAX_PASSES - done.passes;
+    passes(&mut work, &mut done, limit, cancel, pass_done, checking)?;
     // Compact: live triangles, live vertices renumbered.
     let mut index = vec![u32::MAX; n];
     let mut vertices = Vec::with_capacity(n - done.collapses);
@@ -1188,6 +1347,8 @@ mod tests {
             around: vec![Vec::new(); vertices.len()],
             removed: vec![false; vertices.len()],
             removed_count: 0,
+            own: None,
+            own_count: vertices.len(),
             budget: 1.0,
             h,
             grid: TriangleGrid::new(3.0, 0.5, 2),
