@@ -185,6 +185,28 @@ impl Values {
     }
 }
 
+/// `φ` at the midpoints a virtual bisection ([`Examiner::split_quiet`]) asks for: those
+/// already `known` (the round's [`Values`]) and those computed since (`fresh`), so that each
+/// is computed once in a part of a round, however many tetrahedra share it.
+struct Midpoints<'a> {
+    known: &'a PointMap<f64>,
+    fresh: &'a mut PointMap<f64>,
+}
+
+impl Midpoints<'_> {
+    /// `φ` at the lattice point `m` (`field.value` at its position on `lattice`).
+    fn value(&mut self, field: &Field, lattice: Lattice, m: Point) -> f64 {
+        let key = extract::pack(m);
+        if let Some(&v) = self.known.get(&key) {
+            return v;
+        }
+        *self
+            .fresh
+            .entry(key)
+            .or_insert_with(|| field.value(lattice.position(m)))
+    }
+}
+
 /// The tetrahedra of the refinement's leaves and how they came about: see the module doc.
 pub struct Adaptive {
     /// The marked edges.
@@ -362,13 +384,35 @@ pub fn refine(
             })
             .collect();
         twice.extend(edges.into_iter().zip(crossed));
-        let checked: Vec<(Checked, bool)> = todo
+        // The examinations, each part of the round with its own map of the φ it computed at
+        // the virtual bisection's midpoints; the maps are kept with the values (for the next
+        // rounds' examinations, and for the leaves a bisection makes of those points).
+        let (checked, midpoints): (Vec<(Checked, bool)>, PointMap<f64>) = todo
             .par_iter()
-            .map(|e| {
-                let (t, quiet) = leaf(e);
-                examiner.examine(&t, quiet, &values, &twice)
-            })
-            .collect();
+            .fold(
+                || (Vec::new(), PointMap::default()),
+                |(mut checked, mut fresh), e| {
+                    let (t, quiet) = leaf(e);
+                    let mut midpoints = Midpoints {
+                        known: &values.map,
+                        fresh: &mut fresh,
+                    };
+                    checked.push(examiner.examine(&t, quiet, &values, &twice, &mut midpoints));
+                    (checked, fresh)
+                },
+            )
+            .reduce(
+                || (Vec::new(), PointMap::default()),
+                |(mut checked, mut fresh), (more, mut also)| {
+                    checked.extend(more);
+                    if fresh.len() < also.len() {
+                        std::mem::swap(&mut fresh, &mut also);
+                    }
+                    fresh.extend(also);
+                    (checked, fresh)
+                },
+            );
+        values.map.extend(midpoints);
         // Where the boundary crosses each edge of the polygons of the leaves that passed
         // (module doc, 1.): once for every edge, from its inside end, in any round (and
         // again in marching tetrahedra).
@@ -621,6 +665,7 @@ impl Examiner<'_> {
         known_quiet: bool,
         values: &Values,
         twice: &EdgeMap,
+        midpoints: &mut Midpoints,
     ) -> (Checked, bool) {
         if self.outside_ball(t) {
             return (Checked::Pass { case: 0 }, known_quiet);
@@ -629,7 +674,7 @@ impl Examiner<'_> {
         let phi = t.corners.map(|p| values.get(p));
         let quiet = match common_sign(&phi) {
             Some(sign) => {
-                if !known_quiet && !self.quiet(t, sign, phi) {
+                if !known_quiet && !self.quiet(t, sign, phi, midpoints) {
                     return (Checked::Bisect(Reason::SurfaceUnproven), false);
                 }
                 true
@@ -681,33 +726,43 @@ impl Examiner<'_> {
     /// tetrahedra below it, each proven by the cheap bound, down to the finest level, where
     /// corners of the same sign are accepted, or else by the Taylor bound about its centre.
     /// A tetrahedron below it whose new corner has the other sign fails the bisection.
-    fn quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
+    fn quiet(&self, t: &Tet, sign: f64, phi: [f64; 4], midpoints: &mut Midpoints) -> bool {
         // The Taylor bound about the tetrahedron's own centre is dearer than the virtual
         // bisection usually is, so it is tried last. The order does not change the answer:
         // the bisection fails only at a point of `t` where `s·φ ≤ 0` (or NaN), and the Taylor
         // bound, rigorous over `t` with a margin for rounding, then fails too.
         t.level >= self.finest
             || self.gradient_bound(t, sign, &phi)
-            || self.split_quiet(t, sign, phi)
+            || self.split_quiet(t, sign, phi, midpoints)
             || self.proven_empty(t, sign, &phi)
     }
 
     /// The tetrahedra below `t` (corner values `phi`, sign `sign`) quiet: [`Examiner::quiet`]
     /// by the cheap bound only ([`Examiner::gradient_bound`]), the Taylor bound about each
     /// part's own centre being the dearest part of the examination.
-    fn below_quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
+    fn below_quiet(
+        &self,
+        t: &Tet,
+        sign: f64,
+        phi: [f64; 4],
+        midpoints: &mut Midpoints,
+    ) -> bool {
         if t.level >= self.finest || self.gradient_bound(t, sign, &phi) {
             return true;
         }
-        self.split_quiet(t, sign, phi)
+        self.split_quiet(t, sign, phi, midpoints)
     }
 
     /// [`Examiner::below_quiet`] for the two halves of `t`, after checking the sign at the
     /// new corner.
-    fn split_quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
-        let m = t.midpoint();
-        let x = self.lattice.position(m);
-        let value = self.field.value(x);
+    fn split_quiet(
+        &self,
+        t: &Tet,
+        sign: f64,
+        phi: [f64; 4],
+        midpoints: &mut Midpoints,
+    ) -> bool {
+        let value = midpoints.value(self.field, self.lattice, t.midpoint());
         if sign * value <= 0.0 || value.is_nan() {
             // Surface in the tetrahedron (or its box's part outside the ball).
             return false;
@@ -719,7 +774,8 @@ impl Examiner<'_> {
         let mut b = phi;
         b[..k].copy_from_slice(&phi[1..=k]);
         b[k] = value;
-        self.below_quiet(&first, sign, a) && self.below_quiet(&second, sign, b)
+        self.below_quiet(&first, sign, a, midpoints)
+            && self.below_quiet(&second, sign, b, midpoints)
     }
 
     /// The cheap bound: with `g` the gradient of `φ` at the centre of the coarse cube holding
