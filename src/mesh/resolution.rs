@@ -157,6 +157,26 @@ type CubeLeaves = Vec<(Tet, bool)>;
 /// its smaller packed end to the other).
 type EdgeMap = HashMap<u128, bool, BuildHasherDefault<PointHasher>>;
 
+/// The `keys` not yet in `map`, each once, in the order first met; each is put in `map` with
+/// the value `placeholder` (to be replaced).
+fn new_keys<K, V: Copy>(
+    map: &mut HashMap<K, V, BuildHasherDefault<PointHasher>>,
+    keys: impl Iterator<Item = K>,
+    placeholder: V,
+) -> Vec<K>
+where
+    K: Copy + Eq + std::hash::Hash,
+{
+    let mut new = Vec::new();
+    for k in keys {
+        if let std::collections::hash_map::Entry::Vacant(slot) = map.entry(k) {
+            slot.insert(placeholder);
+            new.push(k);
+        }
+    }
+    new
+}
+
 /// `φ` at lattice points, computed once each.
 struct Values {
     lattice: Lattice,
@@ -166,12 +186,7 @@ struct Values {
 impl Values {
     /// Computes `φ` (in parallel) at those of `points` not yet known.
     fn fill(&mut self, field: &Field, points: impl Iterator<Item = Point>) {
-        let mut missing: Vec<u64> = points
-            .map(extract::pack)
-            .filter(|k| !self.map.contains_key(k))
-            .collect();
-        missing.par_sort_unstable();
-        missing.dedup();
+        let missing = new_keys(&mut self.map, points.map(extract::pack), f64::NAN);
         let lattice = self.lattice;
         let computed: Vec<f64> = missing
             .par_iter()
@@ -246,7 +261,7 @@ pub fn refine(
     };
     let examiner = Examiner {
         spreads: Vec::new(),
-        cube_side: 1,
+        cube_shift: 0,
         cells: 0,
         field,
         lattice,
@@ -319,7 +334,7 @@ pub fn refine(
         .unzip();
     let examiner = Examiner {
         spreads,
-        cube_side: side,
+        cube_shift: depth,
         cells: n,
         ..examiner
     };
@@ -360,7 +375,7 @@ pub fn refine(
         );
         // Whether each edge of the crossed leaves is crossed twice (module doc, 2.): once
         // for every edge, however many leaves share it, in any round.
-        let mut edges: Vec<u128> = todo
+        let candidates: Vec<u128> = todo
             .par_iter()
             .map(leaf)
             .filter(|(t, _)| examiner.edges_matter(t, &values))
@@ -369,8 +384,7 @@ pub fn refine(
             })
             .filter(|k| !twice.contains_key(k))
             .collect();
-        edges.par_sort_unstable();
-        edges.dedup();
+        let edges = new_keys(&mut twice, candidates.into_iter(), false);
         let crossed: Vec<bool> = edges
             .par_iter()
             .map(|&k| {
@@ -416,7 +430,7 @@ pub fn refine(
         // Where the boundary crosses each edge of the polygons of the leaves that passed
         // (module doc, 1.): once for every edge, from its inside end, in any round (and
         // again in marching tetrahedra).
-        let mut ends: Vec<(u128, Point, Point)> = todo
+        let candidates: Vec<(u128, Point, Point)> = todo
             .par_iter()
             .zip(&checked)
             .filter_map(|(e, &(checked, _))| match checked {
@@ -431,8 +445,13 @@ pub fn refine(
             })
             .filter(|(k, _, _)| !crossings.contains_key(k))
             .collect();
-        ends.par_sort_unstable_by_key(|e| e.0);
-        ends.dedup_by_key(|e| e.0);
+        let mut ends = Vec::new();
+        for e in candidates {
+            if let std::collections::hash_map::Entry::Vacant(slot) = crossings.entry(e.0) {
+                slot.insert((f64::NAN, VertexKind::Surface));
+                ends.push(e);
+            }
+        }
         let placed: Vec<(f64, VertexKind)> = ends
             .par_iter()
             .map(|&(_, a, b)| field.crossing(lattice.position(a), lattice.position(b)))
@@ -633,8 +652,8 @@ struct Examiner<'a> {
     f_sign: f64,
     /// For each coarse cube (x fastest) not proven empty: how `∇φ` strays over it.
     spreads: Vec<Option<Spread>>,
-    /// The side of a coarse cube (lattice units) and cubes a side.
-    cube_side: i32,
+    /// The side of a coarse cube is `2^cube_shift` lattice units; `cells` cubes a side.
+    cube_shift: u32,
     cells: usize,
 }
 
@@ -740,13 +759,7 @@ impl Examiner<'_> {
     /// The tetrahedra below `t` (corner values `phi`, sign `sign`) quiet: [`Examiner::quiet`]
     /// by the cheap bound only ([`Examiner::gradient_bound`]), the Taylor bound about each
     /// part's own centre being the dearest part of the examination.
-    fn below_quiet(
-        &self,
-        t: &Tet,
-        sign: f64,
-        phi: [f64; 4],
-        midpoints: &mut Midpoints,
-    ) -> bool {
+    fn below_quiet(&self, t: &Tet, sign: f64, phi: [f64; 4], midpoints: &mut Midpoints) -> bool {
         if t.level >= self.finest || self.gradient_bound(t, sign, &phi) {
             return true;
         }
@@ -755,13 +768,7 @@ impl Examiner<'_> {
 
     /// [`Examiner::below_quiet`] for the two halves of `t`, after checking the sign at the
     /// new corner.
-    fn split_quiet(
-        &self,
-        t: &Tet,
-        sign: f64,
-        phi: [f64; 4],
-        midpoints: &mut Midpoints,
-    ) -> bool {
+    fn split_quiet(&self, t: &Tet, sign: f64, phi: [f64; 4], midpoints: &mut Midpoints) -> bool {
         let value = midpoints.value(self.field, self.lattice, t.midpoint());
         if sign * value <= 0.0 || value.is_nan() {
             // Surface in the tetrahedron (or its box's part outside the ball).
@@ -784,23 +791,35 @@ impl Examiner<'_> {
     /// function of `x`, least at a corner: `t` is proven free of surface if for some `v`
     /// that is positive at every corner.
     fn gradient_bound(&self, t: &Tet, sign: f64, phi: &[f64; 4]) -> bool {
-        let (lo, _) = t.bounds();
+        let [a, b, c, d] = t.corners;
         let n = self.cells;
-        let cube = lo.map(|c| ((c / self.cube_side) as usize).min(n - 1));
-        let Some(s) = &self.spreads[cube[0] + n * (cube[1] + n * cube[2])] else {
+        // The coarse cube along an axis: the lattice coordinates are not negative, and the
+        // cube side is a power of two.
+        let cube = |i: usize| {
+            let lowest = a[i].min(b[i]).min(c[i]).min(d[i]);
+            ((lowest >> self.cube_shift) as usize).min(n - 1)
+        };
+        let Some(s) = &self.spreads[cube(0) + n * (cube(1) + n * cube(2))] else {
             return self.proven_empty(t, sign, phi);
         };
-        let points = t.corners.map(|p| self.lattice.position(p));
+        let position = |p: Point| self.lattice.position(p);
+        let points = [position(a), position(b), position(c), position(d)];
         // least[v] = min over corners w of s·g·(w − v) − Σ L_i |w_i − v_i| (and 0, for w = v).
         // Each pair is computed once: swapping v and w negates the linear part exactly and
-        // leaves the spread part unchanged.
+        // leaves the spread part unchanged. (A NaN never replaces the least so far, as with
+        // `f64::min`; which zero is kept does not change the sum with `s·φ(v)` below.)
         let mut least = [0.0f64; 4];
         for (v, w) in TET_EDGES {
             let d = points[w] - points[v];
             let linear = sign * s.gradient.dot(d);
             let spread = s.spread.dot(d.abs());
-            least[v] = least[v].min(linear - spread);
-            least[w] = least[w].min(-linear - spread);
+            let (to_w, to_v) = (linear - spread, -linear - spread);
+            if to_w < least[v] {
+                least[v] = to_w;
+            }
+            if to_v < least[w] {
+                least[w] = to_v;
+            }
         }
         (0..4).any(|v| sign * phi[v] + least[v] > s.margin)
     }
@@ -1028,11 +1047,17 @@ struct Taylor {
 impl Taylor {
     /// `Σ |c·x^a·y^b·z^e|` over the terms at `p`.
     fn magnitude_bound(&self, p: DVec3) -> f64 {
+        // Each power once (`powi` as in the sum over the terms, so the same values).
+        let mut powers = [[1.0f64; MAX_DEGREE + 1]; 3];
+        for (axis, x) in [p.x, p.y, p.z].into_iter().enumerate() {
+            for (i, power) in powers[axis][..=self.degree].iter_mut().enumerate() {
+                *power = x.powi(i as i32);
+            }
+        }
+        let [px, py, pz] = &powers;
         self.terms
             .iter()
-            .map(|&([a, b, e], k)| {
-                (k * p.x.powi(a as i32) * p.y.powi(b as i32) * p.z.powi(e as i32)).abs()
-            })
+            .map(|&([a, b, e], k)| (k * px[a] * py[b] * pz[e]).abs())
             .sum()
     }
 }
@@ -1159,23 +1184,32 @@ impl Taylor {
         // Row `a` of an axis's table (at `a·(a + 1)/2` within it) holds C(a, i)·x^(a−i) for
         // `i ≤ a`: the coefficient of d^i in (x + d)^a.
         let per_axis = d * (d + 1) / 2;
-        let mut tables = Vec::with_capacity(3 * per_axis);
-        for x in [c.x, c.y, c.z] {
+        let mut tables = vec![0.0f64; 3 * per_axis];
+        for (table, x) in tables.chunks_exact_mut(per_axis).zip([c.x, c.y, c.z]) {
             let mut powers = [1.0f64; N];
             for i in 1..d {
                 powers[i] = powers[i - 1] * x;
             }
+            let mut at = 0;
             for a in 0..d {
-                tables.extend((0..=a).map(|i| BINOMIAL[a][i] * powers[a - i]));
+                for (i, o) in table[at..=at + a].iter_mut().enumerate() {
+                    *o = BINOMIAL[a][i] * powers[a - i];
+                }
+                at += a + 1;
             }
         }
-        let row = |axis: usize, a: usize| &tables[axis * per_axis + a * (a + 1) / 2..][..=a];
+        let (tx, rest) = tables.split_at(per_axis);
+        let (ty, tz) = rest.split_at(per_axis);
+        fn row(table: &[f64], a: usize) -> &[f64] {
+            &table[a * (a + 1) / 2..][..=a]
+        }
         for &([a, b, e], k) in &self.terms {
-            let (px, py, pz) = (row(0, a), row(1, b), row(2, e));
+            let (px, py, pz) = (row(tx, a), row(ty, b), row(tz, e));
             for (j, y) in py.iter().enumerate() {
+                let rows = &self.rows[j..];
                 for (l, z) in pz.iter().enumerate() {
                     let yz = k * y * z;
-                    let row = &mut coef[self.rows[j + d * l]..][..=a];
+                    let row = &mut coef[rows[d * l]..][..=a];
                     for (o, x) in row.iter_mut().zip(px) {
                         *o += yz * x;
                     }
