@@ -38,6 +38,9 @@
 //! below a tetrahedron proven free of surface by 3., is not proven again; each edge's double
 //! crossing (2.) and each polygon edge's crossing (1.) are computed once, by edge, whatever
 //! the number of leaves sharing it, and the crossings are handed on to marching tetrahedra;
+//! `φ` at a lattice point is computed once per part of a round however many tetrahedra (or
+//! virtual bisections of 3.) ask for it, and kept for the later rounds; the new points and
+//! edges of a round are found by their maps, not by sorting;
 //! and the cubes proven empty that lie wholly inside or wholly outside the clip ball, where
 //! every corner has the same label, are neither labelled nor marched (a cube proven empty
 //! that the sphere cuts holds cap triangles and is kept).
@@ -1244,6 +1247,96 @@ mod tests {
             &AtomicBool::new(false),
         )
         .unwrap()
+    }
+
+    #[test]
+    fn new_keys_are_the_absent_keys_once_each_in_the_order_first_met() {
+        let mut map = PointMap::<f64>::default();
+        map.insert(7, 1.5);
+        let new = new_keys(&mut map, [3, 7, 5, 3, 9, 5].into_iter(), -1.0);
+        assert_eq!(new, vec![3, 5, 9]);
+        assert_eq!(map[&7], 1.5, "a known value is kept");
+        assert!([3, 5, 9].iter().all(|k| map[k] == -1.0));
+        assert_eq!(map.len(), 4);
+    }
+
+    #[test]
+    fn midpoints_take_known_values_and_compute_each_other_once() {
+        let f = field("x^2 + y^2 + z^2 = 1", 1.5);
+        let lattice = Lattice::of_grid(Grid::covering(1.5, 0.5), 2);
+        let (known_point, other) = ([4, 6, 8], [2, 2, 10]);
+        let mut known = PointMap::default();
+        known.insert(extract::pack(known_point), 42.0);
+        let mut fresh = PointMap::default();
+        let mut midpoints = Midpoints {
+            known: &known,
+            fresh: &mut fresh,
+        };
+        assert_eq!(midpoints.value(&f, lattice, known_point), 42.0);
+        let exact = f.value(lattice.position(other));
+        assert_eq!(midpoints.value(&f, lattice, other), exact);
+        assert_eq!(midpoints.value(&f, lattice, other), exact);
+        assert_eq!(fresh.len(), 1, "the known point is not computed again");
+        assert_eq!(fresh[&extract::pack(other)], exact);
+    }
+
+    /// The examination with the cache of φ at midpoints gives the verdicts of one without it
+    /// (a fresh map for every tetrahedron, and no values known).
+    #[test]
+    fn the_quiet_verdicts_do_not_depend_on_the_midpoint_cache() {
+        let f = field("(x^2 + y^2 + z^2 + 0.64 - 0.09)^2 = 2.56*(x^2 + y^2)", 1.2);
+        let tolerance = 0.01;
+        let depth = depth_for(f.radius(), 2.0 * tolerance, SolidKind::Inside);
+        let coarse = Grid::covering(f.radius(), 2.0 * tolerance * f64::from(1u32 << depth));
+        let a = refine(
+            &f,
+            coarse,
+            depth,
+            tolerance,
+            &|_, _| {},
+            &AtomicBool::new(false),
+        )
+        .unwrap();
+        let lattice = a.lattice;
+        let refinement = Refinement::new(coarse.cells, depth);
+        // No cheap bound: every tetrahedron the Taylor bound does not prove is bisected.
+        let examiner = Examiner {
+            spreads: (0..coarse.cells.pow(3)).map(|_| None).collect(),
+            cube_shift: depth,
+            cells: coarse.cells,
+            field: &f,
+            lattice,
+            taylor: Taylor::new(&f),
+            table: marching_table(),
+            shallow: EXTRACT_SHARE * tolerance,
+            finest: refinement.finest_level(),
+            f_sign: 1.0,
+        };
+        let (empty, mut shared) = (PointMap::default(), PointMap::default());
+        let mut tried = 0;
+        for t in a.refinement.leaves().iter().filter(|t| t.level < 3) {
+            let phi = t.corners.map(|p| f.value(lattice.position(p)));
+            let Some(sign) = common_sign(&phi) else {
+                continue;
+            };
+            let mut alone = PointMap::default();
+            let mut once = Midpoints {
+                known: &empty,
+                fresh: &mut alone,
+            };
+            let expected = examiner.quiet(t, sign, phi, &mut once);
+            let mut cached = Midpoints {
+                known: &empty,
+                fresh: &mut shared,
+            };
+            assert_eq!(examiner.quiet(t, sign, phi, &mut cached), expected);
+            tried += 1;
+        }
+        assert!(
+            tried > 100 && !shared.is_empty(),
+            "{tried} {}",
+            shared.len()
+        );
     }
 
     #[test]
