@@ -180,6 +180,11 @@ where
     new
 }
 
+/// The first-order distance from the surface ([`off_surface`]) of the midpoints of polygon
+/// sides measured in a part of a round, by the side's ends (their edges' keys, the smaller
+/// first).
+type SideMap = HashMap<(u128, u128), f64, BuildHasherDefault<PointHasher>>;
+
 /// `φ` at lattice points, computed once each.
 struct Values {
     lattice: Lattice,
@@ -463,10 +468,16 @@ pub fn refine(
         let verdicts: Vec<(Option<Reason>, bool)> = todo
             .par_iter()
             .zip(&checked)
-            .map(|(e, &(checked, quiet))| match checked {
-                Checked::Bisect(reason) => (Some(reason), quiet),
-                Checked::Pass { case } => (examiner.deviation(&leaf(e).0, case, &crossings), quiet),
-            })
+            .map_init(
+                SideMap::default,
+                |sides, (e, &(checked, quiet))| match checked {
+                    Checked::Bisect(reason) => (Some(reason), quiet),
+                    Checked::Pass { case } => {
+                        let verdict = examiner.deviation(&leaf(e).0, case, &crossings, sides);
+                        (verdict, quiet)
+                    }
+                },
+            )
             .collect();
         fresh.clear();
         for (&(c, i), &(verdict, quiet)) in todo.iter().zip(&verdicts) {
@@ -720,21 +731,43 @@ impl Examiner<'_> {
     /// [`Reason::Deviation`] if a triangle marching tetrahedra makes in `t` (its corners'
     /// labels `case`, as in [`Checked::Pass`]) deviates beyond the share allowed (module doc,
     /// 1.); `crossings` holds its polygon's edges' crossings.
-    fn deviation(&self, t: &Tet, case: usize, crossings: &Crossings) -> Option<Reason> {
+    fn deviation(
+        &self,
+        t: &Tet,
+        case: usize,
+        crossings: &Crossings,
+        sides: &mut SideMap,
+    ) -> Option<Reason> {
         let field = self.field;
         let polygon = self.table[case].as_ref()?;
-        let placed: Vec<(DVec3, VertexKind)> = polygon
+        let placed: Vec<(DVec3, VertexKind, u128)> = polygon
             .iter()
             .map(|&[i, j]| {
                 let (p, q) = (t.corners[i as usize], t.corners[j as usize]);
                 let (a, b) = (self.lattice.position(p), self.lattice.position(q));
-                let (s, kind) = crossings[&extract::edge_key(p, q)];
-                (a + s * (b - a), kind)
+                let key = extract::edge_key(p, q);
+                let (s, kind) = crossings[&key];
+                (a + s * (b - a), kind, key)
             })
             .collect();
         for k in 1..placed.len() - 1 {
             let corners = [placed[0], placed[k], placed[k + 1]];
-            let worst = triangle_deviation(field, corners.map(|c| c.0), corners.map(|c| c.1));
+            // A side's midpoint is the same point in every triangle that has the side (the
+            // sum of its ends is the same in either order).
+            let side = |i: usize| {
+                let (u, v) = (corners[i - 1].2, corners[i % 3].2);
+                (u.min(v), u.max(v))
+            };
+            let off = |i: usize, p: DVec3| {
+                if i == 0 {
+                    off_surface(field, p)
+                } else {
+                    *sides
+                        .entry(side(i))
+                        .or_insert_with(|| off_surface(field, p))
+                }
+            };
+            let worst = deviation_by(field, corners.map(|c| c.0), corners.map(|c| c.1), off);
             if worst.is_nan() || worst > self.shallow {
                 return Some(Reason::Deviation);
             }
@@ -890,18 +923,31 @@ impl Examiner<'_> {
 /// where `∇φ` vanishes (a node). `∇φ` is exact for the inside and outside
 /// ([`Field::value_and_gradient`]).
 pub fn triangle_deviation(field: &Field, corners: [DVec3; 3], kinds: [VertexKind; 3]) -> f64 {
-    let h = 1e-7 * field.radius();
-    let off_surface = |p: DVec3| {
-        let (v, g) = field.value_and_gradient(p, h);
-        let (v, g) = (v.abs(), g.length());
-        if v == 0.0 {
-            0.0
-        } else if g > 0.0 {
-            v / g
-        } else {
-            f64::INFINITY
-        }
-    };
+    deviation_by(field, corners, kinds, |_, p| off_surface(field, p))
+}
+
+/// The first-order distance `|φ|/|∇φ|` of `p` from the surface (infinite where `∇φ`
+/// vanishes but `φ` does not).
+fn off_surface(field: &Field, p: DVec3) -> f64 {
+    let (v, g) = field.value_and_gradient(p, 1e-7 * field.radius());
+    let (v, g) = (v.abs(), g.length());
+    if v == 0.0 {
+        0.0
+    } else if g > 0.0 {
+        v / g
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// [`triangle_deviation`] with `off_surface(i, p)` for [`off_surface`] at the point `p`,
+/// the centroid (`i = 0`) or the midpoint of the side from corner `i − 1` to the next.
+fn deviation_by(
+    field: &Field,
+    corners: [DVec3; 3],
+    kinds: [VertexKind; 3],
+    mut off_surface: impl FnMut(usize, DVec3) -> f64,
+) -> f64 {
     let off_sphere = |p: DVec3| (field.radius() - p.length()).abs();
     let [a, b, c] = corners;
     let surface = kinds.iter().all(|k| k.on_surface());
@@ -913,10 +959,11 @@ pub fn triangle_deviation(field: &Field, corners: [DVec3; 3], kinds: [VertexKind
         0.5 * (c + a),
     ]
     .iter()
-    .map(|&p| match (surface, sphere) {
-        (true, false) => off_surface(p),
+    .enumerate()
+    .map(|(i, &p)| match (surface, sphere) {
+        (true, false) => off_surface(i, p),
         (false, true) => off_sphere(p),
-        _ => off_surface(p).min(off_sphere(p)),
+        _ => off_surface(i, p).min(off_sphere(p)),
     })
     .fold(0.0, f64::max)
 }
