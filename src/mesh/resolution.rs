@@ -1328,9 +1328,10 @@ mod tests {
     }
 
     /// The examination with the cache of φ at midpoints gives the verdicts of one without it
-    /// (a fresh map for every tetrahedron, and no values known).
+    /// (a fresh map for every tetrahedron, and no values known), and so does the measure of
+    /// the deviation with the cache of the distances at polygon sides' midpoints.
     #[test]
-    fn the_quiet_verdicts_do_not_depend_on_the_midpoint_cache() {
+    fn the_verdicts_do_not_depend_on_the_caches() {
         let f = field("(x^2 + y^2 + z^2 + 0.64 - 0.09)^2 = 2.56*(x^2 + y^2)", 1.2);
         let tolerance = 0.01;
         let depth = depth_for(f.radius(), 2.0 * tolerance, SolidKind::Inside);
@@ -1359,6 +1360,27 @@ mod tests {
             finest: refinement.finest_level(),
             f_sign: 1.0,
         };
+        // The deviation verdicts with one map of the sides' midpoints for all the crossed
+        // leaves are those with a map for each.
+        let mut crossings = Crossings::default();
+        for (t, &m) in a.leaves.iter().zip(&a.labels) {
+            for &[i, j] in examiner.table[usize::from(m)].as_ref().unwrap() {
+                let (p, q) = (t.corners[i as usize], t.corners[j as usize]);
+                let placed = f.crossing(lattice.position(p), lattice.position(q));
+                crossings.insert(extract::edge_key(p, q), placed);
+            }
+        }
+        let (mut sides, mut measured, mut failed) = (SideMap::default(), 0, 0);
+        for (t, &m) in a.leaves.iter().zip(&a.labels) {
+            let mut alone = SideMap::default();
+            let expected = examiner.deviation(t, usize::from(m), &crossings, &mut alone);
+            let verdict = examiner.deviation(t, usize::from(m), &crossings, &mut sides);
+            assert_eq!(verdict, expected);
+            measured += alone.len();
+            failed += usize::from(verdict.is_some());
+        }
+        assert!(sides.len() < measured, "{} {measured}", sides.len());
+        eprintln!("{failed} of {} leaves deviate", a.leaves.len());
         let (empty, mut shared) = (PointMap::default(), PointMap::default());
         let mut tried = 0;
         for t in a.refinement.leaves().iter().filter(|t| t.level < 3) {
