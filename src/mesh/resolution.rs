@@ -1347,7 +1347,8 @@ mod tests {
         .unwrap();
         let lattice = a.lattice;
         let refinement = Refinement::new(coarse.cells, depth);
-        // No cheap bound: every tetrahedron the Taylor bound does not prove is bisected.
+        // No cheap bound: every tetrahedron the Taylor bound does not prove is bisected; a
+        // tenth of the deviation allowed, so that some leaves fail it.
         let examiner = Examiner {
             spreads: (0..coarse.cells.pow(3)).map(|_| None).collect(),
             cube_shift: depth,
@@ -1356,7 +1357,7 @@ mod tests {
             lattice,
             taylor: Taylor::new(&f),
             table: marching_table(),
-            shallow: EXTRACT_SHARE * tolerance,
+            shallow: 0.1 * tolerance,
             finest: refinement.finest_level(),
             f_sign: 1.0,
         };
@@ -1380,7 +1381,7 @@ mod tests {
             failed += usize::from(verdict.is_some());
         }
         assert!(sides.len() < measured, "{} {measured}", sides.len());
-        eprintln!("{failed} of {} leaves deviate", a.leaves.len());
+        assert!(failed > 0 && failed < a.leaves.len(), "{failed}");
         let (empty, mut shared) = (PointMap::default(), PointMap::default());
         let mut tried = 0;
         for t in a.refinement.leaves().iter().filter(|t| t.level < 3) {
