@@ -473,17 +473,20 @@ pub fn march_leaves(
     if cancelled() {
         return None;
     }
-    // A lattice point's label, from the first leaf that has it as a corner (the same in
-    // every leaf).
-    let mut label_of: HashMap<u64, bool, BuildHasherDefault<PointHasher>> = HashMap::default();
-    for (t, &m) in leaves.iter().zip(labels) {
-        if m != 0 && m != 15 {
-            for (k, &p) in t.corners.iter().enumerate() {
-                label_of.entry(pack(p)).or_insert(m >> k & 1 == 1);
-            }
-        }
-    }
-    let inside = |p: Point| label_of[&pack(p)];
+    // A lattice point's label, from any leaf that has it as a corner.
+    let mut label_of: Vec<(u64, bool)> = leaves
+        .par_iter()
+        .zip(labels)
+        .filter(|(_, &m)| m != 0 && m != 15)
+        .flat_map_iter(|(t, &m)| (0..4).map(move |k| (pack(t.corners[k]), m >> k & 1 == 1)))
+        .collect();
+    label_of.par_sort_unstable();
+    label_of.dedup();
+    let inside = |p: Point| {
+        let k = pack(p);
+        let i = label_of.partition_point(|&(q, _)| q < k);
+        label_of[i].1
+    };
     let ends = |k: u128| (unpack((k >> 64) as u64), unpack(k as u64));
     assemble(
         field,

@@ -38,9 +38,6 @@
 //! below a tetrahedron proven free of surface by 3., is not proven again; each edge's double
 //! crossing (2.) and each polygon edge's crossing (1.) are computed once, by edge, whatever
 //! the number of leaves sharing it, and the crossings are handed on to marching tetrahedra;
-//! `φ` at a lattice point is computed once per part of a round however many tetrahedra (or
-//! virtual bisections of 3.) ask for it, and kept for the later rounds; the new points and
-//! edges of a round are found by their maps, not by sorting;
 //! and the cubes proven empty that lie wholly inside or wholly outside the clip ball, where
 //! every corner has the same label, are neither labelled nor marched (a cube proven empty
 //! that the sphere cuts holds cap triangles and is kept).
@@ -160,31 +157,6 @@ type CubeLeaves = Vec<(Tet, bool)>;
 /// its smaller packed end to the other).
 type EdgeMap = HashMap<u128, bool, BuildHasherDefault<PointHasher>>;
 
-/// The `keys` not yet in `map`, each once, in the order first met; each is put in `map` with
-/// the value `placeholder` (to be replaced).
-fn new_keys<K, V: Copy>(
-    map: &mut HashMap<K, V, BuildHasherDefault<PointHasher>>,
-    keys: impl Iterator<Item = K>,
-    placeholder: V,
-) -> Vec<K>
-where
-    K: Copy + Eq + std::hash::Hash,
-{
-    let mut new = Vec::new();
-    for k in keys {
-        if let std::collections::hash_map::Entry::Vacant(slot) = map.entry(k) {
-            slot.insert(placeholder);
-            new.push(k);
-        }
-    }
-    new
-}
-
-/// The first-order distance from the surface ([`off_surface`]) of the midpoints of polygon
-/// sides measured in a part of a round, by the side's ends (their edges' keys, the smaller
-/// first).
-type SideMap = HashMap<(u128, u128), f64, BuildHasherDefault<PointHasher>>;
-
 /// `φ` at lattice points, computed once each.
 struct Values {
     lattice: Lattice,
@@ -194,7 +166,12 @@ struct Values {
 impl Values {
     /// Computes `φ` (in parallel) at those of `points` not yet known.
     fn fill(&mut self, field: &Field, points: impl Iterator<Item = Point>) {
-        let missing = new_keys(&mut self.map, points.map(extract::pack), f64::NAN);
+        let mut missing: Vec<u64> = points
+            .map(extract::pack)
+            .filter(|k| !self.map.contains_key(k))
+            .collect();
+        missing.par_sort_unstable();
+        missing.dedup();
         let lattice = self.lattice;
         let computed: Vec<f64> = missing
             .par_iter()
@@ -205,28 +182,6 @@ impl Values {
 
     fn get(&self, p: Point) -> f64 {
         self.map[&extract::pack(p)]
-    }
-}
-
-/// `φ` at the midpoints a virtual bisection ([`Examiner::split_quiet`]) asks for: those
-/// already `known` (the round's [`Values`]) and those computed since (`fresh`), so that each
-/// is computed once in a part of a round, however many tetrahedra share it.
-struct Midpoints<'a> {
-    known: &'a PointMap<f64>,
-    fresh: &'a mut PointMap<f64>,
-}
-
-impl Midpoints<'_> {
-    /// `φ` at the lattice point `m` (`field.value` at its position on `lattice`).
-    fn value(&mut self, field: &Field, lattice: Lattice, m: Point) -> f64 {
-        let key = extract::pack(m);
-        if let Some(&v) = self.known.get(&key) {
-            return v;
-        }
-        *self
-            .fresh
-            .entry(key)
-            .or_insert_with(|| field.value(lattice.position(m)))
     }
 }
 
@@ -269,7 +224,7 @@ pub fn refine(
     };
     let examiner = Examiner {
         spreads: Vec::new(),
-        cube_shift: 0,
+        cube_side: 1,
         cells: 0,
         field,
         lattice,
@@ -342,7 +297,7 @@ pub fn refine(
         .unzip();
     let examiner = Examiner {
         spreads,
-        cube_shift: depth,
+        cube_side: side,
         cells: n,
         ..examiner
     };
@@ -383,7 +338,7 @@ pub fn refine(
         );
         // Whether each edge of the crossed leaves is crossed twice (module doc, 2.): once
         // for every edge, however many leaves share it, in any round.
-        let candidates: Vec<u128> = todo
+        let mut edges: Vec<u128> = todo
             .par_iter()
             .map(leaf)
             .filter(|(t, _)| examiner.edges_matter(t, &values))
@@ -392,7 +347,8 @@ pub fn refine(
             })
             .filter(|k| !twice.contains_key(k))
             .collect();
-        let edges = new_keys(&mut twice, candidates.into_iter(), false);
+        edges.par_sort_unstable();
+        edges.dedup();
         let crossed: Vec<bool> = edges
             .par_iter()
             .map(|&k| {
@@ -406,39 +362,17 @@ pub fn refine(
             })
             .collect();
         twice.extend(edges.into_iter().zip(crossed));
-        // The examinations, each part of the round with its own map of the φ it computed at
-        // the virtual bisection's midpoints; the maps are kept with the values (for the next
-        // rounds' examinations, and for the leaves a bisection makes of those points).
-        let (checked, midpoints): (Vec<(Checked, bool)>, PointMap<f64>) = todo
+        let checked: Vec<(Checked, bool)> = todo
             .par_iter()
-            .fold(
-                || (Vec::new(), PointMap::default()),
-                |(mut checked, mut fresh), e| {
-                    let (t, quiet) = leaf(e);
-                    let mut midpoints = Midpoints {
-                        known: &values.map,
-                        fresh: &mut fresh,
-                    };
-                    checked.push(examiner.examine(&t, quiet, &values, &twice, &mut midpoints));
-                    (checked, fresh)
-                },
-            )
-            .reduce(
-                || (Vec::new(), PointMap::default()),
-                |(mut checked, mut fresh), (more, mut also)| {
-                    checked.extend(more);
-                    if fresh.len() < also.len() {
-                        std::mem::swap(&mut fresh, &mut also);
-                    }
-                    fresh.extend(also);
-                    (checked, fresh)
-                },
-            );
-        values.map.extend(midpoints);
+            .map(|e| {
+                let (t, quiet) = leaf(e);
+                examiner.examine(&t, quiet, &values, &twice)
+            })
+            .collect();
         // Where the boundary crosses each edge of the polygons of the leaves that passed
         // (module doc, 1.): once for every edge, from its inside end, in any round (and
         // again in marching tetrahedra).
-        let candidates: Vec<(u128, Point, Point)> = todo
+        let mut ends: Vec<(u128, Point, Point)> = todo
             .par_iter()
             .zip(&checked)
             .filter_map(|(e, &(checked, _))| match checked {
@@ -453,13 +387,8 @@ pub fn refine(
             })
             .filter(|(k, _, _)| !crossings.contains_key(k))
             .collect();
-        let mut ends = Vec::new();
-        for e in candidates {
-            if let std::collections::hash_map::Entry::Vacant(slot) = crossings.entry(e.0) {
-                slot.insert((f64::NAN, VertexKind::Surface));
-                ends.push(e);
-            }
-        }
+        ends.par_sort_unstable_by_key(|e| e.0);
+        ends.dedup_by_key(|e| e.0);
         let placed: Vec<(f64, VertexKind)> = ends
             .par_iter()
             .map(|&(_, a, b)| field.crossing(lattice.position(a), lattice.position(b)))
@@ -468,16 +397,10 @@ pub fn refine(
         let verdicts: Vec<(Option<Reason>, bool)> = todo
             .par_iter()
             .zip(&checked)
-            .map_init(
-                SideMap::default,
-                |sides, (e, &(checked, quiet))| match checked {
-                    Checked::Bisect(reason) => (Some(reason), quiet),
-                    Checked::Pass { case } => {
-                        let verdict = examiner.deviation(&leaf(e).0, case, &crossings, sides);
-                        (verdict, quiet)
-                    }
-                },
-            )
+            .map(|(e, &(checked, quiet))| match checked {
+                Checked::Bisect(reason) => (Some(reason), quiet),
+                Checked::Pass { case } => (examiner.deviation(&leaf(e).0, case, &crossings), quiet),
+            })
             .collect();
         fresh.clear();
         for (&(c, i), &(verdict, quiet)) in todo.iter().zip(&verdicts) {
@@ -666,8 +589,8 @@ struct Examiner<'a> {
     f_sign: f64,
     /// For each coarse cube (x fastest) not proven empty: how `∇φ` strays over it.
     spreads: Vec<Option<Spread>>,
-    /// The side of a coarse cube is `2^cube_shift` lattice units; `cells` cubes a side.
-    cube_shift: u32,
+    /// The side of a coarse cube (lattice units) and cubes a side.
+    cube_side: i32,
     cells: usize,
 }
 
@@ -698,7 +621,6 @@ impl Examiner<'_> {
         known_quiet: bool,
         values: &Values,
         twice: &EdgeMap,
-        midpoints: &mut Midpoints,
     ) -> (Checked, bool) {
         if self.outside_ball(t) {
             return (Checked::Pass { case: 0 }, known_quiet);
@@ -707,7 +629,7 @@ impl Examiner<'_> {
         let phi = t.corners.map(|p| values.get(p));
         let quiet = match common_sign(&phi) {
             Some(sign) => {
-                if !known_quiet && !self.quiet(t, sign, phi, midpoints) {
+                if !known_quiet && !self.quiet(t, sign, phi) {
                     return (Checked::Bisect(Reason::SurfaceUnproven), false);
                 }
                 true
@@ -731,43 +653,21 @@ impl Examiner<'_> {
     /// [`Reason::Deviation`] if a triangle marching tetrahedra makes in `t` (its corners'
     /// labels `case`, as in [`Checked::Pass`]) deviates beyond the share allowed (module doc,
     /// 1.); `crossings` holds its polygon's edges' crossings.
-    fn deviation(
-        &self,
-        t: &Tet,
-        case: usize,
-        crossings: &Crossings,
-        sides: &mut SideMap,
-    ) -> Option<Reason> {
+    fn deviation(&self, t: &Tet, case: usize, crossings: &Crossings) -> Option<Reason> {
         let field = self.field;
         let polygon = self.table[case].as_ref()?;
-        let placed: Vec<(DVec3, VertexKind, u128)> = polygon
+        let placed: Vec<(DVec3, VertexKind)> = polygon
             .iter()
             .map(|&[i, j]| {
                 let (p, q) = (t.corners[i as usize], t.corners[j as usize]);
                 let (a, b) = (self.lattice.position(p), self.lattice.position(q));
-                let key = extract::edge_key(p, q);
-                let (s, kind) = crossings[&key];
-                (a + s * (b - a), kind, key)
+                let (s, kind) = crossings[&extract::edge_key(p, q)];
+                (a + s * (b - a), kind)
             })
             .collect();
         for k in 1..placed.len() - 1 {
             let corners = [placed[0], placed[k], placed[k + 1]];
-            // A side's midpoint is the same point in every triangle that has the side (the
-            // sum of its ends is the same in either order).
-            let side = |i: usize| {
-                let (u, v) = (corners[i - 1].2, corners[i % 3].2);
-                (u.min(v), u.max(v))
-            };
-            let off = |i: usize, p: DVec3| {
-                if i == 0 {
-                    off_surface(field, p)
-                } else {
-                    *sides
-                        .entry(side(i))
-                        .or_insert_with(|| off_surface(field, p))
-                }
-            };
-            let worst = deviation_by(field, corners.map(|c| c.0), corners.map(|c| c.1), off);
+            let worst = triangle_deviation(field, corners.map(|c| c.0), corners.map(|c| c.1));
             if worst.is_nan() || worst > self.shallow {
                 return Some(Reason::Deviation);
             }
@@ -781,31 +681,33 @@ impl Examiner<'_> {
     /// tetrahedra below it, each proven by the cheap bound, down to the finest level, where
     /// corners of the same sign are accepted, or else by the Taylor bound about its centre.
     /// A tetrahedron below it whose new corner has the other sign fails the bisection.
-    fn quiet(&self, t: &Tet, sign: f64, phi: [f64; 4], midpoints: &mut Midpoints) -> bool {
+    fn quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
         // The Taylor bound about the tetrahedron's own centre is dearer than the virtual
         // bisection usually is, so it is tried last. The order does not change the answer:
         // the bisection fails only at a point of `t` where `s·φ ≤ 0` (or NaN), and the Taylor
         // bound, rigorous over `t` with a margin for rounding, then fails too.
         t.level >= self.finest
             || self.gradient_bound(t, sign, &phi)
-            || self.split_quiet(t, sign, phi, midpoints)
+            || self.split_quiet(t, sign, phi)
             || self.proven_empty(t, sign, &phi)
     }
 
     /// The tetrahedra below `t` (corner values `phi`, sign `sign`) quiet: [`Examiner::quiet`]
     /// by the cheap bound only ([`Examiner::gradient_bound`]), the Taylor bound about each
     /// part's own centre being the dearest part of the examination.
-    fn below_quiet(&self, t: &Tet, sign: f64, phi: [f64; 4], midpoints: &mut Midpoints) -> bool {
+    fn below_quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
         if t.level >= self.finest || self.gradient_bound(t, sign, &phi) {
             return true;
         }
-        self.split_quiet(t, sign, phi, midpoints)
+        self.split_quiet(t, sign, phi)
     }
 
     /// [`Examiner::below_quiet`] for the two halves of `t`, after checking the sign at the
     /// new corner.
-    fn split_quiet(&self, t: &Tet, sign: f64, phi: [f64; 4], midpoints: &mut Midpoints) -> bool {
-        let value = midpoints.value(self.field, self.lattice, t.midpoint());
+    fn split_quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
+        let m = t.midpoint();
+        let x = self.lattice.position(m);
+        let value = self.field.value(x);
         if sign * value <= 0.0 || value.is_nan() {
             // Surface in the tetrahedron (or its box's part outside the ball).
             return false;
@@ -817,8 +719,7 @@ impl Examiner<'_> {
         let mut b = phi;
         b[..k].copy_from_slice(&phi[1..=k]);
         b[k] = value;
-        self.below_quiet(&first, sign, a, midpoints)
-            && self.below_quiet(&second, sign, b, midpoints)
+        self.below_quiet(&first, sign, a) && self.below_quiet(&second, sign, b)
     }
 
     /// The cheap bound: with `g` the gradient of `φ` at the centre of the coarse cube holding
@@ -827,35 +728,23 @@ impl Examiner<'_> {
     /// function of `x`, least at a corner: `t` is proven free of surface if for some `v`
     /// that is positive at every corner.
     fn gradient_bound(&self, t: &Tet, sign: f64, phi: &[f64; 4]) -> bool {
-        let [a, b, c, d] = t.corners;
+        let (lo, _) = t.bounds();
         let n = self.cells;
-        // The coarse cube along an axis: the lattice coordinates are not negative, and the
-        // cube side is a power of two.
-        let cube = |i: usize| {
-            let lowest = a[i].min(b[i]).min(c[i]).min(d[i]);
-            ((lowest >> self.cube_shift) as usize).min(n - 1)
-        };
-        let Some(s) = &self.spreads[cube(0) + n * (cube(1) + n * cube(2))] else {
+        let cube = lo.map(|c| ((c / self.cube_side) as usize).min(n - 1));
+        let Some(s) = &self.spreads[cube[0] + n * (cube[1] + n * cube[2])] else {
             return self.proven_empty(t, sign, phi);
         };
-        let position = |p: Point| self.lattice.position(p);
-        let points = [position(a), position(b), position(c), position(d)];
+        let points = t.corners.map(|p| self.lattice.position(p));
         // least[v] = min over corners w of s·g·(w − v) − Σ L_i |w_i − v_i| (and 0, for w = v).
         // Each pair is computed once: swapping v and w negates the linear part exactly and
-        // leaves the spread part unchanged. (A NaN never replaces the least so far, as with
-        // `f64::min`; which zero is kept does not change the sum with `s·φ(v)` below.)
+        // leaves the spread part unchanged.
         let mut least = [0.0f64; 4];
         for (v, w) in TET_EDGES {
             let d = points[w] - points[v];
             let linear = sign * s.gradient.dot(d);
             let spread = s.spread.dot(d.abs());
-            let (to_w, to_v) = (linear - spread, -linear - spread);
-            if to_w < least[v] {
-                least[v] = to_w;
-            }
-            if to_v < least[w] {
-                least[w] = to_v;
-            }
+            least[v] = least[v].min(linear - spread);
+            least[w] = least[w].min(-linear - spread);
         }
         (0..4).any(|v| sign * phi[v] + least[v] > s.margin)
     }
@@ -923,31 +812,18 @@ impl Examiner<'_> {
 /// where `∇φ` vanishes (a node). `∇φ` is exact for the inside and outside
 /// ([`Field::value_and_gradient`]).
 pub fn triangle_deviation(field: &Field, corners: [DVec3; 3], kinds: [VertexKind; 3]) -> f64 {
-    deviation_by(field, corners, kinds, |_, p| off_surface(field, p))
-}
-
-/// The first-order distance `|φ|/|∇φ|` of `p` from the surface (infinite where `∇φ`
-/// vanishes but `φ` does not).
-fn off_surface(field: &Field, p: DVec3) -> f64 {
-    let (v, g) = field.value_and_gradient(p, 1e-7 * field.radius());
-    let (v, g) = (v.abs(), g.length());
-    if v == 0.0 {
-        0.0
-    } else if g > 0.0 {
-        v / g
-    } else {
-        f64::INFINITY
-    }
-}
-
-/// [`triangle_deviation`] with `off_surface(i, p)` for [`off_surface`] at the point `p`,
-/// the centroid (`i = 0`) or the midpoint of the side from corner `i − 1` to the next.
-fn deviation_by(
-    field: &Field,
-    corners: [DVec3; 3],
-    kinds: [VertexKind; 3],
-    mut off_surface: impl FnMut(usize, DVec3) -> f64,
-) -> f64 {
+    let h = 1e-7 * field.radius();
+    let off_surface = |p: DVec3| {
+        let (v, g) = field.value_and_gradient(p, h);
+        let (v, g) = (v.abs(), g.length());
+        if v == 0.0 {
+            0.0
+        } else if g > 0.0 {
+            v / g
+        } else {
+            f64::INFINITY
+        }
+    };
     let off_sphere = |p: DVec3| (field.radius() - p.length()).abs();
     let [a, b, c] = corners;
     let surface = kinds.iter().all(|k| k.on_surface());
@@ -959,11 +835,10 @@ fn deviation_by(
         0.5 * (c + a),
     ]
     .iter()
-    .enumerate()
-    .map(|(i, &p)| match (surface, sphere) {
-        (true, false) => off_surface(i, p),
+    .map(|&p| match (surface, sphere) {
+        (true, false) => off_surface(p),
         (false, true) => off_sphere(p),
-        _ => off_surface(i, p).min(off_sphere(p)),
+        _ => off_surface(p).min(off_sphere(p)),
     })
     .fold(0.0, f64::max)
 }
@@ -1097,17 +972,11 @@ struct Taylor {
 impl Taylor {
     /// `Σ |c·x^a·y^b·z^e|` over the terms at `p`.
     fn magnitude_bound(&self, p: DVec3) -> f64 {
-        // Each power once (`powi` as in the sum over the terms, so the same values).
-        let mut powers = [[1.0f64; MAX_DEGREE + 1]; 3];
-        for (axis, x) in [p.x, p.y, p.z].into_iter().enumerate() {
-            for (i, power) in powers[axis][..=self.degree].iter_mut().enumerate() {
-                *power = x.powi(i as i32);
-            }
-        }
-        let [px, py, pz] = &powers;
         self.terms
             .iter()
-            .map(|&([a, b, e], k)| (k * px[a] * py[b] * pz[e]).abs())
+            .map(|&([a, b, e], k)| {
+                (k * p.x.powi(a as i32) * p.y.powi(b as i32) * p.z.powi(e as i32)).abs()
+            })
             .sum()
     }
 }
@@ -1234,32 +1103,23 @@ impl Taylor {
         // Row `a` of an axis's table (at `a·(a + 1)/2` within it) holds C(a, i)·x^(a−i) for
         // `i ≤ a`: the coefficient of d^i in (x + d)^a.
         let per_axis = d * (d + 1) / 2;
-        let mut tables = vec![0.0f64; 3 * per_axis];
-        for (table, x) in tables.chunks_exact_mut(per_axis).zip([c.x, c.y, c.z]) {
+        let mut tables = Vec::with_capacity(3 * per_axis);
+        for x in [c.x, c.y, c.z] {
             let mut powers = [1.0f64; N];
             for i in 1..d {
                 powers[i] = powers[i - 1] * x;
             }
-            let mut at = 0;
             for a in 0..d {
-                for (i, o) in table[at..=at + a].iter_mut().enumerate() {
-                    *o = BINOMIAL[a][i] * powers[a - i];
-                }
-                at += a + 1;
+                tables.extend((0..=a).map(|i| BINOMIAL[a][i] * powers[a - i]));
             }
         }
-        let (tx, rest) = tables.split_at(per_axis);
-        let (ty, tz) = rest.split_at(per_axis);
-        fn row(table: &[f64], a: usize) -> &[f64] {
-            &table[a * (a + 1) / 2..][..=a]
-        }
+        let row = |axis: usize, a: usize| &tables[axis * per_axis + a * (a + 1) / 2..][..=a];
         for &([a, b, e], k) in &self.terms {
-            let (px, py, pz) = (row(tx, a), row(ty, b), row(tz, e));
+            let (px, py, pz) = (row(0, a), row(1, b), row(2, e));
             for (j, y) in py.iter().enumerate() {
-                let rows = &self.rows[j..];
                 for (l, z) in pz.iter().enumerate() {
                     let yz = k * y * z;
-                    let row = &mut coef[rows[d * l]..][..=a];
+                    let row = &mut coef[self.rows[j + d * l]..][..=a];
                     for (o, x) in row.iter_mut().zip(px) {
                         *o += yz * x;
                     }
@@ -1294,119 +1154,6 @@ mod tests {
             &AtomicBool::new(false),
         )
         .unwrap()
-    }
-
-    #[test]
-    fn new_keys_are_the_absent_keys_once_each_in_the_order_first_met() {
-        let mut map = PointMap::<f64>::default();
-        map.insert(7, 1.5);
-        let new = new_keys(&mut map, [3, 7, 5, 3, 9, 5].into_iter(), -1.0);
-        assert_eq!(new, vec![3, 5, 9]);
-        assert_eq!(map[&7], 1.5, "a known value is kept");
-        assert!([3, 5, 9].iter().all(|k| map[k] == -1.0));
-        assert_eq!(map.len(), 4);
-    }
-
-    #[test]
-    fn midpoints_take_known_values_and_compute_each_other_once() {
-        let f = field("x^2 + y^2 + z^2 = 1", 1.5);
-        let lattice = Lattice::of_grid(Grid::covering(1.5, 0.5), 2);
-        let (known_point, other) = ([4, 6, 8], [2, 2, 10]);
-        let mut known = PointMap::default();
-        known.insert(extract::pack(known_point), 42.0);
-        let mut fresh = PointMap::default();
-        let mut midpoints = Midpoints {
-            known: &known,
-            fresh: &mut fresh,
-        };
-        assert_eq!(midpoints.value(&f, lattice, known_point), 42.0);
-        let exact = f.value(lattice.position(other));
-        assert_eq!(midpoints.value(&f, lattice, other), exact);
-        assert_eq!(midpoints.value(&f, lattice, other), exact);
-        assert_eq!(fresh.len(), 1, "the known point is not computed again");
-        assert_eq!(fresh[&extract::pack(other)], exact);
-    }
-
-    /// The examination with the cache of φ at midpoints gives the verdicts of one without it
-    /// (a fresh map for every tetrahedron, and no values known), and so does the measure of
-    /// the deviation with the cache of the distances at polygon sides' midpoints.
-    #[test]
-    fn the_verdicts_do_not_depend_on_the_caches() {
-        let f = field("(x^2 + y^2 + z^2 + 0.64 - 0.09)^2 = 2.56*(x^2 + y^2)", 1.2);
-        let tolerance = 0.01;
-        let depth = depth_for(f.radius(), 2.0 * tolerance, SolidKind::Inside);
-        let coarse = Grid::covering(f.radius(), 2.0 * tolerance * f64::from(1u32 << depth));
-        let a = refine(
-            &f,
-            coarse,
-            depth,
-            tolerance,
-            &|_, _| {},
-            &AtomicBool::new(false),
-        )
-        .unwrap();
-        let lattice = a.lattice;
-        let refinement = Refinement::new(coarse.cells, depth);
-        // No cheap bound: every tetrahedron the Taylor bound does not prove is bisected; a
-        // tenth of the deviation allowed, so that some leaves fail it.
-        let examiner = Examiner {
-            spreads: (0..coarse.cells.pow(3)).map(|_| None).collect(),
-            cube_shift: depth,
-            cells: coarse.cells,
-            field: &f,
-            lattice,
-            taylor: Taylor::new(&f),
-            table: marching_table(),
-            shallow: 0.1 * tolerance,
-            finest: refinement.finest_level(),
-            f_sign: 1.0,
-        };
-        // The deviation verdicts with one map of the sides' midpoints for all the crossed
-        // leaves are those with a map for each.
-        let mut crossings = Crossings::default();
-        for (t, &m) in a.leaves.iter().zip(&a.labels) {
-            for &[i, j] in examiner.table[usize::from(m)].as_ref().unwrap() {
-                let (p, q) = (t.corners[i as usize], t.corners[j as usize]);
-                let placed = f.crossing(lattice.position(p), lattice.position(q));
-                crossings.insert(extract::edge_key(p, q), placed);
-            }
-        }
-        let (mut sides, mut measured, mut failed) = (SideMap::default(), 0, 0);
-        for (t, &m) in a.leaves.iter().zip(&a.labels) {
-            let mut alone = SideMap::default();
-            let expected = examiner.deviation(t, usize::from(m), &crossings, &mut alone);
-            let verdict = examiner.deviation(t, usize::from(m), &crossings, &mut sides);
-            assert_eq!(verdict, expected);
-            measured += alone.len();
-            failed += usize::from(verdict.is_some());
-        }
-        assert!(sides.len() < measured, "{} {measured}", sides.len());
-        assert!(failed > 0 && failed < a.leaves.len(), "{failed}");
-        let (empty, mut shared) = (PointMap::default(), PointMap::default());
-        let mut tried = 0;
-        for t in a.refinement.leaves().iter().filter(|t| t.level < 3) {
-            let phi = t.corners.map(|p| f.value(lattice.position(p)));
-            let Some(sign) = common_sign(&phi) else {
-                continue;
-            };
-            let mut alone = PointMap::default();
-            let mut once = Midpoints {
-                known: &empty,
-                fresh: &mut alone,
-            };
-            let expected = examiner.quiet(t, sign, phi, &mut once);
-            let mut cached = Midpoints {
-                known: &empty,
-                fresh: &mut shared,
-            };
-            assert_eq!(examiner.quiet(t, sign, phi, &mut cached), expected);
-            tried += 1;
-        }
-        assert!(
-            tried > 100 && !shared.is_empty(),
-            "{tried} {}",
-            shared.len()
-        );
     }
 
     #[test]
