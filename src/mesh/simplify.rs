@@ -1166,6 +1166,30 @@ impl<'a> Work<'a> {
     }
 }
 
+/// A pass's collapses: every live edge in both directions, from a vertex the work owns
+/// ([`Work::owns`]), shortest first (equal lengths in the order of the triangles).
+fn shortest_first_collapses(work: &Work) -> Vec<Step> {
+    let mut edges: Vec<(f64, u32, u32)> = Vec::new();
+    for (t, tri) in work.triangles.iter().enumerate() {
+        if !work.alive[t] {
+            continue;
+        }
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            if work.own.is_some_and(|own| !own[a as usize]) {
+                continue; // Refused by `Work::owns` whatever the mesh.
+            }
+            let length = (work.vertices[a as usize] - work.vertices[b as usize]).length();
+            edges.push((length, a, b));
+        }
+    }
+    edges.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+    edges
+        .iter()
+        .map(|&(_, a, b)| Step::Collapse(a, b))
+        .collect()
+}
+
 /// Makes at most `limit` passes over `work`'s edges (collapses shortest first, then flips),
 /// until a pass removes fewer than a fiftieth of the vertices left, adding what they did to
 /// `done` and calling `pass_done` with `done.passes` as each ends; `None` if `cancel`
@@ -1179,26 +1203,7 @@ fn passes(
     checking: Checking,
 ) -> Option<()> {
     for _ in 0..limit {
-        // Every live edge in both directions, shortest first.
-        let mut edges: Vec<(f64, u32, u32)> = Vec::new();
-        for (t, tri) in work.triangles.iter().enumerate() {
-            if !work.alive[t] {
-                continue;
-            }
-            for k in 0..3 {
-                let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                if work.own.is_some_and(|own| !own[a as usize]) {
-                    continue; // Refused by `Work::owns` whatever the mesh.
-                }
-                let length = (work.vertices[a as usize] - work.vertices[b as usize]).length();
-                edges.push((length, a, b));
-            }
-        }
-        edges.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
-        let steps: Vec<Step> = edges
-            .iter()
-            .map(|&(_, a, b)| Step::Collapse(a, b))
-            .collect();
+        let steps = shortest_first_collapses(work);
         let (collapsed, redone) = work.make_pass(&steps, cancel, checking)?;
         done.collapses += collapsed;
         done.redone += redone;
@@ -1417,24 +1422,18 @@ mod tests {
         extract::march(field, extract::Grid::covering(3.0, 0.1), &|_, _| {})
     }
 
-    /// Every shortest-first collapse of the live edges, as a pass makes them.
-    fn collapses(work: &Work) -> Vec<Step> {
-        let mut steps = Vec::new();
-        for (t, tri) in work.triangles.iter().enumerate() {
-            if work.alive[t] {
-                steps.extend((0..3).map(|k| Step::Collapse(tri[k], tri[(k + 1) % 3])));
-            }
-        }
-        steps
+    /// The unit sphere clipped to radius 3, as [`sphere_mesh`] meshes it.
+    fn unit_sphere() -> Field {
+        Field::new(
+            &expand("x^2 + y^2 + z^2 = 1").unwrap(),
+            3.0,
+            SolidKind::Inside,
+        )
     }
 
     #[test]
     fn undoing_a_pass_gives_back_the_mesh_as_it_began() {
-        let field = Field::new(
-            &expand("x^2 + y^2 + z^2 = 1").unwrap(),
-            3.0,
-            SolidKind::Inside,
-        );
+        let field = unit_sphere();
         let (mesh, kinds) = sphere_mesh(&field);
         let mut work = Work::new(&field, &mesh, &kinds, 0.05);
         let fans = |work: &Work| {
@@ -1449,7 +1448,7 @@ mod tests {
         };
         let before = (work.triangles.clone(), fans(&work), work.removed.clone());
         work.begin_pass();
-        let steps = collapses(&work);
+        let steps = shortest_first_collapses(&work);
         let made = make(
             &mut work,
             &steps,
@@ -1481,11 +1480,7 @@ mod tests {
     #[test]
     fn the_end_of_pass_test_finds_the_crossings_of_changed_triangles() {
         // Two spheres of radius 1, 1.5 apart, pass through each other; 3 apart, they do not.
-        let field = Field::new(
-            &expand("x^2 + y^2 + z^2 = 1").unwrap(),
-            3.0,
-            SolidKind::Inside,
-        );
+        let field = unit_sphere();
         let (one, one_kinds) = sphere_mesh(&field);
         let two_spheres = |apart: f64| {
             let mut mesh = one.clone();
