@@ -4,7 +4,9 @@
 //!   line along `∇φ` or along any of the tetrahedra's 13 edge directions (the least of these
 //!   bounds the distance from above).
 //! - Mesh to surface: from the centroid of every triangle whose corners are all on the
-//!   surface (or the crease), the nearest root of `φ` along the triangle's normal (or along `∇φ` if nearer).
+//!   surface (or the crease), the nearest root of `φ` along the triangle's normal (or along
+//!   `∇φ` if nearer); where neither line meets the surface within the reach (beside a node,
+//!   where the surface is a cone), the nearest along the 13 edge directions.
 //! - Surface to mesh: points of the exact surface (every root of `φ` on lines parallel to
 //!   the axes, half a grid step off the grid's own lines, inside the clip ball), each one's
 //!   distance to the nearest triangle.
@@ -178,6 +180,7 @@ pub fn measure_cancellable(
                 .into_iter()
                 .chain(along_gradient)
                 .reduce(f64::min)
+                .or_else(|| nearest_along_edges(field, centroid, reach))
         })
         .collect();
     let mesh_to_surface = mesh_side
@@ -237,12 +240,16 @@ pub fn vertex_distance(field: &Field, p: DVec3, reach: f64) -> Option<f64> {
     let h = 1e-7 * field.radius();
     field
         .distance_along(p, field.gradient(p, h), reach)
-        .or_else(|| {
-            EDGE_DIRECTIONS
-                .into_iter()
-                .filter_map(|d| field.distance_along(p, d, reach))
-                .reduce(f64::min)
-        })
+        .or_else(|| nearest_along_edges(field, p, reach))
+}
+
+/// The nearest root of `φ` within `reach` of `p` on the lines through `p` along the
+/// tetrahedra's 13 edge directions (an upper bound on the distance to `φ = 0`), if any.
+fn nearest_along_edges(field: &Field, p: DVec3, reach: f64) -> Option<f64> {
+    EDGE_DIRECTIONS
+        .into_iter()
+        .filter_map(|d| field.distance_along(p, d, reach))
+        .reduce(f64::min)
 }
 
 /// Points of `φ = 0` inside the clip ball: every root on the lines parallel to each axis

@@ -59,6 +59,9 @@ fn assert_guarantees(what: &str, solids: &[NamedSolid], kind: SolidKind, toleran
         assert_eq!(d.vertices_beyond, 0, "{what} {kind:?}: {d:?}");
         assert!(d.vertex <= part.tolerance, "{what} {kind:?}: {d:?}");
         assert!(d.hausdorff().is_finite(), "{what} {kind:?}: {d:?}");
+        // Every sample found the surface or the mesh within the search reach, beside the
+        // nodes too: the Hausdorff estimate is a measurement, not the reach.
+        assert_eq!(d.beyond_reach, 0, "{what} {kind:?}: {d:?}");
         assert!(part.kinds.contains(&VertexKind::Surface), "{what}");
     }
 }
