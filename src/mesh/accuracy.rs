@@ -6,7 +6,9 @@
 //! - Mesh to surface: from the centroid of every triangle whose corners are all on the
 //!   surface (or the crease), the nearest root of `φ` along the triangle's normal (or along
 //!   `∇φ` if nearer); where neither line meets the surface within the reach (beside a node,
-//!   where the surface is a cone), the nearest along the 13 edge directions.
+//!   where the surface is a cone), the nearest along the 13 edge directions. A triangle with
+//!   every corner on the crease may be a piece of the cap: the nearer of the surface and the
+//!   clip sphere.
 //! - Surface to mesh: points of the exact surface (every root of `φ` on lines parallel to
 //!   the axes, half a grid step off the grid's own lines, inside the clip ball), each one's
 //!   distance to the nearest triangle.
@@ -174,11 +176,17 @@ pub fn measure_cancellable(
             }
             let [a, b, c] = mesh.corners(t);
             let centroid = (a + b + c) / 3.0;
+            // Every corner on the crease: the triangle may be a piece of the cap.
+            let off_sphere = mesh.triangles[t]
+                .iter()
+                .all(|&v| kinds[v as usize].on_sphere())
+                .then(|| (field.radius() - centroid.length()).abs());
             let along_normal = field.distance_along(centroid, mesh.normal(t), reach);
             let along_gradient = field.distance_along(centroid, field.gradient(centroid, h), reach);
             along_normal
                 .into_iter()
                 .chain(along_gradient)
+                .chain(off_sphere)
                 .reduce(f64::min)
                 .or_else(|| nearest_along_edges(field, centroid, reach))
         })

@@ -2,14 +2,16 @@
 //! leaves of a conforming bisection of Kuhn tetrahedra ([`super::bisection`]): it starts
 //! from a grid of cubes of the coarsest step (at most the clip radius /
 //! [`FIRST_STEP_DIVISOR`]) and bisects a tetrahedron only where one of these checks fails for
-//! it, down to cubes of the floor step of twice the tolerance, where everything is accepted
-//! (the step every surface got before any search):
+//! it, down to cubes of the floor step of twice the tolerance (the step every surface got
+//! before any search) for 3., and to cubes of the tolerance ([`BELOW_FLOOR`]) for 1. and 2.
+//! (at the nodes and the sharpest bends), where everything is accepted:
 //!
 //! 1. **Accuracy**: every triangle marching tetrahedra makes in it (its vertices placed by the
 //!    root finder, fanned from the first) has its centroid and edge midpoints within
-//!    [`EXTRACT_SHARE`] of the tolerance of the boundary by the first-order estimate
-//!    `|φ|/|∇φ|` (a triangle with all vertices on the clip sphere: `|R − |x||`; one with
-//!    vertices on both: the smaller of the two).
+//!    [`EXTRACT_SHARE`] of the tolerance of the boundary by the estimate `|φ|/|∇φ|`, with a
+//!    second Newton step where the first leaves much of `φ` (beside a node:
+//!    [`Field::distance_estimate`]) (a triangle with all vertices on the clip sphere:
+//!    `|R − |x||`; one with vertices on both: the smaller of the two).
 //! 2. **No edge crossed twice**: if its corners do not all have the same sign of `φ`, each of
 //!    its six edges holds at most one distinct root of `φ` inside the clip ball, counted
 //!    exactly (Bernstein sign variations, then Sturm sequences by
@@ -48,7 +50,7 @@
 //! for a shallow graze. What it does not: features smaller than the floor step (as at the
 //! floor itself); a second piece of surface wholly inside a crossed leaf that meets none of
 //! its edges; the acute wedge at the crease that binary labels cannot see; and the
-//! first-order estimate of 1. is an estimate, not a bound, which the measured Hausdorff
+//! distance estimate of 1. is an estimate, not a bound, which the measured Hausdorff
 //! distance afterwards checks. The Taylor bound is on `f` (the inside and outside); a shell's
 //! `φ` (degree twice `f`'s, a square less a sum of squares) is meshed on the uniform grid of
 //! the floor step ([`super::extract::march`]).
@@ -66,12 +68,19 @@ use std::hash::BuildHasherDefault;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The share of the tolerance an extracted triangle may deviate from the surface (by the
-/// first-order estimate at its centroid and edge midpoints) for its tetrahedron to be kept:
+/// distance estimate at its centroid and edge midpoints) for its tetrahedron to be kept:
 /// the coarsening may then spend [`super::COARSEN_SHARE`] of it again.
 pub const EXTRACT_SHARE: f64 = 0.75;
 
 /// The coarsest step is at most the clip radius divided by this.
 pub const FIRST_STEP_DIVISOR: f64 = 8.0;
+
+/// How many more times than down to the floor step a cube's side may be halved for the
+/// checks 1. and 2. of the module doc (the proofs of 3. stop at the floor): at a node, where
+/// the floor's triangles open or close the cone about a third of the floor step off its tip
+/// (half the floor step off the surface, a little more than the tolerance), and at the
+/// sharpest bends.
+pub const BELOW_FLOOR: u32 = 1;
 
 /// Why a tetrahedron was bisected (module doc, 1. to 3.).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -216,6 +225,8 @@ pub fn refine(
     progress: &(dyn Fn(usize, usize) + Sync),
     cancel: &AtomicBool,
 ) -> Option<Adaptive> {
+    let floor_level = (3 * depth) as u8;
+    let depth = finest_depth(coarse, depth);
     let mut refinement = Refinement::new(coarse.cells, depth);
     let lattice = Lattice::of_grid(coarse, depth);
     let mut values = Values {
@@ -231,7 +242,7 @@ pub fn refine(
         taylor: Taylor::new(field),
         table: marching_table(),
         shallow: EXTRACT_SHARE * tolerance,
-        finest: refinement.finest_level(),
+        floor_level,
         f_sign: if field.kind() == SolidKind::Outside {
             -1.0
         } else {
@@ -523,6 +534,17 @@ pub fn refine(
     })
 }
 
+/// How many times a side of `coarse`'s cubes may be halved at most: `depth` (down to the
+/// floor step) and [`BELOW_FLOOR`] more, unless the lattice would then be too large.
+fn finest_depth(coarse: Grid, depth: u32) -> u32 {
+    let deeper = depth + BELOW_FLOOR;
+    if deeper <= 20 && coarse.cells << deeper < 1 << 21 {
+        deeper
+    } else {
+        depth
+    }
+}
+
 /// The coarse cubes (x fastest, `n` a side of `side` lattice units) whose closed box holds
 /// the lattice point `m`: one, or two, four or eight where `m` lies on their faces.
 fn cubes_holding(m: Point, side: i32, n: usize) -> impl Iterator<Item = usize> {
@@ -559,7 +581,7 @@ pub fn mesh_adaptive(
         &adaptive.crossings,
         cancel,
     )?;
-    let total = 3 * depth as usize + 2;
+    let total = 3 * finest_depth(coarse, depth) as usize + 2;
     progress(total, total);
     Some((mesh, kinds, adaptive.refined))
 }
@@ -583,8 +605,9 @@ struct Examiner<'a> {
     /// The deepest graze allowed; also the deviation allowed ([`EXTRACT_SHARE`] of the
     /// tolerance).
     shallow: f64,
-    /// The finest level (never bisected).
-    finest: u8,
+    /// The level of the floor step's tetrahedra, at and below which corners of the same sign
+    /// are accepted (module doc, 3.).
+    floor_level: u8,
     /// `φ = f_sign · f` (1 inside, −1 outside).
     f_sign: f64,
     /// For each coarse cube (x fastest) not proven empty: how `∇φ` strays over it.
@@ -678,7 +701,7 @@ impl Examiner<'_> {
     /// Whether the tetrahedron `t`, whose corners (values `phi`) all have the sign `sign` of
     /// `φ`, holds no surface the floor would see (module doc, 3.): proven by the cheap bound
     /// ([`Examiner::gradient_bound`]), or else bisected (without changing the mesh) into the
-    /// tetrahedra below it, each proven by the cheap bound, down to the finest level, where
+    /// tetrahedra below it, each proven by the cheap bound, down to the floor's level, where
     /// corners of the same sign are accepted, or else by the Taylor bound about its centre.
     /// A tetrahedron below it whose new corner has the other sign fails the bisection.
     fn quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
@@ -686,7 +709,7 @@ impl Examiner<'_> {
         // bisection usually is, so it is tried last. The order does not change the answer:
         // the bisection fails only at a point of `t` where `s·φ ≤ 0` (or NaN), and the Taylor
         // bound, rigorous over `t` with a margin for rounding, then fails too.
-        t.level >= self.finest
+        t.level >= self.floor_level
             || self.gradient_bound(t, sign, &phi)
             || self.split_quiet(t, sign, phi)
             || self.proven_empty(t, sign, &phi)
@@ -696,7 +719,7 @@ impl Examiner<'_> {
     /// by the cheap bound only ([`Examiner::gradient_bound`]), the Taylor bound about each
     /// part's own centre being the dearest part of the examination.
     fn below_quiet(&self, t: &Tet, sign: f64, phi: [f64; 4]) -> bool {
-        if t.level >= self.finest || self.gradient_bound(t, sign, &phi) {
+        if t.level >= self.floor_level || self.gradient_bound(t, sign, &phi) {
             return true;
         }
         self.split_quiet(t, sign, phi)
@@ -807,23 +830,13 @@ impl Examiner<'_> {
     }
 }
 
-/// The largest first-order deviation of the triangle `corners` (vertex kinds `kinds`) from
+/// The largest estimated deviation of the triangle `corners` (vertex kinds `kinds`) from
 /// the boundary at its centroid and edge midpoints (object units; module doc, 1.): infinite
 /// where `∇φ` vanishes (a node). `∇φ` is exact for the inside and outside
 /// ([`Field::value_and_gradient`]).
 pub fn triangle_deviation(field: &Field, corners: [DVec3; 3], kinds: [VertexKind; 3]) -> f64 {
     let h = 1e-7 * field.radius();
-    let off_surface = |p: DVec3| {
-        let (v, g) = field.value_and_gradient(p, h);
-        let (v, g) = (v.abs(), g.length());
-        if v == 0.0 {
-            0.0
-        } else if g > 0.0 {
-            v / g
-        } else {
-            f64::INFINITY
-        }
-    };
+    let off_surface = |p: DVec3| field.distance_estimate(p, h);
     let off_sphere = |p: DVec3| (field.radius() - p.length()).abs();
     let [a, b, c] = corners;
     let surface = kinds.iter().all(|k| k.on_surface());
@@ -843,7 +856,7 @@ pub fn triangle_deviation(field: &Field, corners: [DVec3; 3], kinds: [VertexKind
     .fold(0.0, f64::max)
 }
 
-/// The largest first-order deviation of `mesh`'s triangles from the boundary
+/// The largest estimated deviation of `mesh`'s triangles from the boundary
 /// ([`triangle_deviation`]).
 pub fn worst_deviation(field: &Field, mesh: &TriangleMesh, kinds: &[VertexKind]) -> f64 {
     mesh.triangles

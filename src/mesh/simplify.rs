@@ -20,7 +20,7 @@
 //!   surface's at each corner, which holds where its long side runs along the direction in
 //!   which the surface curves least (the length of a torus's tube, not around it);
 //! - the accuracy: each new triangle's centroid and edge midpoints are within `budget` of the
-//!   surface by the first-order estimate `|φ|/|∇φ|` (of the sphere: `R − |x|` for a cap
+//!   surface by the estimate [`super::field::Field::distance_estimate`] (of the sphere: `R − |x|` for a cap
 //!   triangle), and so is the removed vertex of the nearest new triangle (the surface side);
 //! - no new triangle meets a triangle near it (or another new one) other than in the corners
 //!   and sides they share, by the exact test of [`super::check`]; the triangles' boxes are
@@ -219,18 +219,10 @@ impl Work<'_> {
         t.map(|v| self.vertices[v as usize])
     }
 
-    /// The first-order distance estimate of `p` from the part `surface` (φ = 0) or the sphere.
+    /// The estimated distance of `p` from the part `surface` (φ = 0) or the sphere.
     fn off(&self, p: DVec3, surface: bool) -> f64 {
         if surface {
-            let (v, g) = self.field.value_and_gradient(p, self.h);
-            let (v, g) = (v.abs(), g.length());
-            if g > 0.0 {
-                v / g
-            } else if v == 0.0 {
-                0.0
-            } else {
-                f64::INFINITY
-            }
+            self.field.distance_estimate(p, self.h)
         } else {
             (self.field.radius() - p.length()).abs()
         }
