@@ -396,22 +396,23 @@ impl Field {
     /// `φ(p)` is 0; infinite where `∇φ` vanishes and `φ` does not. `h` as for
     /// [`Field::value_and_gradient`].
     pub fn distance_estimate(&self, p: DVec3, h: f64) -> f64 {
+        // The Newton step from `p`: its length, its end and |φ(p)|.
         let step = |p: DVec3| {
             let (v, g) = self.value_and_gradient(p, h);
             let g2 = g.length_squared();
             if v == 0.0 {
-                (0.0, p)
+                (0.0, p, 0.0)
             } else if g2 > 0.0 {
-                (v.abs() / g2.sqrt(), p - g * (v / g2))
+                (v.abs() / g2.sqrt(), p - g * (v / g2), v.abs())
             } else {
-                (f64::INFINITY, p)
+                (f64::INFINITY, p, v.abs())
             }
         };
-        let (first, next) = step(p);
+        let (first, next, before) = step(p);
         if first == 0.0 || !first.is_finite() {
             return first;
         }
-        let (before, after) = (self.value(p).abs(), self.value(next).abs());
+        let after = self.value(next).abs();
         if after.is_nan() || after > 0.1 * before {
             first + step(next).0
         } else {

@@ -94,8 +94,8 @@ fn the_nodal_surfaces_mesh_inside_outside_and_as_shells() {
 fn the_nodal_surfaces_are_within_the_tolerance_at_their_nodes() {
     // At the default tolerance (1% of the clip radius) the floor's triangles would open or
     // close Barth's nodes a little more than the tolerance off the cone (2.16e-2 for 2e-2);
-    // the checks that see a node (the distance estimate's second step, edges crossed twice)
-    // bisect one step below the floor there. Both directed distances are within the
+    // the deviation check, whose distance estimate takes a second Newton step beside a
+    // node, bisects one step below the floor there. Both directed distances are within the
     // tolerance, with every sample found within the search reach.
     for (name, kind) in [
         ("kummer", SolidKind::Inside),
