@@ -167,15 +167,18 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
             Some(r) => {
                 outln!(
                     "  {}: tolerance {:.3e}, tetrahedra of a {}³ grid (step {:.3e} in object \
-                     units) bisected where needed down to step {:.3e}: {} leaves ({} on a \
-                     uniform grid of that step), {} of them cut by the boundary",
+                     units) bisected where needed down to step {:.3e} (the proofs of \
+                     emptiness to {:.3e}): {} leaves ({} on a uniform grid of step {:.3e}), \
+                     {} of them cut by the boundary",
                     s.name,
                     part.tolerance,
                     r.coarse.cells,
                     r.coarse.step(),
                     r.cube_side(r.crossed_by_level.len() - 1),
+                    r.floor_side(),
                     r.leaves(),
                     r.uniform_leaves(),
+                    r.floor_side(),
                     r.crossed()
                 );
                 let by_side: Vec<String> = (0..r.crossed_by_level.len())

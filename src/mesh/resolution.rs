@@ -99,9 +99,12 @@ pub enum Reason {
 pub struct Refined {
     /// The domain's cubes: the coarsest step, each cut into six Kuhn tetrahedra.
     pub coarse: Grid,
-    /// How many times a cube's side may be halved: the finest cubes (the floor) have side
+    /// How many times a cube's side may be halved: the finest cubes have side
     /// `coarse.step() / 2^depth`, their tetrahedra level `3·depth`.
     pub depth: u32,
+    /// How many times a cube's side is halved down to the floor step (twice the tolerance),
+    /// where the proofs of emptiness stop: `depth` less [`BELOW_FLOOR`] (or `depth`).
+    pub floor_depth: u32,
     /// Leaf tetrahedra at each level (`0..=3·depth`; the cube side of level `ℓ` is
     /// [`Refined::cube_side`]).
     pub leaves_by_level: Vec<usize>,
@@ -132,7 +135,13 @@ impl Refined {
 
     /// Tetrahedra a uniform grid of the floor step over the same domain would have.
     pub fn uniform_leaves(&self) -> usize {
-        6 * (self.coarse.cells << self.depth).pow(3)
+        6 * (self.coarse.cells << self.floor_depth).pow(3)
+    }
+
+    /// The floor step: the side of the cubes where the proofs of emptiness stop (object
+    /// units).
+    pub fn floor_side(&self) -> f64 {
+        self.coarse.step() / f64::from(1u32 << self.floor_depth)
     }
 
     /// The largest cube side of a leaf the mesh passes through (object units).
@@ -226,7 +235,7 @@ pub fn refine(
     progress: &(dyn Fn(usize, usize) + Sync),
     cancel: &AtomicBool,
 ) -> Option<Adaptive> {
-    let floor_level = (3 * depth) as u8;
+    let (floor_depth, floor_level) = (depth, (3 * depth) as u8);
     let depth = finest_depth(coarse, depth);
     let mut refinement = Refinement::new(coarse.cells, depth);
     let lattice = Lattice::of_grid(coarse, depth);
@@ -484,6 +493,7 @@ pub fn refine(
     let mut refined = Refined {
         coarse,
         depth,
+        floor_depth,
         leaves_by_level: vec![0; finest as usize + 1],
         crossed_by_level: vec![0; finest as usize + 1],
         refined_for,
