@@ -224,8 +224,8 @@ pub struct Adaptive {
     pub refined: Refined,
 }
 
-/// Refines the Kuhn tetrahedra of `coarse` (depth ≥ 1 halvings down to the floor) where
-/// the checks of the module doc fail; `tolerance` in object units. `progress(done, total)`
+/// Refines the Kuhn tetrahedra of `coarse` (`depth` ≥ 1 halvings down to the floor, and
+/// [`BELOW_FLOOR`] more for the deviation check) where the checks of the module doc fail; `tolerance` in object units. `progress(done, total)`
 /// after each round; `None` once `cancel` is set (read before each round).
 pub fn refine(
     field: &Field,
