@@ -8,7 +8,8 @@ prints them: without its own accuracy measurement, check and file) is read from 
 inside the clip ball: the sampled field is max(f, x² + y² + z² − R²)) on an n³ grid of
 samples, n growing by 1.25× until its mesh is as close to the exact surface as kardia's.
 Both meshes are measured the same way, by `kardia mesh --measure` (the root finder's
-two-sided Hausdorff estimate at the grid step of the tolerance compared). The times compared are
+two-sided Hausdorff estimate at the grid step of the tolerance compared; for a surface the
+clip sphere cuts, its surface→mesh part: see `by_s2m` below). The times compared are
 medians of REPEAT (3) interleaved runs of each. The time of
 scikit-image is sampling plus marching (not the interpreter's start or the file written);
 peak memory is each process's maximum resident size (for scikit-image the whole Python

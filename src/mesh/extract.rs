@@ -309,16 +309,8 @@ where
             let (lower, upper) = ends(k);
             let (p, q) = (position(lower), position(upper));
             let (a, b) = if inside(lower) { (p, q) } else { (q, p) };
-            let (s, kind) = known(k).unwrap_or_else(|| field.crossing(a, b));
-            let x = a + s * (b - a);
-            // A cap vertex held off an edge's end (by `END_GAP`, where the end itself lies
-            // on the sphere) goes back onto the sphere, radially.
-            let x = if kind == VertexKind::Cap {
-                x * (field.radius() / x.length())
-            } else {
-                x
-            };
-            Some((x, kind))
+            let crossing = known(k).unwrap_or_else(|| field.crossing(a, b));
+            Some((field.crossing_point(a, b, crossing), crossing.1))
         })
         .collect::<Option<_>>()?;
     let (mut vertices, mut kinds): (Vec<DVec3>, Vec<VertexKind>) = placed.into_iter().unzip();

@@ -208,6 +208,18 @@ impl Field {
         (s.clamp(END_GAP, 1.0 - END_GAP), kind)
     }
 
+    /// The vertex of a [`Field::crossing`] `(s, kind)` of the segment from `a` to `b`: the
+    /// point a fraction `s` of the way, a cap vertex on the clip sphere (to rounding) even
+    /// where `END_GAP` held it off an end that lies on the sphere itself.
+    pub fn crossing_point(&self, a: DVec3, b: DVec3, (s, kind): (f64, VertexKind)) -> DVec3 {
+        let x = a + s * (b - a);
+        if kind == VertexKind::Cap {
+            x * (self.radius / x.length())
+        } else {
+            x
+        }
+    }
+
     /// The first root of `φ(a + s·e)` in `(0, hi]`, by the project's root finder where the
     /// degree allows, else by bisection of the sign when the end is outside.
     fn first_root(&self, a: DVec3, e: DVec3, hi: f64) -> Option<f64> {
@@ -503,6 +515,26 @@ mod tests {
 
     fn sphere(kind: SolidKind, clip: f64) -> Field {
         Field::new(&expand("x^2 + y^2 + z^2 = 1").unwrap(), clip, kind)
+    }
+
+    #[test]
+    fn a_cap_vertex_held_off_an_end_on_the_sphere_goes_back_onto_it() {
+        // The solid (the ball of radius 3) reaches past the clip sphere of radius 2; the
+        // segment ends on the sphere, so the crossing is held END_GAP off that end.
+        let f = Field::new(
+            &expand("x^2 + y^2 + z^2 = 9").unwrap(),
+            2.0,
+            SolidKind::Inside,
+        );
+        let (a, b) = (DVec3::new(0.0, 0.3, 0.0), DVec3::new(0.0, 1.2, 1.6));
+        let crossing = f.crossing(a, b);
+        assert_eq!(crossing, (1.0 - END_GAP, VertexKind::Cap));
+        assert!((a + crossing.0 * (b - a)).length() < 2.0 - 1e-4);
+        let p = f.crossing_point(a, b, crossing);
+        assert!((p.length() - 2.0).abs() < 1e-15, "{p}");
+        // A surface vertex stays where the crossing puts it.
+        let surface = (0.5, VertexKind::Surface);
+        assert_eq!(f.crossing_point(a, b, surface), a + 0.5 * (b - a));
     }
 
     #[test]

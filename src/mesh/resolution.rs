@@ -225,8 +225,9 @@ pub struct Adaptive {
 }
 
 /// Refines the Kuhn tetrahedra of `coarse` (`depth` ≥ 1 halvings down to the floor, and
-/// [`BELOW_FLOOR`] more for the deviation check) where the checks of the module doc fail; `tolerance` in object units. `progress(done, total)`
-/// after each round; `None` once `cancel` is set (read before each round).
+/// [`BELOW_FLOOR`] more for the deviation check) where the checks of the module doc fail;
+/// `tolerance` in object units. `progress(done, total)` after each round; `None` once
+/// `cancel` is set (read before each round).
 pub fn refine(
     field: &Field,
     coarse: Grid,
@@ -592,7 +593,7 @@ pub fn mesh_adaptive(
         &adaptive.crossings,
         cancel,
     )?;
-    let total = 3 * finest_depth(coarse, depth) as usize + 2;
+    let total = 3 * adaptive.refined.depth as usize + 2;
     progress(total, total);
     Some((mesh, kinds, adaptive.refined))
 }
@@ -697,8 +698,8 @@ impl Examiner<'_> {
             .map(|&[i, j]| {
                 let (p, q) = (t.corners[i as usize], t.corners[j as usize]);
                 let (a, b) = (self.lattice.position(p), self.lattice.position(q));
-                let (s, kind) = crossings[&extract::edge_key(p, q)];
-                (a + s * (b - a), kind)
+                let crossing = crossings[&extract::edge_key(p, q)];
+                (field.crossing_point(a, b, crossing), crossing.1)
             })
             .collect();
         for k in 1..placed.len() - 1 {

@@ -20,8 +20,9 @@
 //!   surface's at each corner, which holds where its long side runs along the direction in
 //!   which the surface curves least (the length of a torus's tube, not around it);
 //! - the accuracy: each new triangle's centroid and edge midpoints are within `budget` of the
-//!   surface by the estimate [`super::field::Field::distance_estimate`] (of the sphere: `R − |x|` for a cap
-//!   triangle), and so is the removed vertex of the nearest new triangle (the surface side);
+//!   surface by the estimate [`super::field::Field::distance_estimate`] (of the sphere:
+//!   `R − |x|` for a cap triangle), and so is the removed vertex of the nearest new triangle
+//!   (the surface side);
 //! - no new triangle meets a triangle near it (or another new one) other than in the corners
 //!   and sides they share, by the exact test of [`super::check`]; the triangles' boxes are
 //!   kept (as `f32` rounded outward) in a hierarchy of loose grids of dense arrays, updated
@@ -1222,8 +1223,9 @@ fn passes(
 /// vertices are dropped and the kinds kept in step. Gives up (`None`, the mesh untouched)
 /// once `cancel` is set (read between batches of collapses). `pass_done(k)` is called as
 /// pass `k` (1 to at most [`MAX_PASSES`]; for a mesh split in two, as both sides have ended
-/// pass `k`, then as each pass about the seam ends) ends. The steps are checked one by one unless the
-/// environment variable `KARDIA_COARSEN_CHECKS` is `parallel` (batches checked in parallel):
+/// pass `k`, then as each pass about the seam ends) ends. The steps are checked one by one
+/// unless the environment variable `KARDIA_COARSEN_CHECKS` is `parallel` (batches checked in
+/// parallel):
 /// the mesh is the same either way, for any number of threads (on two cores, busy or quiet,
 /// one by one was the faster).
 pub fn coarsen(

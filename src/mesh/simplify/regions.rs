@@ -43,14 +43,16 @@
 //!
 //! Each side makes its passes until one removes fewer than a fiftieth of its own vertices
 //! left (the band likewise, of its own); the band then makes at most [`MAX_PASSES`] less the
-//! passes of the side that made more, so [`super::Coarsened::passes`] (the larger side's passes and the whole's) stays
-//! within [`MAX_PASSES`]. `pass_done(k)` is called as both sides have ended pass `k`, then as
-//! each pass of the band ends (numbered on from the larger side's), never going back.
+//! passes of the side that made more, so [`super::Coarsened::passes`] (the larger side's
+//! passes and the whole's) stays within [`MAX_PASSES`]. `pass_done(k)` is called as both
+//! sides have ended pass `k`, then as each pass of the band ends (numbered on from the
+//! larger side's), never going back.
 //!
 //! A small mesh is coarsened whole ([`MIN_SPLIT_TRIANGLES`]): below it, the passes about the
 //! seam cost more than the second thread saves (the torus's 9 680 and the heart's 4 398
-//! extracted triangles at the default tolerance are split, and coarsened sooner). One split, not four: the machines have two
-//! cores, and every further plane adds a seam to finish on one thread.
+//! extracted triangles at the default tolerance are split, and coarsened sooner). One split,
+//! not four: the machines have two cores, and every further plane adds a seam to finish on
+//! one thread.
 
 use super::{passes, Checking, Coarsened, Start, Work, MAX_PASSES};
 use crate::geometry::DVec3;
