@@ -517,15 +517,16 @@ mod tests {
         Field::new(&expand("x^2 + y^2 + z^2 = 1").unwrap(), clip, kind)
     }
 
+    /// The inside of `equation`'s surface clipped to radius 2.
+    fn inside(equation: &str) -> Field {
+        Field::new(&expand(equation).unwrap(), 2.0, SolidKind::Inside)
+    }
+
     #[test]
     fn a_cap_vertex_held_off_an_end_on_the_sphere_goes_back_onto_it() {
         // The solid (the ball of radius 3) reaches past the clip sphere of radius 2; the
         // segment ends on the sphere, so the crossing is held END_GAP off that end.
-        let f = Field::new(
-            &expand("x^2 + y^2 + z^2 = 9").unwrap(),
-            2.0,
-            SolidKind::Inside,
-        );
+        let f = inside("x^2 + y^2 + z^2 = 9");
         let (a, b) = (DVec3::new(0.0, 0.3, 0.0), DVec3::new(0.0, 1.2, 1.6));
         let crossing = f.crossing(a, b);
         assert_eq!(crossing, (1.0 - END_GAP, VertexKind::Cap));
@@ -541,11 +542,7 @@ mod tests {
     fn the_distance_estimate_takes_a_second_step_beside_a_node() {
         // A cone with its node at the origin: from (0, 0, a) the nearest point is a/√2 away;
         // |φ|/|∇φ| says a/2 (its step leaves a quarter of φ), the second step makes it 3a/4.
-        let cone = Field::new(
-            &expand("x^2 + y^2 - z^2 = 0").unwrap(),
-            2.0,
-            SolidKind::Inside,
-        );
+        let cone = inside("x^2 + y^2 - z^2 = 0");
         let a = 0.1;
         let d = cone.distance_estimate(DVec3::new(0.0, 0.0, a), 1e-7);
         assert!((d - 0.75 * a).abs() < 1e-12, "{d}");
