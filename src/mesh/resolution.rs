@@ -40,9 +40,10 @@
 //! below a tetrahedron proven free of surface by 3., is not proven again; each edge's double
 //! crossing (2.) and each polygon edge's crossing (1.) are computed once, by edge, whatever
 //! the number of leaves sharing it, and the crossings are handed on to marching tetrahedra;
-//! and the cubes proven empty that lie wholly inside or wholly outside the clip ball, where
-//! every corner has the same label, are neither labelled nor marched (a cube proven empty
-//! that the sphere cuts holds cap triangles and is kept).
+//! and the cubes proven empty where every corner has the same label (those wholly inside or
+//! wholly outside the clip ball, and those outside the solid throughout, whatever the sphere
+//! does) are neither labelled nor marched (a cube proven inside the solid that the sphere
+//! cuts holds cap triangles and is kept).
 //!
 //! What this proves: within the ball, no piece of the surface that sampling at the floor
 //! step would see lies inside a leaf whose corners agree (a small component, a bubble, a
@@ -274,38 +275,36 @@ pub fn refine(
         let hi = lo.map(|v| v + (size * side as usize) as i32);
         (lattice.position(lo), lattice.position(hi))
     };
-    let block_empty: Vec<bool> = (0..blocks * blocks * blocks)
+    let block_sign: Vec<Option<f64>> = (0..blocks * blocks * blocks)
         .into_par_iter()
         .map(|b| {
             let (x, y, z) = (b % blocks, b / blocks % blocks, b / (blocks * blocks));
             let (lo, hi) = cube_box(x * BLOCK, y * BLOCK, z * BLOCK, BLOCK);
-            examiner.box_empty(lo, hi)
+            examiner.empty_sign(lo, hi)
         })
         .collect();
     // Each cube's emptiness and, for the cubes not proven empty, φ's gradient at the centre
     // and how far it strays over the cube (the cheap bound of Examiner::quiet), from one
     // Taylor expansion about the cube's centre.
-    let (cube_empty, spreads): (Vec<bool>, Vec<Option<Spread>>) = (0..n * n * n)
+    let (empty_sign, spreads): (Vec<Option<f64>>, Vec<Option<Spread>>) = (0..n * n * n)
         .into_par_iter()
         .map(|c| {
             let (x, y, z) = (c % n, c / n % n, c / (n * n));
             let block = x / BLOCK + blocks * (y / BLOCK + blocks * (z / BLOCK));
-            if block_empty[block] {
-                return (true, None);
+            if let Some(sign) = block_sign[block] {
+                return (Some(sign), None);
             }
             let (lo, hi) = cube_box(x, y, z, 1);
             let centre = 0.5 * (lo + hi);
             let r = 0.5 * (hi - lo).max_element();
             if examiner.outside_box(lo, hi) {
-                return (true, None);
+                return (Some(1.0), None);
             }
             let coef = examiner.taylor.coefficients(centre);
-            if examiner
-                .taylor
-                .sums(&coef, centre, r)
-                .is_some_and(|sums| sums.proves_empty())
-            {
-                return (true, None);
+            if let Some(sums) = examiner.taylor.sums(&coef, centre, r) {
+                if sums.proves_empty() {
+                    return (Some(examiner.f_sign * sums.value.signum()), None);
+                }
             }
             let (value, gradient, spread) = examiner.taylor.spread(&coef, r);
             let f_sign = examiner.f_sign;
@@ -314,9 +313,10 @@ pub fn refine(
                 spread,
                 margin: 1e-10 * (value.abs() + examiner.taylor.magnitude_bound(centre)),
             };
-            (false, Some(spread))
+            (None, Some(spread))
         })
         .unzip();
+    let cube_empty: Vec<bool> = empty_sign.iter().map(Option::is_some).collect();
     let examiner = Examiner {
         spreads,
         cube_side: side,
@@ -502,7 +502,9 @@ pub fn refine(
     };
     let mut kept: Vec<Tet> = Vec::new();
     for (c, leaves) in cube_leaves.iter().enumerate() {
-        let skip = cube_empty[c] && uniform(c);
+        // A cube where φ > 0 throughout (or wholly outside the ball) has every corner
+        // outside, whatever the sphere does.
+        let skip = empty_sign[c].is_some_and(|sign| sign > 0.0) || cube_empty[c] && uniform(c);
         if leaves.is_empty() {
             refined.leaves_by_level[0] += 6;
             if !skip {
@@ -786,16 +788,18 @@ impl Examiner<'_> {
         (0..4).any(|v| sign * phi[v] + least[v] > s.margin)
     }
 
-    /// Whether the box `lo`–`hi` is proven free of `φ = 0` inside the clip ball: wholly
-    /// outside the ball, or `|φ(c)| > Σ_{|α|≥1} |a_α| r^{|α|}` about its centre `c` (`r` its
-    /// largest half-side).
-    fn box_empty(&self, lo: DVec3, hi: DVec3) -> bool {
+    /// Whether the box `lo`–`hi` is proven free of `φ = 0` inside the clip ball, with the
+    /// sign every lattice point's `φ` then has for its label (1: outside): `Some(1)` if it
+    /// lies wholly outside the ball, `Some(sign of φ(c))` if `|φ(c)| > Σ_{|α|≥1} |a_α|
+    /// r^{|α|}` about its centre `c` (`r` its largest half-side), else `None`.
+    fn empty_sign(&self, lo: DVec3, hi: DVec3) -> Option<f64> {
         let centre = 0.5 * (lo + hi);
-        self.outside_box(lo, hi)
-            || self
-                .taylor
-                .at(centre, 0.5 * (hi - lo).max_element())
-                .is_some_and(|sums| sums.proves_empty())
+        if self.outside_box(lo, hi) {
+            return Some(1.0);
+        }
+        let sums = self.taylor.at(centre, 0.5 * (hi - lo).max_element())?;
+        sums.proves_empty()
+            .then(|| self.f_sign * sums.value.signum())
     }
 
     /// Whether the box `lo`–`hi` lies wholly outside the clip ball.

@@ -38,17 +38,18 @@
 //! So the mesh each pass leaves has no crossing (where the one it began with had none), and
 //! the result is deterministic.
 //!
-//! Edges are tried shortest first, in passes until a pass removes few vertices; after each
-//! pass, edges are flipped to the other diagonal of their two triangles where that makes
-//! the thinner of the two clearly thicker (which frees further collapses), under the same
-//! conditions for the new triangles and with neither end of the edge left with three
-//! neighbours or fewer. With more than one thread, the steps (collapses, then flips) are
-//! checked in parallel in batches against the mesh as each batch begins and made in order,
-//! a verdict that an earlier step of its batch could have changed being checked again: the
-//! result is the same as one step after another, for any number of threads (a pass made
-//! again is made one by one). The check of the finished mesh ([`super::check::verify`]) stays the
-//! guarantee: the caller falls back to a smaller budget, then to the uncoarsened mesh, if it
-//! ever finds a crossing.
+//! Edges are tried shortest first, in passes until a pass removes few vertices (after the first
+//! pass, only the steps whose verdict may have changed: a fan their check reads changed since
+//! they were last tried); after each pass, edges are flipped to the other diagonal of their two
+//! triangles where that makes the thinner of the two clearly thicker (which frees further
+//! collapses), under the same conditions for the new triangles and with neither end of the edge
+//! left with three neighbours or fewer. With more than one thread, the steps (collapses, then
+//! flips) are checked in parallel in batches against the mesh as each batch begins and made in
+//! order, a verdict that an earlier step of its batch could have changed being checked again:
+//! the result is the same as one step after another, for any number of threads (a pass made
+//! again is made one by one). The check of the finished mesh ([`super::check::verify`]) stays
+//! the guarantee: the caller falls back to a smaller budget, then to the uncoarsened mesh, if
+//! it ever finds a crossing.
 //!
 //! A mesh of at least [`regions::MIN_SPLIT_TRIANGLES`] triangles is first split by a plane
 //! (across its widest axis, at the median vertex): the two sides are coarsened at once
@@ -213,6 +214,12 @@ struct Work<'a> {
     careful: Careful,
     /// What the pass in hand changed.
     log: UndoLog,
+    /// The sweep (a pass's collapses or its flips, counted from 1) in which each vertex's
+    /// fan last changed (0: never), so that a later sweep tries only the steps it could now
+    /// decide differently ([`Work::may_differ`]).
+    fan_changed: Vec<u32>,
+    /// The sweep in hand.
+    sweep: u32,
 }
 
 impl Work<'_> {
@@ -444,8 +451,10 @@ impl Work<'_> {
         }
     }
 
-    /// Keeps the fan of vertex `w` as it is in the undo log, if the pass has not changed it.
+    /// Keeps the fan of vertex `w` as it is in the undo log, if the pass has not changed it,
+    /// and notes that the sweep in hand changes it.
     fn log_fan(&mut self, w: u32) {
+        self.fan_changed[w as usize] = self.sweep;
         let log = &mut self.log;
         if log.fan_pass[w as usize] != log.pass {
             log.fan_pass[w as usize] = log.pass;
@@ -1155,7 +1164,21 @@ impl<'a> Work<'a> {
             grid,
             surface_normals,
             careful: Careful::default(),
+            fan_changed: vec![0; n],
+            sweep: 0,
         }
+    }
+
+    /// Whether `step`, refused when tried in the sweep before the last, may be decided
+    /// differently now: a fan its check reads ([`Work::footprint`]) changed since that sweep
+    /// began. (A refusal for a crossing with a triangle farther off may not be tried again,
+    /// which only leaves a vertex the mesh could have lost.)
+    fn may_differ(&self, step: Step, footprint: &mut Vec<u32>) -> bool {
+        let since = self.sweep.saturating_sub(2);
+        self.footprint(step, footprint);
+        footprint
+            .iter()
+            .any(|&w| self.fan_changed[w as usize] >= since)
     }
 }
 
@@ -1195,16 +1218,27 @@ fn passes(
     pass_done: &(dyn Fn(usize) + Sync),
     checking: Checking,
 ) -> Option<()> {
-    for _ in 0..limit {
-        let steps = shortest_first_collapses(work);
+    let mut footprint = Vec::new();
+    for pass in 0..limit {
+        // After the first pass, only the steps whose verdict may have changed since they
+        // were last tried.
+        work.sweep += 1;
+        let mut steps = shortest_first_collapses(work);
+        if pass > 0 {
+            steps.retain(|&step| work.may_differ(step, &mut footprint));
+        }
         let (collapsed, redone) = work.make_pass(&steps, cancel, checking)?;
         done.collapses += collapsed;
         done.redone += redone;
         // Flips toward thicker triangles, which free further collapses.
-        let steps: Vec<Step> = (0..work.triangles.len() as u32)
+        work.sweep += 1;
+        let mut steps: Vec<Step> = (0..work.triangles.len() as u32)
             .filter(|&t| work.alive[t as usize])
             .flat_map(|t| (0..3).map(move |k| Step::Flip(t, k)))
             .collect();
+        if pass > 0 {
+            steps.retain(|&step| work.may_differ(step, &mut footprint));
+        }
         let (flipped, redone) = work.make_pass(&steps, cancel, checking)?;
         done.flips += flipped;
         done.redone += redone;
@@ -1357,6 +1391,8 @@ mod tests {
                 .collect(),
             careful: Careful::default(),
             log: UndoLog::default(),
+            fan_changed: vec![0; vertices.len()],
+            sweep: 0,
         };
         let (along, across) = (mesh.corners(0), mesh.corners(1));
         assert!(quality(along) < MIN_QUALITY && quality(along) > THIN_QUALITY);
@@ -1423,6 +1459,36 @@ mod tests {
             3.0,
             SolidKind::Inside,
         )
+    }
+
+    #[test]
+    fn a_later_sweep_skips_only_steps_still_refused() {
+        let field = unit_sphere();
+        let (mesh, kinds) = sphere_mesh(&field);
+        let mut work = Work::new(&field, &mesh, &kinds, 0.004);
+        let cancel = AtomicBool::new(false);
+        let mut done = Coarsened::default();
+        passes(&mut work, &mut done, 2, &cancel, &|_| {}, Checking::Serial).unwrap();
+        assert!(work.removed_count > 100, "{}", work.removed_count);
+        // The third pass's collapses: those skipped are refused on the mesh as it is.
+        work.sweep += 1;
+        let steps = shortest_first_collapses(&work);
+        let mut footprint = Vec::new();
+        let skipped: Vec<Step> = steps
+            .iter()
+            .copied()
+            .filter(|&step| !work.may_differ(step, &mut footprint))
+            .collect();
+        assert!(
+            !skipped.is_empty() && skipped.len() < steps.len(),
+            "{} of {}",
+            skipped.len(),
+            steps.len()
+        );
+        let mut scratch = Scratch::default();
+        for step in skipped {
+            assert!(!work.check(step, &mut scratch).ok, "{step:?}");
+        }
     }
 
     #[test]
