@@ -13,8 +13,9 @@
 //!    [`Field::distance_estimate`]) (a triangle with all vertices on the clip sphere:
 //!    `|R − |x||`; one with vertices on both: the smaller of the two).
 //! 2. **No edge crossed twice**: if its corners do not all have the same sign of `φ`, each of
-//!    its six edges holds at most one distinct root of `φ` inside the clip ball, counted
-//!    exactly (Bernstein sign variations, then Sturm sequences by
+//!    its six edges holds at most one distinct root of `φ` inside the clip ball: proven at
+//!    once where `φ` is monotone along the edge by its coarse cube's bounds on `∇φ`, else
+//!    counted exactly (Bernstein sign variations, then Sturm sequences by
 //!    [`crate::roots::sturm_roots`] where those allow two or more). An edge crossed twice
 //!    hides a handle, a thin part or a small piece between its ends. One exception, a shallow
 //!    graze: exactly two roots, with the point midway between them within [`EXTRACT_SHARE`]
@@ -306,14 +307,7 @@ pub fn refine(
                     return (Some(examiner.f_sign * sums.value.signum()), None);
                 }
             }
-            let (value, gradient, spread) = examiner.taylor.spread(&coef, r);
-            let f_sign = examiner.f_sign;
-            let spread = Spread {
-                gradient: f_sign * gradient,
-                spread,
-                margin: 1e-10 * (value.abs() + examiner.taylor.magnitude_bound(centre)),
-            };
-            (None, Some(spread))
+            (None, Some(examiner.spread(&coef, centre, r)))
         })
         .unzip();
     let cube_empty: Vec<bool> = empty_sign.iter().map(Option::is_some).collect();
@@ -375,12 +369,13 @@ pub fn refine(
             .par_iter()
             .map(|&k| {
                 let (p, q) = (extract::unpack((k >> 64) as u64), extract::unpack(k as u64));
-                crossed_twice(
-                    field,
-                    lattice.position(p),
-                    lattice.position(q),
-                    examiner.shallow,
-                )
+                !examiner.monotone_along(p, q)
+                    && crossed_twice(
+                        field,
+                        lattice.position(p),
+                        lattice.position(q),
+                        examiner.shallow,
+                    )
             })
             .collect();
         twice.extend(edges.into_iter().zip(crossed));
@@ -786,6 +781,35 @@ impl Examiner<'_> {
             least[w] = least[w].min(-linear - spread);
         }
         (0..4).any(|v| sign * phi[v] + least[v] > s.margin)
+    }
+
+    /// How `∇φ` strays over the cube of half-side `r` about `centre`, from `f`'s Taylor
+    /// coefficients about it ([`Taylor::coefficients`]).
+    fn spread(&self, coef: &[f64], centre: DVec3, r: f64) -> Spread {
+        let (value, gradient, spread) = self.taylor.spread(coef, r);
+        Spread {
+            gradient: self.f_sign * gradient,
+            spread,
+            margin: 1e-10 * (value.abs() + self.taylor.magnitude_bound(centre)),
+        }
+    }
+
+    /// Whether `φ` is proven strictly monotone along the segment between the lattice points
+    /// `p` and `q` (within one coarse cube, as a leaf's edge is), so that it crosses `φ = 0`
+    /// at most once: `|g·e| > Σ L_i |e_i|` with `e = q − p` and the gradient `g` and its
+    /// bounds `L_i` of the coarse cube that holds the segment ([`Spread`]).
+    fn monotone_along(&self, p: Point, q: Point) -> bool {
+        let n = self.cells;
+        let cube = std::array::from_fn::<usize, 3, _>(|i| {
+            (((p[i] + q[i]) / (2 * self.cube_side)) as usize).min(n - 1)
+        });
+        let Some(s) = &self.spreads[cube[0] + n * (cube[1] + n * cube[2])] else {
+            return false;
+        };
+        let e = self.lattice.position(q) - self.lattice.position(p);
+        let along = s.gradient.dot(e).abs();
+        let stray = s.spread.dot(e.abs());
+        along - stray > s.margin + 1e-9 * (along + stray)
     }
 
     /// Whether the box `lo`–`hi` is proven free of `φ = 0` inside the clip ball, with the
@@ -1202,6 +1226,68 @@ mod tests {
         assert_eq!(bernstein_variations(&[1.0, 0.0, 1.0]), 0);
         assert_eq!(bernstein_variations(&[-2.0, 1.0]), 0);
         assert_eq!(bernstein_variations(&[-0.5, 1.0]), 1);
+    }
+
+    #[test]
+    fn a_segment_proven_monotone_crosses_at_most_once() {
+        // A torus on a grid of 0.25 steps, its lattice four times finer; segments between
+        // lattice points of one cube, in the seven directions of Kuhn edges and others.
+        let f = field("(x^2 + y^2 + z^2 + 0.75)^2 - 4*(x^2 + y^2)", 1.6);
+        let coarse = Grid::covering(f.radius(), 0.25);
+        let (n, depth) = (coarse.cells, 2);
+        let side = 1 << depth;
+        let lattice = Lattice::of_grid(coarse, depth);
+        let mut examiner = Examiner {
+            spreads: Vec::new(),
+            cube_side: side,
+            cells: n,
+            field: &f,
+            lattice,
+            taylor: Taylor::new(&f),
+            table: marching_table(),
+            shallow: 0.01,
+            floor_level: 3 * depth as u8,
+            f_sign: 1.0,
+        };
+        examiner.spreads = (0..n * n * n)
+            .map(|c| {
+                let lo = [c % n, c / n % n, c / (n * n)].map(|v| v as i32 * side);
+                let centre = lattice.position(lo.map(|v| v + side / 2));
+                let coef = examiner.taylor.coefficients(centre);
+                Some(examiner.spread(&coef, centre, 0.5 * coarse.step()))
+            })
+            .collect();
+        let (mut proven, mut not) = (0, 0);
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = |m: i32| {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            ((state >> 33) % m as u64) as i32
+        };
+        for _ in 0..20_000 {
+            let cube = [0; 3].map(|_| next(n as i32) * side);
+            let p = cube.map(|c| c + next(side + 1));
+            let q = cube.map(|c| c + next(side + 1));
+            if p == q {
+                continue;
+            }
+            if !examiner.monotone_along(p, q) {
+                not += 1;
+                continue;
+            }
+            proven += 1;
+            let (a, b) = (lattice.position(p), lattice.position(q));
+            let samples: Vec<f64> = (0..=64)
+                .map(|k| f.value(a.lerp(b, f64::from(k) / 64.0)))
+                .collect();
+            let rising = samples[64] > samples[0];
+            assert!(
+                samples.windows(2).all(|w| (w[1] > w[0]) == rising),
+                "{p:?} {q:?}"
+            );
+        }
+        assert!(proven > 1000 && not > 1000, "{proven} {not}");
     }
 
     #[test]
