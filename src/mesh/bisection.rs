@@ -151,8 +151,9 @@ pub struct Refinement {
     marked: HashSet<u64, BuildHasherDefault<PointHasher>>,
 }
 
-/// A hasher for lattice points, packed lattice points and edges of them (a multiply per word; the keys are
-/// well spread integers, and the tables are not exposed to chosen input).
+/// A hasher for lattice points, packed lattice points and edges of them, and for the vertex
+/// indices and cells of [`super::check`] (a multiply per word; the keys are well spread
+/// integers, and the tables are not exposed to chosen input).
 #[derive(Default)]
 pub struct PointHasher(u64);
 
@@ -164,6 +165,9 @@ impl Hasher for PointHasher {
         for &b in bytes {
             self.write_u64(u64::from(b));
         }
+    }
+    fn write_u32(&mut self, v: u32) {
+        self.write_u64(u64::from(v));
     }
     fn write_u64(&mut self, v: u64) {
         self.0 = (self.0.rotate_left(21) ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15);

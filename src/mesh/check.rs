@@ -7,7 +7,9 @@
 use super::TriangleMesh;
 use crate::geometry::DVec3;
 use rayon::prelude::*;
+use super::bisection::PointHasher;
 use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
 
 /// What [`verify`] measured on a mesh that keeps every guarantee.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -57,7 +59,8 @@ pub fn verify(mesh: &TriangleMesh) -> Result<Verified, String> {
 /// Every directed edge `a → b` of a triangle appears in exactly one triangle, and `b → a`
 /// in exactly one other: closed and consistently oriented.
 pub fn edges_pair_up(mesh: &TriangleMesh) -> Result<(), String> {
-    let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
+    let mut directed: HashMap<(u32, u32), usize, BuildHasherDefault<PointHasher>> =
+        HashMap::default();
     for (t, tri) in mesh.triangles.iter().enumerate() {
         if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
             return Err(format!("triangle {t} repeats a vertex"));
@@ -94,14 +97,18 @@ pub fn one_fan_per_vertex(mesh: &TriangleMesh) -> Result<(), String> {
         if edges.is_empty() {
             return Err(format!("vertex {v} is in no triangle"));
         }
-        let next: HashMap<u32, u32> = edges.iter().copied().collect();
+        let mut next = edges.clone();
+        next.sort_unstable();
         let start = edges[0].0;
         let mut at = start;
         let mut steps = 0;
         loop {
-            at = *next
-                .get(&at)
-                .ok_or_else(|| format!("the triangles about vertex {v} do not close"))?;
+            // With paired edges, each b has one c (a repeated b fails at edges_pair_up).
+            let i = next.partition_point(|&(b, _)| b < at);
+            at = match next.get(i) {
+                Some(&(b, c)) if b == at => c,
+                _ => return Err(format!("the triangles about vertex {v} do not close")),
+            };
             steps += 1;
             if at == start {
                 break;
@@ -134,7 +141,8 @@ pub fn components(mesh: &TriangleMesh) -> usize {
         }
         i
     }
-    let mut by_edge: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut by_edge: HashMap<(u32, u32), u32, BuildHasherDefault<PointHasher>> =
+        HashMap::default();
     for (t, tri) in mesh.triangles.iter().enumerate() {
         for k in 0..3 {
             let (a, b) = (tri[k], tri[(k + 1) % 3]);
@@ -193,45 +201,53 @@ pub fn crossing_triangles(mesh: &TriangleMesh) -> Vec<(usize, usize)> {
         let c = corners(t);
         size += (c[1] - c[0]).length().max((c[2] - c[0]).length());
     }
-    let cell = (2.0 * size / tris.len() as f64).max(1e-300);
+    // Cells at least a 2^20th of the box's largest side, so each index fits in 21 bits.
+    let cell = (2.0 * size / tris.len() as f64)
+        .max((hi - lo).max_element() / f64::from(1u32 << 20))
+        .max(1e-300);
     let dims = ((hi - lo) / cell).floor().as_uvec3() + 1;
-    let cell_of = |p: DVec3| {
-        let c = ((p - lo) / cell).floor().as_uvec3().min(dims - 1);
-        (c.x, c.y, c.z)
-    };
-    let mut cells: HashMap<(u32, u32, u32), Vec<u32>> = HashMap::new();
-    let ranges: Vec<_> = (0..tris.len())
+    let cell_of = |p: DVec3| ((p - lo) / cell).floor().as_uvec3().min(dims - 1);
+    let key = |x: u32, y: u32, z: u32| u64::from(x) | u64::from(y) << 21 | u64::from(z) << 42;
+    // Each triangle's box, and the range of cells it covers.
+    let boxes: Vec<(DVec3, DVec3)> = (0..tris.len())
         .map(|t| {
             let c = corners(t);
-            (
-                cell_of(c[0].min(c[1]).min(c[2])),
-                cell_of(c[0].max(c[1]).max(c[2])),
-            )
+            (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]))
         })
         .collect();
+    let ranges: Vec<_> = boxes
+        .iter()
+        .map(|&(a, b)| (cell_of(a), cell_of(b)))
+        .collect();
+    let mut cells: HashMap<u64, Vec<u32>, BuildHasherDefault<PointHasher>> = HashMap::default();
     for (t, &(a, b)) in ranges.iter().enumerate() {
-        for x in a.0..=b.0 {
-            for y in a.1..=b.1 {
-                for z in a.2..=b.2 {
-                    cells.entry((x, y, z)).or_default().push(t as u32);
+        for x in a.x..=b.x {
+            for y in a.y..=b.y {
+                for z in a.z..=b.z {
+                    cells.entry(key(x, y, z)).or_default().push(t as u32);
                 }
             }
         }
     }
-    // Each triangle against the later triangles of its cells, in parallel.
+    // Each triangle against the later triangles of its cells whose boxes meet its own (a
+    // pair that meets has boxes that meet), in parallel.
     let mut found: Vec<(usize, usize)> = ranges
         .par_iter()
         .enumerate()
         .flat_map_iter(|(i, &(a, b))| {
+            let (lo_i, hi_i) = boxes[i];
             let mut candidates = Vec::new();
-            for x in a.0..=b.0 {
-                for y in a.1..=b.1 {
-                    for z in a.2..=b.2 {
+            for x in a.x..=b.x {
+                for y in a.y..=b.y {
+                    for z in a.z..=b.z {
                         candidates.extend(
-                            cells[&(x, y, z)]
+                            cells[&key(x, y, z)]
                                 .iter()
                                 .map(|&j| j as usize)
-                                .filter(|&j| j > i),
+                                .filter(|&j| {
+                                    let (lo_j, hi_j) = boxes[j];
+                                    j > i && lo_j.cmple(hi_i).all() && lo_i.cmple(hi_j).all()
+                                }),
                         );
                     }
                 }
