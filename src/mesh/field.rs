@@ -8,7 +8,7 @@
 
 use crate::geometry::DVec3;
 use crate::roots::{sturm_roots, Solver};
-use crate::shapes::implicit::poly::{Compiled, Poly, Powers};
+use crate::shapes::implicit::poly::{Compiled, Gradient, Poly, Powers};
 use crate::shapes::implicit::MAX_DEGREE;
 
 /// Which side of the surface the mesh encloses.
@@ -59,6 +59,8 @@ pub const END_GAP: f64 = 1e-3;
 pub struct Field {
     f: Compiled,
     gradient: [Compiled; 3],
+    /// The three partials of `gradient`, evaluated in one pass (the same bits).
+    joint_gradient: Gradient,
     kind: SolidKind,
     /// `(T/2)²` for a shell.
     half_thickness_sq: f64,
@@ -74,9 +76,11 @@ impl Field {
             SolidKind::Shell { thickness } => thickness / 2.0,
             _ => 0.0,
         };
+        let gradient = [0, 1, 2].map(|v| Compiled::new(&polynomial.derivative(v)));
         Self {
             f: Compiled::new(polynomial),
-            gradient: [0, 1, 2].map(|v| Compiled::new(&polynomial.derivative(v))),
+            joint_gradient: Gradient::new(&gradient),
+            gradient,
             kind,
             half_thickness_sq: half * half,
             radius: clip_radius,
@@ -440,14 +444,10 @@ impl Field {
         let exact = || {
             // The partials' degrees are below f's, so its powers serve them all.
             let powers = Powers::new(p.to_array(), self.f.degree);
-            let at = |c: &Compiled| c.eval_with_bound_on(&powers).0;
+            let (gradient, _) = self.joint_gradient.eval_with_bound_on(&powers);
             (
-                at(&self.f),
-                DVec3::new(
-                    at(&self.gradient[0]),
-                    at(&self.gradient[1]),
-                    at(&self.gradient[2]),
-                ),
+                self.f.eval_with_bound_on(&powers).0,
+                DVec3::from_array(gradient),
             )
         };
         match self.kind {
