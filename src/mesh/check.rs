@@ -4,10 +4,10 @@
 //! and no two triangles that cross or overlap. `kardia mesh` checks every file it writes;
 //! the tests check every mesh they make.
 
+use super::bisection::PointHasher;
 use super::TriangleMesh;
 use crate::geometry::DVec3;
 use rayon::prelude::*;
-use super::bisection::PointHasher;
 use std::collections::HashMap;
 use std::hash::BuildHasherDefault;
 
@@ -141,8 +141,7 @@ pub fn components(mesh: &TriangleMesh) -> usize {
         }
         i
     }
-    let mut by_edge: HashMap<(u32, u32), u32, BuildHasherDefault<PointHasher>> =
-        HashMap::default();
+    let mut by_edge: HashMap<(u32, u32), u32, BuildHasherDefault<PointHasher>> = HashMap::default();
     for (t, tri) in mesh.triangles.iter().enumerate() {
         for k in 0..3 {
             let (a, b) = (tri[k], tri[(k + 1) % 3]);
@@ -240,15 +239,12 @@ pub fn crossing_triangles(mesh: &TriangleMesh) -> Vec<(usize, usize)> {
             for x in a.x..=b.x {
                 for y in a.y..=b.y {
                     for z in a.z..=b.z {
-                        candidates.extend(
-                            cells[&key(x, y, z)]
-                                .iter()
-                                .map(|&j| j as usize)
-                                .filter(|&j| {
-                                    let (lo_j, hi_j) = boxes[j];
-                                    j > i && lo_j.cmple(hi_i).all() && lo_i.cmple(hi_j).all()
-                                }),
-                        );
+                        candidates.extend(cells[&key(x, y, z)].iter().map(|&j| j as usize).filter(
+                            |&j| {
+                                let (lo_j, hi_j) = boxes[j];
+                                j > i && lo_j.cmple(hi_i).all() && lo_i.cmple(hi_j).all()
+                            },
+                        ));
                     }
                 }
             }
