@@ -93,19 +93,18 @@ pub fn one_fan_per_vertex(mesh: &TriangleMesh) -> Result<(), String> {
             link[tri[k] as usize].push((tri[(k + 1) % 3], tri[(k + 2) % 3]));
         }
     }
-    for (v, edges) in link.iter().enumerate() {
+    for (v, edges) in link.iter_mut().enumerate() {
         if edges.is_empty() {
             return Err(format!("vertex {v} is in no triangle"));
         }
-        let mut next = edges.clone();
-        next.sort_unstable();
+        edges.sort_unstable();
         let start = edges[0].0;
         let mut at = start;
         let mut steps = 0;
         loop {
             // With paired edges, each b has one c (a repeated b fails at edges_pair_up).
-            let i = next.partition_point(|&(b, _)| b < at);
-            at = match next.get(i) {
+            let i = edges.partition_point(|&(b, _)| b < at);
+            at = match edges.get(i) {
                 Some(&(b, c)) if b == at => c,
                 _ => return Err(format!("the triangles about vertex {v} do not close")),
             };
@@ -190,16 +189,18 @@ pub fn crossing_triangles(mesh: &TriangleMesh) -> Vec<(usize, usize)> {
         return Vec::new();
     }
     let corners = |t: usize| tris[t].map(|v| mesh.vertices[v as usize]);
+    // Each triangle's box, the box of them all and their mean longest side from a corner.
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
     let mut size = 0.0;
-    for t in 0..tris.len() {
-        for p in corners(t) {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
-        let c = corners(t);
-        size += (c[1] - c[0]).length().max((c[2] - c[0]).length());
-    }
+    let boxes: Vec<(DVec3, DVec3)> = (0..tris.len())
+        .map(|t| {
+            let c = corners(t);
+            size += (c[1] - c[0]).length().max((c[2] - c[0]).length());
+            let (a, b) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
+            (lo, hi) = (lo.min(a), hi.max(b));
+            (a, b)
+        })
+        .collect();
     // Cells at least a 2^20th of the box's largest side, so each index fits in 21 bits.
     let cell = (2.0 * size / tris.len() as f64)
         .max((hi - lo).max_element() / f64::from(1u32 << 20))
@@ -207,13 +208,6 @@ pub fn crossing_triangles(mesh: &TriangleMesh) -> Vec<(usize, usize)> {
     let dims = ((hi - lo) / cell).floor().as_uvec3() + 1;
     let cell_of = |p: DVec3| ((p - lo) / cell).floor().as_uvec3().min(dims - 1);
     let key = |x: u32, y: u32, z: u32| u64::from(x) | u64::from(y) << 21 | u64::from(z) << 42;
-    // Each triangle's box, and the range of cells it covers.
-    let boxes: Vec<(DVec3, DVec3)> = (0..tris.len())
-        .map(|t| {
-            let c = corners(t);
-            (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]))
-        })
-        .collect();
     let ranges: Vec<_> = boxes
         .iter()
         .map(|&(a, b)| (cell_of(a), cell_of(b)))

@@ -310,7 +310,6 @@ pub fn refine(
             (None, Some(examiner.spread(&coef, centre, r)))
         })
         .unzip();
-    let cube_empty: Vec<bool> = empty_sign.iter().map(Option::is_some).collect();
     let examiner = Examiner {
         spreads,
         cube_side: side,
@@ -330,7 +329,7 @@ pub fn refine(
     };
     let mut cube_leaves: Vec<CubeLeaves> = vec![Vec::new(); n * n * n];
     let mut todo: Vec<(usize, usize)> = Vec::new();
-    for c in (0..n * n * n).filter(|&c| !cube_empty[c]) {
+    for c in (0..n * n * n).filter(|&c| empty_sign[c].is_none()) {
         cube_leaves[c] = kuhn(c).map(|t| (t, false)).to_vec();
         todo.extend((0..6).map(|i| (c, i)));
     }
@@ -445,7 +444,7 @@ pub fn refine(
             .zip(before)
             .map(|(&c, old)| {
                 let old = if old.is_empty() {
-                    kuhn(c).map(|t| (t, cube_empty[c])).to_vec()
+                    kuhn(c).map(|t| (t, empty_sign[c].is_some())).to_vec()
                 } else {
                     old
                 };
@@ -499,7 +498,7 @@ pub fn refine(
     for (c, leaves) in cube_leaves.iter().enumerate() {
         // A cube where φ > 0 throughout (or wholly outside the ball) has every corner
         // outside, whatever the sphere does.
-        let skip = empty_sign[c].is_some_and(|sign| sign > 0.0) || cube_empty[c] && uniform(c);
+        let skip = empty_sign[c].is_some_and(|sign| sign > 0.0 || uniform(c));
         if leaves.is_empty() {
             refined.leaves_by_level[0] += 6;
             if !skip {
@@ -762,10 +761,7 @@ impl Examiner<'_> {
     /// function of `x`, least at a corner: `t` is proven free of surface if for some `v`
     /// that is positive at every corner.
     fn gradient_bound(&self, t: &Tet, sign: f64, phi: &[f64; 4]) -> bool {
-        let (lo, _) = t.bounds();
-        let n = self.cells;
-        let cube = lo.map(|c| ((c / self.cube_side) as usize).min(n - 1));
-        let Some(s) = &self.spreads[cube[0] + n * (cube[1] + n * cube[2])] else {
+        let Some(s) = self.cube_spread(t.bounds().0) else {
             return self.proven_empty(t, sign, phi);
         };
         let points = t.corners.map(|p| self.lattice.position(p));
@@ -794,16 +790,22 @@ impl Examiner<'_> {
         }
     }
 
+    /// The spread of the coarse cube whose closed box holds whatever lies in it between the
+    /// lattice point `lo` and points above it on every axis (a leaf with that least corner;
+    /// on a face, either cube holds it), or `None` for a cube proven empty.
+    fn cube_spread(&self, lo: Point) -> Option<&Spread> {
+        let n = self.cells;
+        let cube = lo.map(|c| ((c / self.cube_side) as usize).min(n - 1));
+        self.spreads[cube[0] + n * (cube[1] + n * cube[2])].as_ref()
+    }
+
     /// Whether `φ` is proven strictly monotone along the segment between the lattice points
     /// `p` and `q` (within one coarse cube, as a leaf's edge is), so that it crosses `φ = 0`
     /// at most once: `|g·e| > Σ L_i |e_i|` with `e = q − p` and the gradient `g` and its
     /// bounds `L_i` of the coarse cube that holds the segment ([`Spread`]).
     fn monotone_along(&self, p: Point, q: Point) -> bool {
-        let n = self.cells;
-        let cube = std::array::from_fn::<usize, 3, _>(|i| {
-            (((p[i] + q[i]) / (2 * self.cube_side)) as usize).min(n - 1)
-        });
-        let Some(s) = &self.spreads[cube[0] + n * (cube[1] + n * cube[2])] else {
+        let lo = std::array::from_fn(|i| p[i].min(q[i]));
+        let Some(s) = self.cube_spread(lo) else {
             return false;
         };
         let e = self.lattice.position(q) - self.lattice.position(p);

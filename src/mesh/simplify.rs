@@ -974,7 +974,7 @@ pub(crate) enum Checking {
 }
 
 /// One step of a pass: `u` collapsed into `v`, or side `k` of triangle `t` flipped.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 enum Step {
     Collapse(u32, u32),
     Flip(u32, u8),
@@ -1169,6 +1169,17 @@ impl<'a> Work<'a> {
         }
     }
 
+    /// Begins the next sweep with `steps`: all of them in the first pass (`every`), else only
+    /// those that [`Work::may_differ`].
+    fn begin_sweep(&mut self, mut steps: Vec<Step>, every: bool) -> Vec<Step> {
+        self.sweep += 1;
+        if !every {
+            let mut footprint = Vec::new();
+            steps.retain(|&step| self.may_differ(step, &mut footprint));
+        }
+        steps
+    }
+
     /// Whether `step`, refused when tried in the sweep before the last, may be decided
     /// differently now: a fan its check reads ([`Work::footprint`]) changed since that sweep
     /// began. (A refusal for a crossing with a triangle farther off may not be tried again,
@@ -1218,27 +1229,18 @@ fn passes(
     pass_done: &(dyn Fn(usize) + Sync),
     checking: Checking,
 ) -> Option<()> {
-    let mut footprint = Vec::new();
     for pass in 0..limit {
-        // After the first pass, only the steps whose verdict may have changed since they
-        // were last tried.
-        work.sweep += 1;
-        let mut steps = shortest_first_collapses(work);
-        if pass > 0 {
-            steps.retain(|&step| work.may_differ(step, &mut footprint));
-        }
+        let steps = shortest_first_collapses(work);
+        let steps = work.begin_sweep(steps, pass == 0);
         let (collapsed, redone) = work.make_pass(&steps, cancel, checking)?;
         done.collapses += collapsed;
         done.redone += redone;
         // Flips toward thicker triangles, which free further collapses.
-        work.sweep += 1;
-        let mut steps: Vec<Step> = (0..work.triangles.len() as u32)
+        let steps: Vec<Step> = (0..work.triangles.len() as u32)
             .filter(|&t| work.alive[t as usize])
             .flat_map(|t| (0..3).map(move |k| Step::Flip(t, k)))
             .collect();
-        if pass > 0 {
-            steps.retain(|&step| work.may_differ(step, &mut footprint));
-        }
+        let steps = work.begin_sweep(steps, pass == 0);
         let (flipped, redone) = work.make_pass(&steps, cancel, checking)?;
         done.flips += flipped;
         done.redone += redone;
@@ -1471,13 +1473,14 @@ mod tests {
         passes(&mut work, &mut done, 2, &cancel, &|_| {}, Checking::Serial).unwrap();
         assert!(work.removed_count > 100, "{}", work.removed_count);
         // The third pass's collapses: those skipped are refused on the mesh as it is.
-        work.sweep += 1;
+        // (The sweep keeps its steps in order, so what it left out is found in one walk.)
         let steps = shortest_first_collapses(&work);
-        let mut footprint = Vec::new();
+        let tried = work.begin_sweep(steps.clone(), false);
+        let mut tried = tried.iter().peekable();
         let skipped: Vec<Step> = steps
             .iter()
             .copied()
-            .filter(|&step| !work.may_differ(step, &mut footprint))
+            .filter(|step| tried.next_if_eq(&step).is_none())
             .collect();
         assert!(
             !skipped.is_empty() && skipped.len() < steps.len(),
