@@ -110,6 +110,23 @@ impl Grid {
         Self { cells, half }
     }
 
+    /// The grid whose cells, halved `depth` times, give a lattice of spacing `u` at most
+    /// `floor` with no point on the sphere of `radius` about the origin: the cells are even
+    /// in number (the origin is a lattice point at every level) and `(radius / u)²` is an
+    /// integer plus ½, so every lattice point lies at least about `u² / (4·radius)` off the
+    /// sphere, where the crossings of the edges through it would crowd it. The cube is at
+    /// least one cell wider than the ball on each side.
+    pub fn clear_of_sphere(radius: f64, floor: f64, depth: u32) -> Self {
+        let n = ((radius / floor).powi(2) - 0.5).ceil().max(0.0);
+        let unit = radius / (n + 0.5).sqrt();
+        let step = unit * f64::from(1u32 << depth);
+        let cells = 2 * ((radius + step) / step).ceil().max(1.0) as usize;
+        Self {
+            cells,
+            half: cells as f64 * step / 2.0,
+        }
+    }
+
     /// The distance between neighbouring vertices.
     pub fn step(&self) -> f64 {
         2.0 * self.half / self.cells as f64
@@ -519,6 +536,45 @@ const NO_KEY: u64 = u64::MAX;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn no_lattice_point_lies_on_the_clip_sphere() {
+        // The default tolerance (1% of the radius) asks for a floor step of radius / 50,
+        // where a plain grid through the origin puts lattice points such as (0, 30, 40) and
+        // (14, 48, 0) exactly on the sphere.
+        for (radius, floor, depth) in [
+            (1.0, 0.02, 2),
+            (3.16228, 0.0632456, 2),
+            (1.14, 0.0228, 3),
+            (2.5, 0.01, 4),
+            (1.0, 0.06, 0),
+        ] {
+            let grid = Grid::clear_of_sphere(radius, floor, depth);
+            let lattice = Lattice::of_grid(grid, depth);
+            let u = lattice.unit;
+            assert!(u <= floor && u > 0.99 * floor, "{radius} {floor}: {u}");
+            assert_eq!(grid.cells % 2, 0);
+            assert!(grid.half >= radius + grid.step());
+            // The origin is a lattice point; every point within a step of the sphere keeps
+            // the promised distance from it.
+            let centre = (grid.half / u).round();
+            assert!((grid.half / u - centre).abs() < 1e-9);
+            let n = (radius / u).ceil() as i32 + 1;
+            let margin = 0.9 * u * u / (4.0 * radius);
+            let mut near = 0;
+            for x in -n..=n {
+                for y in -n..=n {
+                    for z in -n..=n {
+                        let p = lattice.position([x, y, z].map(|c| c + centre as i32));
+                        let off = (p.length() - radius).abs();
+                        assert!(off >= margin, "{radius} {floor} {depth}: {x} {y} {z} {off}");
+                        near += usize::from(off < u);
+                    }
+                }
+            }
+            assert!(near > 0);
+        }
+    }
 
     #[test]
     fn the_six_tetrahedra_fill_the_cube_with_positive_orientation() {

@@ -199,10 +199,19 @@ impl Field {
                 (-qb + root) / (2.0 * qa)
             }
         });
-        let hi = ball_exit.unwrap_or(1.0).min(1.0);
+        let gap = |s: f64| s.clamp(END_GAP, 1.0 - END_GAP);
+        // An exit that the end gap moves anyway is searched past, so that a root of `φ` in
+        // the same end gap (an end on both the surface and the sphere) is found.
+        let hi = ball_exit
+            .map_or(1.0, |x| if gap(x) < x { 1.0 } else { x })
+            .min(1.0);
         let surface = self.first_root(a, e, hi);
         let (s, kind) = match (surface, ball_exit) {
             (Some(s), Some(x)) if s < x => (s, VertexKind::Surface),
+            // Both in the end gap: the vertex the gap holds off the end is not moved onto
+            // the sphere, like its neighbours about the same end (which the surface crosses
+            // there too), so that the triangles about that end do not fold.
+            (Some(s), Some(x)) if gap(s) == gap(x) => (s, VertexKind::Surface),
             (Some(s), None) => (s, VertexKind::Surface),
             (_, Some(x)) => (x, VertexKind::Cap),
             // The labels say φ changes sign on the segment but the root finder found no
@@ -582,6 +591,31 @@ mod tests {
         let (s, kind) = f.crossing(DVec3::ZERO, DVec3::new(2.0, 0.0, 0.0) / 1.5);
         assert_eq!(kind, VertexKind::Surface);
         assert!((s * 2.0 / 1.5 - 1.0).abs() < 1e-14, "{s}");
+    }
+
+    #[test]
+    fn an_end_on_both_the_surface_and_the_sphere_keeps_its_vertex_on_the_edge() {
+        // The plane x = 0 clipped to the unit ball; the edge ends just outside the ball
+        // (by 1e-9) on the plane, so the ball's exit and the plane's root are both in the
+        // end gap. The vertex stays on the edge as a surface vertex: moved onto the sphere,
+        // it would leave the edge, and the triangles about that end could fold.
+        let f = Field::new(&expand("x").unwrap(), 1.0, SolidKind::Inside);
+        let (a, b) = (
+            DVec3::new(-0.1, 0.55, 0.75),
+            DVec3::new(0.0, 0.6, 0.8) * (1.0 + 1e-9),
+        );
+        let crossing = f.crossing(a, b);
+        assert_eq!(crossing, (1.0 - END_GAP, VertexKind::Surface));
+        let x = f.crossing_point(a, b, crossing);
+        assert!(
+            (x - (a + (1.0 - END_GAP) * (b - a))).length() < 1e-15,
+            "{x}"
+        );
+        // Where only the exit is in the end gap, the vertex is a cap vertex on the sphere.
+        let off = DVec3::new(-0.01, 0.6, 0.8) * (1.0 + 1e-9);
+        let crossing = f.crossing(a, off);
+        assert_eq!(crossing.1, VertexKind::Cap);
+        assert!((f.crossing_point(a, off, crossing).length() - 1.0).abs() < 1e-15);
     }
 
     #[test]

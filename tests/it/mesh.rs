@@ -605,7 +605,7 @@ fn the_tetrahedra_are_fine_only_where_the_surface_needs_it() {
     let field = mesh::Field::new(&barth.polynomial, radius, SolidKind::Inside);
     let floor = 2.0 * tolerance;
     let depth = resolution::depth_for(radius, floor, SolidKind::Inside);
-    let coarse = mesh::extract::Grid::covering(radius, floor * f64::from(1u32 << depth));
+    let coarse = mesh::extract::Grid::clear_of_sphere(radius, floor, depth);
     let adaptive = resolution::refine(
         &field,
         coarse,
