@@ -152,7 +152,9 @@ pub enum MeshError {
     Invalid(String),
     /// No grid vertex fell inside the solid.
     #[error(
-        "the solid is empty at this tolerance (no grid point inside it): try a smaller --tolerance"
+        "the solid is empty at this tolerance (no grid point inside it): it may have no \
+         volume (a point or a curve, where the polynomial is a sum of squares), or be thinner \
+         than the grid: try a smaller --tolerance"
     )]
     Empty,
     /// A guarantee failed on the finished mesh (a bug: please report it).
