@@ -185,7 +185,7 @@ impl Field {
     /// to `b` (not in it), as the fraction `s` of the way (`END_GAP ≤ s ≤ 1 − END_GAP`) and
     /// whether it lies on `φ = 0` or on the clip sphere: the first root of `φ` along the
     /// segment by the project's root finder, or the segment's exit from the ball if that
-    /// comes first.
+    /// comes first (a root of `φ` if both lie in the end gap at `b`).
     pub fn crossing(&self, a: DVec3, b: DVec3) -> (f64, VertexKind) {
         let e = b - a;
         let r2 = self.radius * self.radius;
