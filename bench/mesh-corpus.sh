@@ -11,8 +11,9 @@
 #     BINARY         the kardia binary (default: target/release/kardia, built with cargo first)
 #
 # KIND="--outside" or KIND="--shell F" (the wall F × the clip radius thick) meshes that kind of
-# solid instead of the inside; LIMIT=S stops each run after S seconds (default 60); ONLY=REGEX
-# runs only the ids that match; LOG=FILE writes each run's id, status, seconds and summary.
+# solid instead of the inside; LIMIT=S stops each run after S seconds (default 60; such runs
+# are counted apart); ONLY=REGEX runs only the ids that match; LOG=FILE writes each run's id,
+# status, seconds and summary.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 CORPUS=${1:?usage: bench/mesh-corpus.sh SURFACES_JSON [BINARY]}

@@ -22,7 +22,7 @@ surfaces = [
 buckets = [(1.0, "≤ 1"), (1.1, "1–1.1"), (1.5, "1.1–1.5"), (2.0, "1.5–2"), (float("inf"), "> 2")]
 counts = {name: 0 for _, name in buckets}
 counts["not measured"] = 0
-meshed, refused, other, seconds = 0, [], [], []
+meshed, refused, other, late, seconds = 0, [], [], [], []
 with tempfile.TemporaryDirectory() as out:
     for s in surfaces:
         radius = float(s["radius"])
@@ -41,8 +41,11 @@ with tempfile.TemporaryDirectory() as out:
         if log:
             summary = text.replace("\n", " | ")
             log.write(f"{s['id']}\t{status}\t{took:.2f}\t{summary}\n")
+        if status == "time limit":
+            late.append(f"{s['id']}: past the time limit ({limit:g} s)")
+            continue
         if status != 0:
-            line = text.strip().splitlines()[-1] if text.strip() else status
+            line = text.strip().splitlines()[-1]
             (refused if "failed its own check" in text else other).append(f"{s['id']}: {line}")
             continue
         meshed += 1
@@ -54,11 +57,12 @@ with tempfile.TemporaryDirectory() as out:
         ratio = float(found.group(1)) / (0.01 * radius)
         counts[next(name for top, name in buckets if ratio <= top)] += 1
 
-for line in refused + other:
+for line in refused + other + late:
     print(line)
 seconds.sort()
 print(f"\n{len(surfaces)} surfaces{' ' + ' '.join(kind) if kind else ''}: {meshed} meshed, "
-      f"{len(refused)} refused by the check, {len(other)} other answers")
+      f"{len(refused)} refused by the check, {len(other)} other answers, "
+      f"{len(late)} past the time limit")
 if seconds:
     print(f"seconds per run: median {seconds[len(seconds) // 2]:.2f}, largest {seconds[-1]:.2f}")
 print("Hausdorff estimate / tolerance: " + ", ".join(f"{n} {c}" for n, c in counts.items()))

@@ -120,7 +120,7 @@ impl Grid {
         let n = ((radius / floor).powi(2) - 0.5).ceil().max(0.0);
         let unit = radius / (n + 0.5).sqrt();
         let step = unit * f64::from(1u32 << depth);
-        let cells = 2 * ((radius + step) / step).ceil().max(1.0) as usize;
+        let cells = 2 * ((radius + step) / step).ceil() as usize;
         Self {
             cells,
             half: cells as f64 * step / 2.0,

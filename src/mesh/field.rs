@@ -199,19 +199,20 @@ impl Field {
                 (-qb + root) / (2.0 * qa)
             }
         });
-        let gap = |s: f64| s.clamp(END_GAP, 1.0 - END_GAP);
-        // An exit that the end gap moves anyway is searched past, so that a root of `φ` in
-        // the same end gap (an end on both the surface and the sphere) is found.
-        let hi = ball_exit
-            .map_or(1.0, |x| if gap(x) < x { 1.0 } else { x })
-            .min(1.0);
+        // An exit in the end gap at `b` is searched past, so that a root of `φ` in the same
+        // gap (an end on both the surface and the sphere) is found.
+        let exit_in_end_gap = ball_exit.is_some_and(|x| x > 1.0 - END_GAP);
+        let hi = match ball_exit {
+            Some(x) if !exit_in_end_gap => x,
+            _ => 1.0,
+        };
         let surface = self.first_root(a, e, hi);
         let (s, kind) = match (surface, ball_exit) {
             (Some(s), Some(x)) if s < x => (s, VertexKind::Surface),
             // Both in the end gap: the vertex the gap holds off the end is not moved onto
             // the sphere, like its neighbours about the same end (which the surface crosses
             // there too), so that the triangles about that end do not fold.
-            (Some(s), Some(x)) if gap(s) == gap(x) => (s, VertexKind::Surface),
+            (Some(s), Some(_)) if exit_in_end_gap => (s, VertexKind::Surface),
             (Some(s), None) => (s, VertexKind::Surface),
             (_, Some(x)) => (x, VertexKind::Cap),
             // The labels say φ changes sign on the segment but the root finder found no

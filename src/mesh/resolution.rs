@@ -1231,6 +1231,20 @@ mod tests {
     }
 
     #[test]
+    fn an_end_on_the_surface_and_the_sphere_keeps_the_mesh_closed() {
+        // `adaptive` builds the plain grid through the origin (`Grid::covering`), on which
+        // the clip sphere of radius 3.16228 passes through lattice points of the plane x = 0
+        // at 1% of it ((0, 30, 40) steps): the vertices held off those points must stay on
+        // their edges.
+        let f = field("x", 3.16228);
+        let lattice = Lattice::of_grid(Grid::covering(f.radius(), 0.0632456 * 4.0), 2);
+        let on_both = lattice.position([54, 84, 94]);
+        assert!((on_both.length() - f.radius()).abs() < 1e-12 && on_both.x.abs() < 1e-12);
+        let (mesh, _, _) = adaptive(&f, 0.0316228);
+        check::verify(&mesh).unwrap();
+    }
+
+    #[test]
     fn a_segment_proven_monotone_crosses_at_most_once() {
         // A torus on a grid of 0.25 steps, its lattice four times finer; segments between
         // lattice points of one cube, in the seven directions of Kuhn edges and others.
