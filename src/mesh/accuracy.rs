@@ -5,13 +5,15 @@
 //!   bounds the distance from above).
 //! - Mesh to surface: from the centroid of every triangle whose corners are all on the
 //!   surface (or the crease), the nearest root of `φ` along the triangle's normal (or along
-//!   `∇φ` if nearer); where neither line meets the surface within the reach (beside a node,
-//!   where the surface is a cone), the nearest along the 13 edge directions. A triangle with
+//!   `∇φ` if nearer); where neither line meets the surface within half the tolerance (beside
+//!   a node, where the surface is a cone; a shell's wall beside a singular curve), the
+//!   nearest along the 13 edge directions too. A triangle with
 //!   every corner on the crease may be a piece of the cap: the nearer of the surface and the
 //!   clip sphere.
 //! - Surface to mesh: points of the exact surface (every root of `φ` on lines parallel to
-//!   the axes, half a grid step off the grid's own lines, inside the clip ball), each one's
-//!   distance to the nearest triangle.
+//!   the axes, half a grid step off the grid's own lines, inside the clip ball; for a shell,
+//!   those that are points of its wall: [`Field::is_boundary_root`]), each one's distance to
+//!   the nearest triangle.
 //!
 //! The larger of the two directed distances estimates the two-sided Hausdorff distance
 //! between the surface part of the mesh and the surface (from samples: an estimate, not a
@@ -87,7 +89,7 @@ impl Deviation {
 }
 
 /// Measures the object-space mesh of `field` (see the module doc). `tolerance`: the reach
-/// for vertices; `step`: the grid step (the surface samples' spacing; the reach of the other
+/// for vertices (and twice the distance past which a triangle's other lines are tried); `step`: the grid step (the surface samples' spacing; the reach of the other
 /// measurements is twice it).
 pub fn measure(
     field: &Field,
@@ -183,12 +185,20 @@ pub fn measure_cancellable(
                 .then(|| (field.radius() - centroid.length()).abs());
             let along_normal = field.distance_along(centroid, mesh.normal(t), reach);
             let along_gradient = field.distance_along(centroid, field.gradient(centroid, h), reach);
-            along_normal
+            let nearest = along_normal
                 .into_iter()
                 .chain(along_gradient)
                 .chain(off_sphere)
-                .reduce(f64::min)
-                .or_else(|| nearest_along_edges(field, centroid, reach))
+                .reduce(f64::min);
+            // Each line gives an upper bound on the distance; where those two are far (a
+            // shell's wall beside a singular curve bends away from them), the 13 others.
+            match nearest {
+                Some(d) if d <= 0.5 * tolerance => Some(d),
+                _ => nearest
+                    .into_iter()
+                    .chain(nearest_along_edges(field, centroid, reach))
+                    .reduce(f64::min),
+            }
         })
         .collect();
     let mesh_to_surface = mesh_side
@@ -293,7 +303,7 @@ pub fn surface_samples(field: &Field, step: f64) -> Vec<DVec3> {
             sturm_roots(&c, 0.0, 1.0)
                 .into_iter()
                 .map(move |s| start + s * e)
-                .filter(move |p| p.length_squared() < r * r)
+                .filter(move |p| p.length_squared() < r * r && field.is_boundary_root(*p))
                 .collect::<Vec<_>>()
         })
         .collect()

@@ -4,7 +4,9 @@
 //! for the inside of a surface, `φ = −f` for its outside, and `φ = f² − (T/2)²·|∇f|²` for a
 //! shell of thickness `T` (the points where `|f|/|∇f| < T/2`, the first-order estimate of
 //! the distance to the surface). A point with `φ = 0` exactly counts as outside (a fixed
-//! sign: no label is ever zero), and so does any point on or outside the clip sphere.
+//! sign: no label is ever zero), and so does any point on or outside the clip sphere; but a
+//! singular point of the surface (`f` and `∇f` zero) is in a shell's wall, whose `φ` is
+//! negative all about it ([`Field::value`] gives it the least negative value).
 
 use crate::geometry::DVec3;
 use crate::roots::{sturm_roots, Solver};
@@ -53,6 +55,11 @@ impl VertexKind {
 /// so that no triangle collapses to zero area (a vertex moved by it is still measured by
 /// [`crate::mesh::accuracy`]).
 pub const END_GAP: f64 = 1e-3;
+
+/// How far from zero, as a share of the size of its two parts, a shell's `φ` may be at a
+/// root found along a line ([`Field::is_boundary_root`]): a root placed to within this share
+/// of the wall's half thickness passes.
+pub const WALL_ROOT_SHARE: f64 = 1e-3;
 
 /// The solid's indicator: see the module documentation.
 #[derive(Debug, Clone)]
@@ -112,6 +119,36 @@ impl Field {
         }
     }
 
+    /// `φ` expanded in monomials, up to the sign of the outside: `(exponents of x, y, z,
+    /// coefficient)`, of total degree at most [`Field::degree`]. For the inside and outside
+    /// these are `f`'s terms (`φ = ±f`); for a shell, those of `f² − (T/2)²·|∇f|²` (each
+    /// coefficient a sum of products of `f`'s, rounded).
+    pub fn expanded_terms(&self) -> Vec<([usize; 3], f64)> {
+        let terms = |p: &Compiled| -> Vec<([usize; 3], f64)> {
+            p.terms
+                .iter()
+                .map(|t| (t.e.map(usize::from), t.c))
+                .collect()
+        };
+        if !matches!(self.kind, SolidKind::Shell { .. }) {
+            return terms(&self.f);
+        }
+        let mut sum: std::collections::BTreeMap<[usize; 3], f64> = Default::default();
+        let mut add_product = |p: &[([usize; 3], f64)], scale: f64| {
+            for &(a, x) in p {
+                for &(b, y) in p {
+                    let e = [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+                    *sum.entry(e).or_default() += scale * x * y;
+                }
+            }
+        };
+        add_product(&terms(&self.f), 1.0);
+        for g in &self.gradient {
+            add_product(&terms(g), -self.half_thickness_sq);
+        }
+        sum.into_iter().filter(|&(_, c)| c != 0.0).collect()
+    }
+
     /// `f` at an object-space point.
     pub fn surface_value(&self, p: DVec3) -> f64 {
         self.f.eval(p.to_array())
@@ -148,9 +185,33 @@ impl Field {
             SolidKind::Outside => -f,
             SolidKind::Shell { .. } => {
                 let g: f64 = self.gradient.iter().map(|d| d.eval(q).powi(2)).sum();
-                f * f - self.half_thickness_sq * g
+                let phi = f * f - self.half_thickness_sq * g;
+                if phi == 0.0 && f == 0.0 {
+                    // A singular point of the surface (f and ∇f zero): in the wall, as
+                    // every point about it is, not outside as a zero of φ would be.
+                    -f64::MIN_POSITIVE
+                } else {
+                    phi
+                }
             }
         }
+    }
+
+    /// Whether a root of `φ` found at `p` (along a line, by the root finder) lies on the
+    /// solid's boundary: always for the inside and outside; for a shell, where `φ(p)` is
+    /// within [`WALL_ROOT_SHARE`] of `f² + (T/2)²·|∇f|²`, the size of its two parts. Beside a
+    /// singular point or curve of the surface (in the wall's inside, where both parts vanish)
+    /// `φ` is zero only to the rounding of a line's polynomial, and roots found there are not
+    /// points of the wall.
+    pub fn is_boundary_root(&self, p: DVec3) -> bool {
+        if !matches!(self.kind, SolidKind::Shell { .. }) {
+            return true;
+        }
+        let q = p.to_array();
+        let f = self.f.eval(q);
+        let g: f64 = self.gradient.iter().map(|d| d.eval(q).powi(2)).sum();
+        let (first, second) = (f * f, self.half_thickness_sq * g);
+        (first - second).abs() < WALL_ROOT_SHARE * (first + second)
     }
 
     /// Whether an object-space point is in the solid: strictly inside the clip ball and
@@ -285,24 +346,24 @@ impl Field {
             .enumerate()
             .map(|(k, &x)| if k % 2 == 1 { -x } else { x })
             .collect();
+        let e = dir * (reach / len);
         let found = sturm_roots(&c, -1.0 - 1e-12, 1.0)
             .into_iter()
             .chain(self.solver.first_root(&c, 0.0, 1.0))
-            .chain(self.solver.first_root(&mirrored, 0.0, 1.0))
+            .chain(self.solver.first_root(&mirrored, 0.0, 1.0).map(|s| -s))
+            .filter(|&s| self.is_boundary_root(p + s * e))
             .map(|s| s.abs() * reach)
             .reduce(f64::min);
-        found.or_else(|| {
-            self.hidden_double_root(p, dir * (reach / len), &c)
-                .map(|s| s * reach)
-        })
+        found.or_else(|| self.hidden_double_root(p, e, &c).map(|s| s * reach))
     }
 
     /// The nearest `|s| ≤ 1` where `φ(p + s·e)` (coefficients `c`) has a root that rounding
     /// hides from the root finder: a double root at a node of the surface, where `φ` touches
     /// 0 without changing sign and its computed values hover about 0 at the rounding of `f`.
     /// Such a root is a simple root of the line polynomial's derivative (found by Sturm
-    /// sequences) at which `φ` is zero to its rounding ([`Field::at_rounding`]); a shell's
-    /// wall has such a point at each node of the surface.
+    /// sequences) at which `φ` is zero to its rounding ([`Field::at_rounding`]) and which is
+    /// a point of the boundary ([`Field::is_boundary_root`]: for a shell, not the surface's
+    /// own node, which is inside the wall).
     fn hidden_double_root(&self, p: DVec3, e: DVec3, c: &[f64]) -> Option<f64> {
         if c.len() < 3 {
             return None;
@@ -315,7 +376,7 @@ impl Field {
             .collect();
         sturm_roots(&derivative, -1.0 - 1e-12, 1.0)
             .into_iter()
-            .filter(|&s| self.at_rounding(p + s * e))
+            .filter(|&s| self.at_rounding(p + s * e) && self.is_boundary_root(p + s * e))
             .map(f64::abs)
             .reduce(f64::min)
     }
@@ -644,6 +705,28 @@ mod tests {
             let v: f64 = c.iter().rev().fold(0.0, |acc, k| acc * s + k);
             assert!((v - shell.value(a + s * e)).abs() < 1e-12);
         }
+        // The expanded polynomial is the same φ.
+        let terms = shell.expanded_terms();
+        assert!(terms
+            .iter()
+            .all(|(e, _)| e.iter().sum::<usize>() <= shell.degree()));
+        for p in [a, a + e, DVec3::new(1.01, 0.2, -0.1)] {
+            let v: f64 = terms
+                .iter()
+                .map(|&([i, j, k], c)| {
+                    c * p.x.powi(i as i32) * p.y.powi(j as i32) * p.z.powi(k as i32)
+                })
+                .sum();
+            assert!((v - shell.value(p)).abs() < 1e-12, "{v} {}", shell.value(p));
+        }
+        // A singular point of the surface is in the wall (φ is negative all about it).
+        let cone = Field::new(
+            &expand("x*y*z").unwrap(),
+            1.0,
+            SolidKind::Shell { thickness: 0.1 },
+        );
+        assert!(cone.inside(DVec3::ZERO) && cone.inside(DVec3::splat(1e-3)));
+        assert!(!inside("x*y*z").inside(DVec3::ZERO));
     }
 
     #[test]
@@ -682,12 +765,12 @@ mod tests {
                 .unwrap();
             assert!((d - 2f64.sqrt() * 1e-4).abs() < 1e-9, "{kind:?} {d}");
         }
-        // A shell's wall has a pinhole at each node, where its φ touches 0 from below.
+        // A shell's φ touches 0 from below at each node too, but the node is inside the
+        // wall (φ < 0 all about it), not a point of it: the wall is farther off.
         let shell = Field::new(&poly, p.bound, SolidKind::Shell { thickness: 0.1 });
         assert!(shell.at_rounding(node) && !shell.at_rounding(near));
-        let d = shell
-            .distance_along(near, DVec3::new(1.0, 1.0, 0.0), 0.05)
-            .unwrap();
-        assert!(d <= 0.05, "{d}");
+        assert!(!shell.is_boundary_root(node) && shell.inside(near));
+        let d = shell.distance_along(near, DVec3::new(1.0, 1.0, 0.0), 0.05);
+        assert!(d.is_none_or(|d| d > 0.01), "{d:?}");
     }
 }

@@ -147,6 +147,21 @@ pub enum MeshError {
         /// The limit.
         limit: usize,
     },
+    /// A shell's wall asks for a finer grid than allowed ([`SHELL_FLOOR_SHARE`]).
+    #[error(
+        "a shell {thickness} thick needs {cells} grid cells a side (the grid step at most \
+         3/4 of the wall's thickness, so that no part of the wall slips between \
+         grid points), more than the limit of {limit}: choose a thicker --shell or a larger \
+         --max-cells"
+    )]
+    TooThin {
+        /// The wall's thickness asked for (world units).
+        thickness: f64,
+        /// Cells a side it needs.
+        cells: usize,
+        /// The limit.
+        limit: usize,
+    },
     /// A parameter is out of range.
     #[error("{0}")]
     Invalid(String),
@@ -298,28 +313,23 @@ pub fn mesh_solid_cancellable(
             "the tolerance must be a finite number greater than 0, not {tolerance}"
         )));
     }
-    let kind = match request.kind {
-        SolidKind::Shell { thickness } => {
-            if !(thickness > 0.0 && thickness.is_finite()) {
-                return Err(MeshError::Invalid(format!(
-                    "the shell's thickness must be a finite number greater than 0, not \
-                     {thickness}"
-                )));
-            }
-            // World thickness to object units by the frame's mean scale.
-            SolidKind::Shell {
-                thickness: thickness / frame.m.determinant().abs().cbrt(),
-            }
-        }
-        k => k,
-    };
-    let floor_step = 2.0 * tolerance / grow;
+    let kind = object_kind(request.kind, &frame)?;
+    let floor_step = floor_step(tolerance / grow, kind);
     let floor = extract::Grid::clear_of_sphere(radius, floor_step, 0);
     if floor.cells > request.max_cells {
-        return Err(MeshError::TooFine {
-            tolerance,
-            cells: floor.cells,
-            limit: request.max_cells,
+        return Err(match request.kind {
+            SolidKind::Shell { thickness } if floor_step < 2.0 * tolerance / grow => {
+                MeshError::TooThin {
+                    thickness,
+                    cells: floor.cells,
+                    limit: request.max_cells,
+                }
+            }
+            _ => MeshError::TooFine {
+                tolerance,
+                cells: floor.cells,
+                limit: request.max_cells,
+            },
         });
     }
     let field = Field::new(&solid.polynomial, radius, kind);
@@ -339,7 +349,7 @@ pub fn mesh_solid_cancellable(
             all,
         )
     };
-    let depth = resolution::depth_for(radius, floor_step, kind);
+    let depth = resolution::depth_for(radius, floor_step, field.degree());
     let (extracted, extracted_kinds, grid, refined) = if depth == 0 {
         let (mesh, kinds) = extract::march_cancellable(&field, floor, &scaled, cancel)
             .ok_or(MeshError::Cancelled)?;
@@ -403,7 +413,7 @@ pub fn mesh_solid_cancellable(
         &object_mesh,
         &kinds,
         tolerance / grow,
-        floor.step(),
+        measure_step(radius, tolerance / grow),
         cancel,
         &|part| {
             progress(
@@ -430,10 +440,51 @@ pub fn mesh_solid_cancellable(
     })
 }
 
+/// The largest share of a shell's thickness the floor step may be. A flat wall thicker than
+/// the step always holds a corner of every grid tetrahedron it passes through (the corners of
+/// a Kuhn tetrahedron are a path of steps along the axes), so no part of it slips between
+/// grid points; the rest is a margin for the wall's bends.
+pub const SHELL_FLOOR_SHARE: f64 = 0.75;
+
+/// `kind` with a shell's thickness (world units) in object units, by the frame's mean scale;
+/// an error for a thickness that is not a finite number above 0.
+fn object_kind(kind: SolidKind, frame: &Frame) -> Result<SolidKind, MeshError> {
+    match kind {
+        SolidKind::Shell { thickness } => {
+            if !(thickness > 0.0 && thickness.is_finite()) {
+                return Err(MeshError::Invalid(format!(
+                    "the shell's thickness must be a finite number greater than 0, not \
+                     {thickness}"
+                )));
+            }
+            Ok(SolidKind::Shell {
+                thickness: thickness / frame.m.determinant().abs().cbrt(),
+            })
+        }
+        k => Ok(k),
+    }
+}
+
+/// The floor step (object units) for `tolerance` and `kind` (object units): twice the
+/// tolerance, and for a shell at most [`SHELL_FLOOR_SHARE`] of its thickness.
+fn floor_step(tolerance: f64, kind: SolidKind) -> f64 {
+    match kind {
+        SolidKind::Shell { thickness } => (2.0 * tolerance).min(SHELL_FLOOR_SHARE * thickness),
+        _ => 2.0 * tolerance,
+    }
+}
+
+/// The spacing of the measurement's surface samples ([`accuracy::measure`]) for `tolerance`
+/// (object units) in a clip ball of `radius`: the floor step of a solid, also for a shell,
+/// whose thinner grid does not make its samples denser.
+fn measure_step(radius: f64, tolerance: f64) -> f64 {
+    extract::Grid::clear_of_sphere(radius, 2.0 * tolerance, 0).step()
+}
+
 /// Measures a mesh from a file (STL, OBJ or PLY, in world units: another mesher's, or
 /// `kardia mesh`'s written without `--size`) against `solid`'s exact surface the way
 /// [`mesh_solid`] measures its own ([`accuracy::measure`], with the grid step `kardia mesh`
-/// would use for `tolerance` in world units). The file carries no vertex kinds: a vertex
+/// would use for `tolerance` in world units; `kind` with a shell's thickness in world units). The file carries no vertex kinds: a vertex
 /// within `1e-6` of the clip radius of the clip sphere counts as a cap vertex, every other as
 /// a surface vertex, and a vertex's deviation is sought within `tolerance`.
 pub fn measure_file(
@@ -471,8 +522,9 @@ pub fn measure_file(
             }
         })
         .collect::<Vec<_>>();
+    let kind = object_kind(kind, &frame)?;
     let field = Field::new(&solid.polynomial, radius, kind);
-    let step = extract::Grid::clear_of_sphere(radius, 2.0 * tolerance / grow, 0).step();
+    let step = measure_step(radius, tolerance / grow);
     Ok(accuracy::measure(&field, &object, &kinds, tolerance / grow, step).scaled(grow))
 }
 
@@ -807,6 +859,83 @@ mod tests {
         let volume = check::verify(&mesh).unwrap().volume;
         let ball = 4.0 / 3.0 * std::f64::consts::PI;
         assert!((volume - ball).abs() < 0.02 * ball, "{volume}");
+    }
+
+    #[test]
+    fn a_wall_thinner_than_the_tolerances_grid_has_no_holes() {
+        // A hollow sphere 0.04 thick at a tolerance of 0.05: on the tolerance's grid of step
+        // 0.1 the wall slipped between grid points wherever it leans (84 pieces); the grid
+        // of at most 3/4 of the thickness gives the two closed spheres of the wall.
+        let m = mesh(
+            &solid("x^2 + y^2 + z^2 = 1", 1.5),
+            SolidKind::Shell { thickness: 0.04 },
+            0.05,
+        );
+        let v = check::verify(&m.mesh).unwrap();
+        assert_eq!((v.components, v.euler_characteristic), (2, 4));
+        // The wall |f|/|∇f| ≤ 0.02: radii 0.980 to 1.020; each sphere of the mesh is within
+        // the Hausdorff distance of its own.
+        let ball = |r: f64| 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+        let (inner, outer) = (
+            0.02f64.mul_add(0.02, 1.0).sqrt() - 0.02,
+            0.02f64.mul_add(0.02, 1.0).sqrt() + 0.02,
+        );
+        let d = m.deviation.hausdorff();
+        assert!(d <= 0.05, "{:?}", m.deviation);
+        let (least, most) = (
+            ball(outer - d) - ball(inner + d),
+            ball(outer + d) - ball(inner - d),
+        );
+        assert!(
+            v.volume >= least && v.volume <= most,
+            "{} {least} {most}",
+            v.volume
+        );
+        // A thinner wall than the grid's limit allows is refused, naming the thickness.
+        let request = MeshRequest {
+            kind: SolidKind::Shell { thickness: 0.001 },
+            tolerance: Some(0.05),
+            ..MeshRequest::default()
+        };
+        let refused = mesh_solid(&solid("x^2 + y^2 + z^2 = 1", 1.5), &request, &|_, _| {});
+        assert!(
+            matches!(refused, Err(MeshError::TooThin { .. })),
+            "{refused:?}"
+        );
+    }
+
+    #[test]
+    fn a_shell_through_a_singular_point_holds_it_in_its_wall() {
+        // The cubic cone's shell: its apex (f and ∇f zero) is a lattice point, which φ = 0
+        // would have put outside, a tiny hollow in the wall the measurement could not place.
+        let m = mesh(
+            &solid("x^3 + y^3 + z^3 + 2*x*y*z", 1.14),
+            SolidKind::Shell { thickness: 0.0342 },
+            0.0114,
+        );
+        let v = check::verify(&m.mesh).unwrap();
+        assert_eq!((v.components, v.euler_characteristic), (1, 2));
+        let d = &m.deviation;
+        assert_eq!(d.beyond_reach, 0, "{d:?}");
+        assert!(d.hausdorff() <= 0.0114, "{d:?}");
+    }
+
+    #[test]
+    fn a_shell_about_a_singular_curve_is_within_the_tolerance() {
+        // The heart's rim (z = 0, 2x² + y² = 1) is a singular curve, inside the wall, where
+        // the wall's φ vanishes to rounding: roots found there are not wall points (they
+        // were taken as samples of the wall, 99 of them far from any triangle), and the
+        // wall bends away from the lines along the normal and ∇φ (a triangle measured at
+        // 0.051 whose wall is 0.0066 away along x).
+        let m = mesh(
+            &solid("(2*x^2 + y^2 + z^2 - 1)^3 - 0.1*x^2*z^3 - y^2*z^3", 2.0),
+            SolidKind::Shell { thickness: 0.06 },
+            0.02,
+        );
+        check::verify(&m.mesh).unwrap();
+        let d = &m.deviation;
+        assert_eq!((d.beyond_reach, d.vertices_beyond), (0, 0), "{d:?}");
+        assert!(d.hausdorff() <= 0.02, "{d:?}");
     }
 
     #[test]

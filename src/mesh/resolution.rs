@@ -53,9 +53,12 @@
 //! floor itself); a second piece of surface wholly inside a crossed leaf that meets none of
 //! its edges; the acute wedge at the crease that binary labels cannot see; and the
 //! distance estimate of 1. is an estimate, not a bound, which the measured Hausdorff
-//! distance afterwards checks. The Taylor bound is on `f` (the inside and outside); a shell's
-//! `φ` (degree twice `f`'s, a square less a sum of squares) is meshed on the uniform grid of
-//! the floor step ([`super::extract::march`]).
+//! distance afterwards checks. The Taylor bound is on `φ` expanded in monomials
+//! ([`Field::expanded_terms`]: `±f`, or a shell's `f² − (T/2)²·|∇f|²`); a shell whose `φ`
+//! has degree above [`MAX_DEGREE`] (a surface of degree 9 or more) is meshed on the uniform
+//! grid of the floor step instead ([`super::extract::march`]). A shell's floor step is also
+//! at most [`super::SHELL_FLOOR_SHARE`] of its thickness, so that its two sheets, each
+//! crossing an edge, are told apart by 2. down to it.
 
 use super::bisection::{kuhn_tetrahedra, Point, PointHasher, Refinement, Tet, TET_EDGES};
 use super::extract::{self, marching_table, Crossings, Grid, Lattice, TablePolygon};
@@ -156,10 +159,11 @@ impl Refined {
 }
 
 /// How many times the coarsest cube's side is halved to reach the floor step `floor`: the
-/// most with `floor·2^depth ≤ radius /` [`FIRST_STEP_DIVISOR`] (0 for a shell, which is
-/// meshed on the floor's uniform grid).
-pub fn depth_for(radius: f64, floor: f64, kind: SolidKind) -> u32 {
-    if matches!(kind, SolidKind::Shell { .. }) {
+/// most with `floor·2^depth ≤ radius /` [`FIRST_STEP_DIVISOR`]; 0 when `φ`'s `degree` is
+/// above [`MAX_DEGREE`] (a shell of a surface of degree 9 or more, beyond the root finder
+/// and the Taylor bound here), which is meshed on the floor's uniform grid.
+pub fn depth_for(radius: f64, floor: f64, degree: usize) -> u32 {
+    if degree > MAX_DEGREE {
         return 0;
     }
     let mut depth = 0;
@@ -859,7 +863,7 @@ impl Examiner<'_> {
         }
         self.taylor.at(centre, r).is_some_and(|sums| {
             let least_corner = phi.iter().map(|v| sign * v).fold(f64::INFINITY, f64::min);
-            // The Taylor sums are of f; φ = ±f.
+            // The Taylor sums are of f (a shell's φ itself); φ = ±f.
             let s = sign * self.f_sign;
             let centre_value = s * sums.value;
             let least_linear = t
@@ -1015,7 +1019,8 @@ impl TaylorSums {
     }
 }
 
-/// Taylor coefficients of `f` (the surface's polynomial) about a point, summed by degree.
+/// Taylor coefficients of `φ` (up to the outside's sign: [`Field::expanded_terms`]) about a
+/// point, summed by degree. Below, `f` names that polynomial: the surface's, or a shell's `φ`.
 struct Taylor {
     terms: Vec<([usize; 3], f64)>,
     degree: usize,
@@ -1054,8 +1059,8 @@ struct TaylorSums {
 
 impl Taylor {
     fn new(field: &Field) -> Self {
-        let f = field.surface_polynomial();
-        let d = f.degree + 1;
+        let degree = field.degree();
+        let d = degree + 1;
         let mut rows = vec![usize::MAX; d * d];
         let mut size = 0;
         for l in 0..d {
@@ -1065,12 +1070,8 @@ impl Taylor {
             }
         }
         Self {
-            terms: f
-                .terms
-                .iter()
-                .map(|t| (t.e.map(usize::from), t.c))
-                .collect(),
-            degree: f.degree,
+            terms: field.expanded_terms(),
+            degree,
             rows,
             size,
         }
@@ -1200,7 +1201,7 @@ mod tests {
     /// The mesh on the leaves for `tolerance`, from the coarsest grid at most radius / 8.
     fn adaptive(f: &Field, tolerance: f64) -> (TriangleMesh, Vec<VertexKind>, Refined) {
         let floor = 2.0 * tolerance;
-        let depth = depth_for(f.radius(), floor, SolidKind::Inside);
+        let depth = depth_for(f.radius(), floor, f.degree());
         let coarse = Grid::covering(f.radius(), floor * f64::from(1u32 << depth));
         mesh_adaptive(
             f,
@@ -1215,10 +1216,11 @@ mod tests {
 
     #[test]
     fn the_depth_halves_from_an_eighth_of_the_radius_down_to_the_floor() {
-        assert_eq!(depth_for(2.0, 0.04, SolidKind::Inside), 2);
-        assert_eq!(depth_for(2.0, 0.3, SolidKind::Outside), 0);
-        let shell = SolidKind::Shell { thickness: 0.1 };
-        assert_eq!(depth_for(2.0, 0.04, shell), 0);
+        assert_eq!(depth_for(2.0, 0.04, 6), 2);
+        assert_eq!(depth_for(2.0, 0.3, 6), 0);
+        // A shell of a surface of degree 9 and more: φ of degree 18 and more.
+        assert_eq!(depth_for(2.0, 0.04, 16), 2);
+        assert_eq!(depth_for(2.0, 0.04, 18), 0);
     }
 
     #[test]
@@ -1364,7 +1366,7 @@ mod tests {
             let f = field(equation, radius);
             let tolerance = 0.01;
             let floor = 2.0 * tolerance;
-            let depth = depth_for(f.radius(), floor, SolidKind::Inside);
+            let depth = depth_for(f.radius(), floor, f.degree());
             let coarse = Grid::covering(f.radius(), floor * f64::from(1u32 << depth));
             let cancel = AtomicBool::new(false);
             let a = refine(&f, coarse, depth, tolerance, &|_, _| {}, &cancel).unwrap();

@@ -604,7 +604,7 @@ fn the_tetrahedra_are_fine_only_where_the_surface_needs_it() {
     let tolerance = 0.01 * radius;
     let field = mesh::Field::new(&barth.polynomial, radius, SolidKind::Inside);
     let floor = 2.0 * tolerance;
-    let depth = resolution::depth_for(radius, floor, SolidKind::Inside);
+    let depth = resolution::depth_for(radius, floor, field.degree());
     let coarse = mesh::extract::Grid::clear_of_sphere(radius, floor, depth);
     let adaptive = resolution::refine(
         &field,
