@@ -7,7 +7,9 @@
 //!   surface (or the crease), the nearest root of `φ` along the triangle's normal (or along
 //!   `∇φ` if nearer); where neither line meets the surface within half the tolerance (beside
 //!   a node, where the surface is a cone; a shell's wall beside a singular curve), the
-//!   nearest along the 13 edge directions too. A triangle with
+//!   nearest along the 13 edge directions too, and the distance to where Newton steps from
+//!   the centroid converge (a part of the zero set that is a curve or a point, which lines
+//!   miss). A triangle with
 //!   every corner on the crease may be a piece of the cap: the nearer of the surface and the
 //!   clip sphere.
 //! - Surface to mesh: points of the exact surface (every root of `φ` on lines parallel to
@@ -197,6 +199,7 @@ pub fn measure_cancellable(
                 _ => nearest
                     .into_iter()
                     .chain(nearest_along_edges(field, centroid, reach))
+                    .chain(descent_to_zero(field, centroid, reach))
                     .reduce(f64::min),
             }
         })
@@ -269,6 +272,44 @@ fn nearest_along_edges(field: &Field, p: DVec3, reach: f64) -> Option<f64> {
         .filter_map(|d| field.distance_along(p, d, reach))
         .reduce(f64::min)
 }
+
+/// The distance from `p` to where Newton steps from `p` converge (at most
+/// [`DESCENT_STEPS`], until a step is shorter than `1e-9 · reach` or `φ` is zero to
+/// rounding, [`Field::at_rounding`]), the last
+/// step's length twice added for the rest of the way, if that is within `reach` and (for a
+/// shell) a point of the boundary ([`Field::is_boundary_root`]): an upper bound on the
+/// distance to `φ = 0` where no line through `p` meets it, as beside a part of the zero set
+/// that is a curve or a point (the cross-cap's stick, where `φ` touches 0 without changing
+/// sign and a line misses the curve).
+fn descent_to_zero(field: &Field, p: DVec3, reach: f64) -> Option<f64> {
+    let h = 1e-7 * field.radius();
+    let mut q = p;
+    for _ in 0..DESCENT_STEPS {
+        let (v, g) = field.value_and_gradient(q, h);
+        let g2 = g.length_squared();
+        let step = if v == 0.0 {
+            DVec3::ZERO
+        } else if g2 > 0.0 && v.is_finite() {
+            g * (v / g2)
+        } else {
+            return None;
+        };
+        q -= step;
+        let d = q.distance(p) + 2.0 * step.length();
+        if d > reach {
+            return None;
+        }
+        if step.length() <= 1e-9 * reach || field.at_rounding(q) {
+            return field.is_boundary_root(q).then_some(d);
+        }
+    }
+    None
+}
+
+/// The most Newton steps [`descent_to_zero`] takes: beside a curve or point where `φ`
+/// vanishes to second order each step halves the distance, so from a grid step away this
+/// converges to a billionth of it.
+pub const DESCENT_STEPS: usize = 64;
 
 /// Points of `φ = 0` inside the clip ball: every root on the lines parallel to each axis
 /// through the points `(i + ½)·step` of the other two axes (by the root finder).

@@ -939,6 +939,26 @@ mod tests {
     }
 
     #[test]
+    fn triangles_beside_a_curve_or_a_point_of_the_zero_set_are_measured_to_it() {
+        // The cross-cap's stick (x = z = 0, y < 0) and leminescape's z-axis are curves of the
+        // zero set, and the blend of two cylinders has an isolated zero at the origin (a
+        // lattice point, counted outside: a hollow 2.4e-4 across); no line through a
+        // triangle's centroid meets such a curve or point, where it was measured at the
+        // search's reach (4 times the tolerance) or at a farther sheet (3.7 times).
+        for (equation, radius) in [
+            ("x^2*y - z^2", 1.14),
+            ("4*x^2*(x^2 + y^2 + z^2 + z) + y^2*(y^2 + z^2 - 1)", 1.0),
+            ("(x^2 + y^2 - 1)*(x^2 + z^2 - 1) - 1", 3.0),
+        ] {
+            let tolerance = 0.01 * radius;
+            let m = mesh(&solid(equation, radius), SolidKind::Inside, tolerance);
+            let d = &m.deviation;
+            assert_eq!(d.beyond_reach, 0, "{equation}: {d:?}");
+            assert!(d.mesh_to_surface <= tolerance, "{equation}: {d:?}");
+        }
+    }
+
+    #[test]
     fn too_fine_a_tolerance_is_refused() {
         let s = solid("x^2 + y^2 + z^2 = 1", 1.5);
         let request = MeshRequest {
