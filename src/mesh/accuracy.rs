@@ -9,9 +9,8 @@
 //!   a node, where the surface is a cone; a shell's wall beside a singular curve), the
 //!   nearest along the 13 edge directions too, and the distance to where Newton steps from
 //!   the centroid converge (a part of the zero set that is a curve or a point, which lines
-//!   miss). A triangle with
-//!   every corner on the crease may be a piece of the cap: the nearer of the surface and the
-//!   clip sphere.
+//!   miss). A triangle with every corner on the crease may be a piece of the cap: the nearer
+//!   of the surface and the clip sphere.
 //! - Surface to mesh: points of the exact surface (every root of `φ` on lines parallel to
 //!   the axes, half a grid step off the grid's own lines, inside the clip ball; for a shell,
 //!   those that are points of its wall: [`Field::is_boundary_root`]), each one's distance to
@@ -91,8 +90,9 @@ impl Deviation {
 }
 
 /// Measures the object-space mesh of `field` (see the module doc). `tolerance`: the reach
-/// for vertices (and twice the distance past which a triangle's other lines are tried); `step`: the grid step (the surface samples' spacing; the reach of the other
-/// measurements is twice it).
+/// for vertices, and twice the distance past which a triangle is measured along more lines;
+/// `step`: the grid step (the surface samples' spacing; the reach of the other measurements
+/// is twice it).
 pub fn measure(
     field: &Field,
     mesh: &TriangleMesh,
@@ -275,12 +275,11 @@ fn nearest_along_edges(field: &Field, p: DVec3, reach: f64) -> Option<f64> {
 
 /// The distance from `p` to where Newton steps from `p` converge (at most
 /// [`DESCENT_STEPS`], until a step is shorter than `1e-9 · reach` or `φ` is zero to
-/// rounding, [`Field::at_rounding`]), the last
-/// step's length twice added for the rest of the way, if that is within `reach` and (for a
-/// shell) a point of the boundary ([`Field::is_boundary_root`]): an upper bound on the
-/// distance to `φ = 0` where no line through `p` meets it, as beside a part of the zero set
-/// that is a curve or a point (the cross-cap's stick, where `φ` touches 0 without changing
-/// sign and a line misses the curve).
+/// rounding, [`Field::at_rounding`]), with twice the last step's length added for the rest
+/// of the way, if that is within `reach` and (for a shell) a point of the wall
+/// ([`Field::is_boundary_root`]): an upper bound on the distance to `φ = 0` where no line
+/// through `p` meets it, as beside a part of the zero set that is a curve or a point (the
+/// cross-cap's stick, where `φ` touches 0 without changing sign and a line misses it).
 fn descent_to_zero(field: &Field, p: DVec3, reach: f64) -> Option<f64> {
     let h = 1e-7 * field.radius();
     let mut q = p;

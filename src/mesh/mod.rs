@@ -483,10 +483,11 @@ fn measure_step(radius: f64, tolerance: f64) -> f64 {
 
 /// Measures a mesh from a file (STL, OBJ or PLY, in world units: another mesher's, or
 /// `kardia mesh`'s written without `--size`) against `solid`'s exact surface the way
-/// [`mesh_solid`] measures its own ([`accuracy::measure`], with the grid step `kardia mesh`
-/// would use for `tolerance` in world units; `kind` with a shell's thickness in world units). The file carries no vertex kinds: a vertex
-/// within `1e-6` of the clip radius of the clip sphere counts as a cap vertex, every other as
-/// a surface vertex, and a vertex's deviation is sought within `tolerance`.
+/// [`mesh_solid`] measures its own ([`accuracy::measure`], with the sample spacing
+/// `kardia mesh` would use for `tolerance` in world units; `kind` with a shell's thickness in
+/// world units). The file carries no vertex kinds: a vertex within `1e-6` of the clip radius
+/// of the clip sphere counts as a cap vertex, every other as a surface vertex, and a vertex's
+/// deviation is sought within `tolerance`.
 pub fn measure_file(
     solid: &PolynomialSolid,
     kind: SolidKind,
