@@ -95,12 +95,6 @@ impl Field {
         }
     }
 
-    /// The surface's polynomial `f` (object space; `φ` is `f`, `−f` or the shell's
-    /// polynomial of it).
-    pub fn surface_polynomial(&self) -> &Compiled {
-        &self.f
-    }
-
     /// The clip radius (object space).
     pub fn radius(&self) -> f64 {
         self.radius
@@ -184,8 +178,8 @@ impl Field {
             SolidKind::Inside => f,
             SolidKind::Outside => -f,
             SolidKind::Shell { .. } => {
-                let g: f64 = self.gradient.iter().map(|d| d.eval(q).powi(2)).sum();
-                let phi = f * f - self.half_thickness_sq * g;
+                let (square, gradient_part) = self.shell_parts(f, q);
+                let phi = square - gradient_part;
                 if phi == 0.0 && f == 0.0 {
                     // A singular point of the surface (f and ∇f zero): in the wall, as
                     // every point about it is, not outside as a zero of φ would be.
@@ -208,14 +202,19 @@ impl Field {
             return true;
         }
         let q = p.to_array();
-        let f = self.f.eval(q);
-        let g: f64 = self.gradient.iter().map(|d| d.eval(q).powi(2)).sum();
-        let (first, second) = (f * f, self.half_thickness_sq * g);
+        let (first, second) = self.shell_parts(self.f.eval(q), q);
         (first - second).abs() < WALL_ROOT_SHARE * (first + second)
     }
 
+    /// A shell's `φ` at `q` as its two parts, `f²` and `(T/2)²·|∇f|²`, given `f` there.
+    fn shell_parts(&self, f: f64, q: [f64; 3]) -> (f64, f64) {
+        let g: f64 = self.gradient.iter().map(|d| d.eval(q).powi(2)).sum();
+        (f * f, self.half_thickness_sq * g)
+    }
+
     /// Whether an object-space point is in the solid: strictly inside the clip ball and
-    /// `φ < 0` (a zero counts as outside).
+    /// `φ < 0` (a zero counts as outside, but for a shell a singular point of the surface is
+    /// inside: see the module doc).
     pub fn inside(&self, p: DVec3) -> bool {
         p.length_squared() < self.radius * self.radius && self.value(p) < 0.0
     }

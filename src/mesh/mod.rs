@@ -877,10 +877,9 @@ mod tests {
         // The wall |f|/|∇f| ≤ 0.02: radii 0.980 to 1.020; each sphere of the mesh is within
         // the Hausdorff distance of its own.
         let ball = |r: f64| 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
-        let (inner, outer) = (
-            0.02f64.mul_add(0.02, 1.0).sqrt() - 0.02,
-            0.02f64.mul_add(0.02, 1.0).sqrt() + 0.02,
-        );
+        // |r² − 1| / 2r = 0.02 at r = √1.0004 ∓ 0.02.
+        let middle = 1.0004f64.sqrt();
+        let (inner, outer) = (middle - 0.02, middle + 0.02);
         let d = m.deviation.hausdorff();
         assert!(d <= 0.05, "{:?}", m.deviation);
         let (least, most) = (
