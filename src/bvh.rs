@@ -287,6 +287,58 @@ impl Bvh {
         }
     }
 
+    /// Walks the tree about the point `p`: calls `visit(id, &mut reach)` for each item of each
+    /// leaf whose box comes within `reach` of `p` (nearest child first), where `visit` asks
+    /// the item and may lower `reach` (to the distance of the nearest item found, say);
+    /// lowering it below 0 ends the walk. Every item whose box is within `reach` of `p`, as
+    /// `reach` stands when its leaf is reached, is visited.
+    pub fn walk_near(&self, p: DVec3, mut reach: f64, mut visit: impl FnMut(u32, &mut f64)) {
+        if self.nodes.is_empty() || reach < 0.0 || reach.is_nan() {
+            return;
+        }
+        // Never read beyond `top`; no deeper than the tree.
+        let mut stack = [std::mem::MaybeUninit::<(u32, f64)>::uninit(); MAX_DEPTH];
+        let mut top = 0;
+        let mut node = (0usize, box_distance(&self.nodes[0].bounds, p));
+        loop {
+            let (k, near) = node;
+            if near <= reach {
+                let n = &self.nodes[k];
+                if n.count > 0 {
+                    let first = n.offset as usize;
+                    for &id in &self.items[first..first + n.count as usize] {
+                        visit(id, &mut reach);
+                        if reach < 0.0 || reach.is_nan() {
+                            return;
+                        }
+                    }
+                } else {
+                    let (low, high) = (k + 1, n.offset as usize);
+                    let low = (low, box_distance(&self.nodes[low].bounds, p));
+                    let high = (high, box_distance(&self.nodes[high].bounds, p));
+                    let (first, second) = if low.1 <= high.1 {
+                        (low, high)
+                    } else {
+                        (high, low)
+                    };
+                    if second.1 <= reach {
+                        stack[top].write((second.0 as u32, second.1));
+                        top += 1;
+                    }
+                    node = first;
+                    continue;
+                }
+            }
+            if top == 0 {
+                return;
+            }
+            top -= 1;
+            // SAFETY: entries below `top` were written before `top` passed them.
+            let (k, near) = unsafe { stack[top].assume_init() };
+            node = (k as usize, near);
+        }
+    }
+
     /// [`Bvh::walk`] for [`LANES`] rays at once: calls `visit(id, &mut t_max)` for each item of
     /// each leaf whose box some lane's ray meets within that lane's current range (lane `i`
     /// on `(t_min[i], t_max[i])`; a lane with `t_max[i] < t_min[i]` is idle), nearest child
@@ -487,6 +539,17 @@ fn active_lanes(t_min: &[f64; LANES], t_max: &[f64; LANES]) -> u32 {
     (0..LANES).fold(0u32, |mask, i| mask | ((t_max[i] >= t_min[i]) as u32) << i)
 }
 
+/// The distance from `p` to the nearest point of `bounds` (0 inside it, +∞ for an empty box).
+#[inline(always)]
+fn box_distance(bounds: &Aabb, p: DVec3) -> f64 {
+    let gap = (bounds.min - p).max(p - bounds.max).max(DVec3::ZERO);
+    if bounds.min.cmpgt(bounds.max).any() {
+        f64::INFINITY
+    } else {
+        gap.length()
+    }
+}
+
 /// Half the surface area of a box (0 for an empty one).
 fn half_area(b: &Aabb) -> f64 {
     let d = (b.max - b.min).max(DVec3::ZERO);
@@ -601,6 +664,50 @@ mod tests {
         let (b, nb) = leaf_range(bvh, node.offset as usize);
         assert_eq!(a + na, b);
         (a, na + nb)
+    }
+
+    #[test]
+    fn the_walk_near_a_point_visits_every_box_within_its_reach_and_finds_the_nearest() {
+        let mut rng = Uniform::new(11);
+        let items = boxes(&mut rng, 700);
+        let bvh = Bvh::new(&items);
+        for _ in 0..2000 {
+            let p = DVec3::new(
+                rng.range(-14.0, 14.0),
+                rng.range(-14.0, 14.0),
+                rng.range(-14.0, 14.0),
+            );
+            let reach = rng.range(0.0, 6.0);
+            // A fixed reach: exactly the boxes within it.
+            let mut seen = vec![false; items.len()];
+            bvh.walk_near(p, reach, |id, _| seen[id as usize] = true);
+            for (id, b) in &items {
+                let within = !is_empty(b) && box_distance(b, p) <= reach;
+                assert!(!within || seen[*id as usize], "item {id} missed");
+                assert!(
+                    !is_empty(b) || !seen[*id as usize],
+                    "empty box {id} visited"
+                );
+            }
+            // A shrinking reach finds the box nearest p, as a scan does.
+            let mut best = f64::INFINITY;
+            bvh.walk_near(p, f64::INFINITY, |id, reach| {
+                best = best.min(box_distance(&items[id as usize].1, p));
+                *reach = best;
+            });
+            let scan = items
+                .iter()
+                .map(|(_, b)| box_distance(b, p))
+                .fold(f64::INFINITY, f64::min);
+            assert_eq!(best, scan);
+        }
+        // A negative reach ends the walk at once.
+        let mut visits = 0;
+        bvh.walk_near(DVec3::ZERO, f64::INFINITY, |_, reach| {
+            visits += 1;
+            *reach = -1.0;
+        });
+        assert_eq!(visits, 1);
     }
 
     #[test]

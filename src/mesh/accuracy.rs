@@ -22,12 +22,12 @@
 
 use super::field::{Field, VertexKind};
 use super::TriangleMesh;
-use crate::geometry::DVec3;
+use crate::bvh::Bvh;
+use crate::geometry::{Aabb, DVec3};
 use crate::roots::sturm_roots;
 use crate::shapes::implicit::MAX_DEGREE;
 pub use crate::shapes::triangles::closest_on_triangle;
 use rayon::prelude::*;
-use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The directions of the tetrahedra's edges ([`super::bisection`]: the axes, the diagonals
@@ -214,7 +214,7 @@ pub fn measure_cancellable(
     }
     part_done(2);
     let samples = surface_samples(field, step);
-    let nearest = NearestTriangle::new(mesh, step);
+    let nearest = NearestTriangle::new(mesh);
     let surface_side: Vec<Option<f64>> = samples
         .par_iter()
         .map(|&p| {
@@ -349,71 +349,31 @@ pub fn surface_samples(field: &Field, step: f64) -> Vec<DVec3> {
         .collect()
 }
 
-/// Triangles bucketed by a grid of cubes, for nearest-triangle distances.
+/// The mesh's triangles in a bounding volume hierarchy, for nearest-triangle distances.
 struct NearestTriangle<'a> {
     mesh: &'a TriangleMesh,
-    cell: f64,
-    buckets: HashMap<[i64; 3], Vec<u32>>,
+    bvh: Bvh,
 }
 
 impl<'a> NearestTriangle<'a> {
-    fn new(mesh: &'a TriangleMesh, cell: f64) -> Self {
-        let mut buckets: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
-        for t in 0..mesh.triangles.len() {
-            let [a, b, c] = mesh.corners(t);
-            let lo = Self::key(a.min(b).min(c), cell);
-            let hi = Self::key(a.max(b).max(c), cell);
-            for x in lo[0]..=hi[0] {
-                for y in lo[1]..=hi[1] {
-                    for z in lo[2]..=hi[2] {
-                        buckets.entry([x, y, z]).or_default().push(t as u32);
-                    }
-                }
-            }
-        }
+    fn new(mesh: &'a TriangleMesh) -> Self {
+        let boxes: Vec<(u32, Aabb)> = (0..mesh.triangles.len())
+            .map(|t| (t as u32, Aabb::from_points(mesh.corners(t))))
+            .collect();
         Self {
             mesh,
-            cell,
-            buckets,
+            bvh: Bvh::new(&boxes),
         }
     }
 
-    fn key(p: DVec3, cell: f64) -> [i64; 3] {
-        (p / cell).floor().as_i64vec3().to_array()
-    }
-
-    /// The distance from `p` to the nearest triangle, if one is within `reach`: the cells
-    /// are searched in rings of growing Chebyshev distance about `p`'s cell, stopping once
-    /// the box of cells searched holds the ball of the best distance found (or of `reach`).
+    /// The distance from `p` to the nearest triangle, if one is within `reach`.
     fn distance(&self, p: DVec3, reach: f64) -> Option<f64> {
-        let centre = Self::key(p, self.cell);
-        let rings = (reach / self.cell).ceil() as i64 + 1;
         let mut best = f64::INFINITY;
-        for ring in 0..=rings {
-            for x in centre[0] - ring..=centre[0] + ring {
-                for y in centre[1] - ring..=centre[1] + ring {
-                    for z in centre[2] - ring..=centre[2] + ring {
-                        let on_ring = (x - centre[0]).abs() == ring
-                            || (y - centre[1]).abs() == ring
-                            || (z - centre[2]).abs() == ring;
-                        if !on_ring {
-                            continue;
-                        }
-                        for &t in self.buckets.get(&[x, y, z]).into_iter().flatten() {
-                            let q = closest_on_triangle(p, self.mesh.corners(t as usize));
-                            best = best.min((p - q).length());
-                        }
-                    }
-                }
-            }
-            // Every point within `covered` of p lies in a cell already searched.
-            let lo = (DVec3::from_array(centre.map(|c| c as f64)) - ring as f64) * self.cell;
-            let hi = lo + (2 * ring + 1) as f64 * self.cell;
-            let covered = (p - lo).min(hi - p).min_element();
-            if best <= covered || covered >= reach {
-                break;
-            }
-        }
+        self.bvh.walk_near(p, reach, |t, within| {
+            let q = closest_on_triangle(p, self.mesh.corners(t as usize));
+            best = best.min((p - q).length());
+            *within = within.min(best);
+        });
         (best <= reach).then_some(best)
     }
 }
