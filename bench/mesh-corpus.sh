@@ -4,7 +4,8 @@
 # each with "id", "degree", the equation as typed for kardia under "kardia" and its clip ball's
 # "radius") meshed at the default tolerance (1% of the clip radius). Prints each failure (exit
 # status other than 0, or past the time limit) and a table: how many meshed, how many the
-# check refused, and the two-sided Hausdorff estimate over the tolerance in buckets. Usage:
+# check refused, and the two-sided Hausdorff estimate over the tolerance in buckets (and again
+# away from the parts thinner than the grid step, which the summary counts apart). Usage:
 #
 #   bench/mesh-corpus.sh SURFACES_JSON [BINARY]
 #     SURFACES_JSON  the corpus (not in this repository)

@@ -22,6 +22,7 @@ surfaces = [
 buckets = [(1.0, "≤ 1"), (1.1, "1–1.1"), (1.5, "1.1–1.5"), (2.0, "1.5–2"), (float("inf"), "> 2")]
 counts = {name: 0 for _, name in buckets}
 counts["not measured"] = 0
+away = {name: 0 for _, name in buckets}
 meshed, refused, other, late, seconds = 0, [], [], [], []
 with tempfile.TemporaryDirectory() as out:
     for s in surfaces:
@@ -56,6 +57,12 @@ with tempfile.TemporaryDirectory() as out:
             continue
         ratio = float(found.group(1)) / (0.01 * radius)
         counts[next(name for top, name in buckets if ratio <= top)] += 1
+        # Away from the parts thinner than the grid step (the summary's "elsewhere", when
+        # some samples beyond the tolerance are there).
+        elsewhere = re.search(r"elsewhere the largest distance is ([0-9.e+-]+)", text)
+        if elsewhere:
+            ratio = float(elsewhere.group(1)) / (0.01 * radius)
+        away[next(name for top, name in buckets if ratio <= top)] += 1
 
 for line in refused + other + late:
     print(line)
@@ -66,3 +73,4 @@ print(f"\n{len(surfaces)} surfaces{' ' + ' '.join(kind) if kind else ''}: {meshe
 if seconds:
     print(f"seconds per run: median {seconds[len(seconds) // 2]:.2f}, largest {seconds[-1]:.2f}")
 print("Hausdorff estimate / tolerance: " + ", ".join(f"{n} {c}" for n, c in counts.items()))
+print("away from parts thinner than the grid step: " + ", ".join(f"{n} {c}" for n, c in away.items()))

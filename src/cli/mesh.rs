@@ -240,7 +240,7 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
             outln!(
                 "    deviation (scene units, by the root finder): surface vertices ≤ {:.2e} \
                  ({} measured, {} beyond the tolerance, {} at a node: f zero to rounding); Hausdorff estimate {:.2e} \
-                 (mesh→surface {:.2e}, surface→mesh {:.2e} from {} surface samples{})",
+                 (mesh→surface {:.2e}, surface→mesh {:.2e} from {} surface samples{}{})",
                 d.vertex,
                 d.vertices,
                 d.vertices_beyond,
@@ -249,12 +249,42 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
                 d.mesh_to_surface,
                 d.surface_to_mesh,
                 d.surface_samples,
+                if d.touching_samples > 0 {
+                    format!(
+                        "; {} roots where f touches 0 without changing sign, on no solid's \
+                         boundary, left out",
+                        d.touching_samples
+                    )
+                } else {
+                    String::new()
+                },
                 if d.beyond_reach > 0 {
                     format!(", {} samples beyond reach", d.beyond_reach)
                 } else {
                     String::new()
                 }
             );
+            if d.thin_samples > 0 {
+                outln!(
+                    "    {} sample{} beyond the tolerance lie where the solid or a gap in it is \
+                     thinner than the grid step {:.3e} (beside a singular point or curve, \
+                     where sheets nearly touch, or where the surface meets the clip sphere at \
+                     a glancing angle), which the grid closes or opens; elsewhere the largest \
+                     distance is {:.2e}",
+                    d.thin_samples,
+                    if d.thin_samples == 1 { "" } else { "s" },
+                    d.thin_width,
+                    d.away_from_thin
+                );
+            }
+            if d.away_from_thin > part.tolerance {
+                outln!(
+                    "    beyond the tolerance {:.3e} away from thin parts too ({:.2e}): a \
+                     smaller --tolerance refines the grid",
+                    part.tolerance,
+                    d.away_from_thin
+                );
+            }
         } else {
             outln!("    deviation not measured (the shell's polynomial is above degree 16)");
         }

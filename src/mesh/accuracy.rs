@@ -65,8 +65,26 @@ pub struct Deviation {
     pub mesh_to_surface: f64,
     /// The largest distance from a sampled point of the surface to the mesh.
     pub surface_to_mesh: f64,
-    /// Surface samples taken.
+    /// Surface samples taken (points of the solid's boundary).
     pub surface_samples: usize,
+    /// Roots of `φ` on the sampling lines left out because `φ` does not change sign there
+    /// (a curve or point of `f = 0`, or a sheet along which `f` is a square: inside the
+    /// solid or outside it, never on its boundary, so no mesh of the solid comes near it).
+    pub touching_samples: usize,
+    /// The largest distance either way ([`Deviation::hausdorff`]) left when the samples
+    /// farther than the tolerance that lie where the solid, or a gap in it, is thinner than
+    /// the grid's step ([`Deviation::thin_samples`]) are set aside.
+    pub away_from_thin: f64,
+    /// Samples (either way) farther than the tolerance at a place where the solid or a gap
+    /// in it is thinner than the grid's step: a surface sample with another point of the
+    /// boundary within a step along `∇φ` (or a singular point, where `∇φ` vanishes), a
+    /// triangle with the boundary on both sides within a step along its normal. The labels
+    /// close or open such parts (beside a singular point or curve, or where two sheets
+    /// nearly touch), so they are counted apart from the rest.
+    pub thin_samples: usize,
+    /// The width below which a part counts as thin: the grid's step the samples are spaced
+    /// by.
+    pub thin_width: f64,
     /// Samples (either way) with nothing found within the search reach (counted at the reach).
     pub beyond_reach: usize,
     /// Whether the surface could be measured (its line polynomials have degree ≤ 16).
@@ -79,12 +97,21 @@ impl Deviation {
         self.mesh_to_surface.max(self.surface_to_mesh)
     }
 
+    /// Whether every distance beyond `tolerance` is at a place thinner than the grid's step
+    /// (and there is one): the estimate exceeds the tolerance only where the labels close
+    /// or open a part.
+    pub fn beyond_only_where_thin(&self, tolerance: f64) -> bool {
+        self.thin_samples > 0 && self.away_from_thin <= tolerance
+    }
+
     /// Every distance multiplied by `k` (object units to world units by the frame's stretch:
     /// an upper bound).
     pub fn scaled(mut self, k: f64) -> Self {
         self.vertex *= k;
         self.mesh_to_surface *= k;
         self.surface_to_mesh *= k;
+        self.away_from_thin *= k;
+        self.thin_width *= k;
         self
     }
 }
@@ -208,12 +235,33 @@ pub fn measure_cancellable(
         .iter()
         .map(|d| d.unwrap_or(reach))
         .fold(0.0, f64::max);
+    // The triangles beyond the tolerance, each with whether it lies where the solid or a
+    // gap is thinner than a step (the boundary on both sides along its normal).
+    let measured_triangles: Vec<usize> = (0..mesh.triangles.len())
+        .filter(|&t| {
+            mesh.triangles[t]
+                .iter()
+                .all(|&v| kinds[v as usize].on_surface())
+        })
+        .collect();
+    let far_triangles: Vec<(f64, bool)> = measured_triangles
+        .par_iter()
+        .zip(&mesh_side)
+        .filter_map(|(&t, d)| {
+            let d = d.unwrap_or(reach);
+            (d > tolerance).then(|| {
+                let [a, b, c] = mesh.corners(t);
+                let centroid = (a + b + c) / 3.0;
+                (d, between_sheets(field, centroid, mesh.normal(t), step))
+            })
+        })
+        .collect();
 
     if cancelled() {
         return None;
     }
     part_done(2);
-    let samples = surface_samples(field, step);
+    let (samples, touching_samples) = surface_samples(field, step);
     let nearest = NearestTriangle::new(mesh);
     let surface_side: Vec<Option<f64>> = samples
         .par_iter()
@@ -232,6 +280,26 @@ pub fn measure_cancellable(
         .iter()
         .map(|d| d.unwrap_or(reach))
         .fold(0.0, f64::max);
+    let far_samples: Vec<(f64, bool)> = samples
+        .par_iter()
+        .zip(&surface_side)
+        .filter_map(|(&p, d)| {
+            let d = d.unwrap_or(reach);
+            (d > tolerance).then(|| (d, thin_at(field, p, step)))
+        })
+        .collect();
+    let far = far_triangles.iter().chain(&far_samples);
+    let thin_samples = far.clone().filter(|(_, thin)| *thin).count();
+    let within = mesh_side
+        .iter()
+        .chain(&surface_side)
+        .map(|d| d.unwrap_or(reach))
+        .filter(|&d| d <= tolerance)
+        .fold(0.0, f64::max);
+    let away_from_thin = far
+        .filter(|(_, thin)| !thin)
+        .map(|&(d, _)| d)
+        .fold(within, f64::max);
     let beyond_reach = mesh_side
         .iter()
         .chain(&surface_side)
@@ -245,6 +313,10 @@ pub fn measure_cancellable(
         mesh_to_surface,
         surface_to_mesh,
         surface_samples: samples.len(),
+        touching_samples,
+        away_from_thin,
+        thin_samples,
+        thin_width: step,
         beyond_reach,
         measured: true,
     })
@@ -310,9 +382,55 @@ fn descent_to_zero(field: &Field, p: DVec3, reach: f64) -> Option<f64> {
 /// converges to a billionth of it.
 pub const DESCENT_STEPS: usize = 64;
 
-/// Points of `φ = 0` inside the clip ball: every root on the lines parallel to each axis
-/// through the points `(i + ½)·step` of the other two axes (by the root finder).
-pub fn surface_samples(field: &Field, step: f64) -> Vec<DVec3> {
+/// Whether the point `p` of the boundary lies where the solid or a gap in it is thinner
+/// than `width`: `∇φ` vanishes there (a singular point), or the line along `∇φ` meets the
+/// boundary again within `width` of `p` (another sheet that near).
+fn thin_at(field: &Field, p: DVec3, width: f64) -> bool {
+    let h = 1e-7 * field.radius();
+    let g = field.gradient(p, h);
+    if g.length_squared() == 0.0 || field.is_singular(p) {
+        return true;
+    }
+    other_sheet(field, p, g, width, 1.0).is_some()
+        || other_sheet(field, p, -g, width, 1.0).is_some()
+}
+
+/// Whether the boundary lies on both sides of `p` within `width` along `dir`: a triangle
+/// there spans a gap or a part of the solid thinner than `width`.
+fn between_sheets(field: &Field, p: DVec3, dir: DVec3, width: f64) -> bool {
+    other_sheet(field, p, dir, width, 0.0).is_some()
+        && other_sheet(field, p, -dir, width, 0.0).is_some()
+}
+
+/// A point of the boundary on the ray from `p` along `dir` within `width` (past
+/// `skip · 1e-6 · width`, so that `p`'s own root is not counted when `p` is a point of the
+/// boundary), as a distance: the nearest of `φ = 0` (for a shell a point of its wall), or
+/// `width` where the ray leaves the clip ball within it.
+fn other_sheet(field: &Field, p: DVec3, dir: DVec3, width: f64, skip: f64) -> Option<f64> {
+    let e = dir.normalize_or_zero() * width;
+    if e == DVec3::ZERO {
+        return None;
+    }
+    // The clip sphere bounds the solid too (|x|² is convex along the ray: the far end is
+    // outside the ball if any point is).
+    if (p + e).length() > field.radius() {
+        return Some(width);
+    }
+    let c = field.along(p, e);
+    sturm_roots(&c, 0.0, 1.0)
+        .into_iter()
+        .filter(|&s| s > skip * 1e-6 && field.is_boundary_root(p + s * e))
+        .map(|s| s * width)
+        .reduce(f64::min)
+}
+
+/// Points of the solid's boundary inside the clip ball: every root of `φ` at which it
+/// changes sign on the lines parallel to each axis through the points `(i + ½)·step` of the
+/// other two axes (by the root finder; for a shell, those that are points of its wall,
+/// [`Field::is_boundary_root`]); with how many roots were left out because `φ` does not
+/// change sign there (it touches 0: a curve or point of `f = 0`, or a sheet along which
+/// `f` is a square, inside the solid or outside it but never on its boundary).
+pub fn surface_samples(field: &Field, step: f64) -> (Vec<DVec3>, usize) {
     let r = field.radius();
     let count = (r / step).ceil() as i64;
     let offsets: Vec<f64> = (-count..count).map(|i| (i as f64 + 0.5) * step).collect();
@@ -327,9 +445,9 @@ pub fn surface_samples(field: &Field, step: f64) -> Vec<DVec3> {
             }
         }
     }
-    lines
+    let per_line: Vec<(Vec<DVec3>, usize)> = lines
         .par_iter()
-        .flat_map_iter(|&(axis, u, v, half)| {
+        .map(|&(axis, u, v, half)| {
             let place = |t: f64| {
                 let mut p = [u, v, u];
                 p[axis] = t;
@@ -340,13 +458,33 @@ pub fn surface_samples(field: &Field, step: f64) -> Vec<DVec3> {
             let start = place(-half);
             let e = place(half) - start;
             let c = field.along(start, e);
-            sturm_roots(&c, 0.0, 1.0)
-                .into_iter()
-                .map(move |s| start + s * e)
-                .filter(move |p| p.length_squared() < r * r && field.is_boundary_root(*p))
-                .collect::<Vec<_>>()
+            let roots = sturm_roots(&c, 0.0, 1.0);
+            // The sign between consecutive roots (and the ends) is constant: a root changes
+            // sign when the midpoints on its two sides differ.
+            let sign_at = |s: f64| c.iter().rev().fold(0.0, |acc, &k| acc * s + k).signum();
+            let mut boundary = Vec::new();
+            let mut touching = 0;
+            for (i, &s) in roots.iter().enumerate() {
+                let p = start + s * e;
+                if p.length_squared() >= r * r || !field.is_boundary_root(p) {
+                    continue;
+                }
+                let before = 0.5 * (s + if i == 0 { 0.0 } else { roots[i - 1] });
+                let after = 0.5 * (s + roots.get(i + 1).copied().unwrap_or(1.0));
+                if sign_at(before) != sign_at(after) {
+                    boundary.push(p);
+                } else {
+                    touching += 1;
+                }
+            }
+            (boundary, touching)
         })
-        .collect()
+        .collect();
+    let touching = per_line.iter().map(|(_, t)| t).sum();
+    (
+        per_line.into_iter().flat_map(|(b, _)| b).collect(),
+        touching,
+    )
 }
 
 /// The mesh's triangles in a bounding volume hierarchy, for nearest-triangle distances.
@@ -405,13 +543,61 @@ mod tests {
     }
 
     #[test]
+    fn a_point_is_thin_beside_another_sheet_a_singular_point_or_the_clip_sphere() {
+        let field = |equation: &str, radius: f64| {
+            let poly = crate::shapes::implicit::expand(equation).unwrap();
+            Field::new(&poly, radius, super::super::SolidKind::Inside)
+        };
+        let one = DVec3::X;
+        // A sphere, far from its clip sphere: nowhere thin.
+        assert!(!thin_at(&field("x^2 + y^2 + z^2 = 1", 2.0), one, 0.1));
+        // Two spheres 0.01 apart along x: the solid between them is thinner than 0.1, not
+        // than 0.001.
+        let two = field("(x^2 + y^2 + z^2 - 1)*(x^2 + y^2 + z^2 - 1.0201)", 2.0);
+        assert!(thin_at(&two, one, 0.1));
+        assert!(!thin_at(&two, one, 0.001));
+        // The apex of a cone, where ∇f vanishes, is thin at any width.
+        assert!(thin_at(&field("x^2 + y^2 - z^2", 2.0), DVec3::ZERO, 1e-9));
+        // The clip sphere 0.05 beyond the surface along the normal.
+        let clipped = field("x^2 + y^2 + z^2 = 1", 1.05);
+        assert!(thin_at(&clipped, one, 0.1));
+        assert!(!thin_at(&clipped, one, 0.01));
+        // A point between two sheets 0.01 apart, across them.
+        assert!(between_sheets(&two, DVec3::new(1.005, 0.0, 0.0), one, 0.1));
+        assert!(!between_sheets(
+            &two,
+            DVec3::new(1.005, 0.0, 0.0),
+            DVec3::Y,
+            0.1
+        ));
+    }
+
+    #[test]
     fn surface_samples_are_on_the_surface() {
         let poly = crate::shapes::implicit::expand("x^2 + y^2 + z^2 = 1").unwrap();
         let field = Field::new(&poly, 1.5, super::super::SolidKind::Inside);
-        let samples = surface_samples(&field, 0.1);
+        let (samples, touching) = surface_samples(&field, 0.1);
+        assert_eq!(touching, 0);
         assert!(samples.len() > 500);
         for p in samples {
             assert!((p.length() - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn roots_where_f_touches_zero_are_no_samples_of_the_boundary() {
+        // The diagonal x = y = z is a curve of f = 0 inside the ball, where f ≤ 0 all
+        // around (a factor that is a sum of squares): the lines parallel to an axis through
+        // it (y = z for those along x) touch 0 there without a change of sign.
+        let poly =
+            crate::shapes::implicit::expand("(x^2 + y^2 + z^2 - 1)*((x - y)^2 + (y - z)^2) = 0")
+                .unwrap();
+        let field = Field::new(&poly, 1.5, super::super::SolidKind::Inside);
+        let (samples, touching) = surface_samples(&field, 0.1);
+        assert!(touching > 10, "{touching}");
+        assert!(samples.len() > 500);
+        for p in samples {
+            assert!((p.length() - 1.0).abs() < 1e-9, "{p}");
         }
     }
 }

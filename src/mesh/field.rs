@@ -170,6 +170,19 @@ impl Field {
         self.value(p).abs() <= margin * bound
     }
 
+    /// Whether `∇f` vanishes at `p` up to the rounding of a root's place (a millionth of the
+    /// sum of its terms' magnitudes): a singular point of the surface. Always false for a
+    /// shell, whose wall is smooth wherever the surface is.
+    pub fn is_singular(&self, p: DVec3) -> bool {
+        if matches!(self.kind, SolidKind::Shell { .. }) {
+            return false;
+        }
+        let powers = Powers::new(p.to_array(), self.f.degree);
+        let (gradient, bound) = self.joint_gradient.eval_with_bound_on(&powers);
+        let bound = DVec3::from_array(bound).length();
+        DVec3::from_array(gradient).length() <= 1e-6 * bound
+    }
+
     /// `φ` at an object-space point (negative inside the solid, ignoring the ball).
     pub fn value(&self, p: DVec3) -> f64 {
         let q = p.to_array();

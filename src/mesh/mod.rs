@@ -707,6 +707,37 @@ mod tests {
     }
 
     #[test]
+    fn distances_beyond_the_tolerance_where_a_part_is_thinner_than_the_grid_are_counted_apart() {
+        // Two cylinders touching along the lines x = ±1: where one factor is negative the
+        // solid has wedges thinner than any grid about the curves where they cross. Far
+        // beyond the tolerance there, within it elsewhere.
+        let tolerance = 0.0334;
+        let m = mesh(
+            &solid("(x^2 + y^2 - 1)*(x^2 + z^2 - 1) = 0", 3.34),
+            SolidKind::Inside,
+            tolerance,
+        );
+        let d = m.deviation;
+        assert!(d.hausdorff() > 2.0 * tolerance, "{d:?}");
+        assert!(d.beyond_only_where_thin(tolerance), "{d:?}");
+        // A shell's wall meets the clip sphere at glancing angles along the squared-off
+        // sphere's edges.
+        let tolerance = 0.0114;
+        let m = mesh(
+            &solid("x^4 + y^4 + z^4 = 1", 1.14),
+            SolidKind::Shell { thickness: 0.0342 },
+            tolerance,
+        );
+        let d = m.deviation;
+        assert!(d.hausdorff() > 2.0 * tolerance, "{d:?}");
+        assert!(d.beyond_only_where_thin(tolerance), "{d:?}");
+        // A sphere has no thin part.
+        let m = mesh(&solid("x^2 + y^2 + z^2 = 1", 1.5), SolidKind::Inside, 0.02);
+        assert_eq!(m.deviation.thin_samples, 0, "{:?}", m.deviation);
+        assert!(!m.deviation.beyond_only_where_thin(0.02));
+    }
+
+    #[test]
     fn a_clipped_unbounded_surface_is_closed_by_its_cap_on_the_sphere() {
         // The region below the plane z = 0.3 inside the ball of radius 1.
         let m = mesh(&solid("z = 0.3", 1.0), SolidKind::Inside, 0.03);
