@@ -383,12 +383,13 @@ fn descent_to_zero(field: &Field, p: DVec3, reach: f64) -> Option<f64> {
 pub const DESCENT_STEPS: usize = 64;
 
 /// Whether the point `p` of the boundary lies where the solid or a gap in it is thinner
-/// than `width`: `∇φ` vanishes there (a singular point), or the line along `∇φ` meets the
-/// boundary again within `width` of `p` (another sheet that near).
+/// than `width`: `∇φ` vanishes there or at a node within `width` of it (a singular point),
+/// or the line along `∇φ` meets the boundary again within `width` of `p` (another sheet
+/// that near).
 fn thin_at(field: &Field, p: DVec3, width: f64) -> bool {
     let h = 1e-7 * field.radius();
     let g = field.gradient(p, h);
-    if g.length_squared() == 0.0 || field.is_singular(p) {
+    if g.length_squared() == 0.0 || field.is_singular(p) || field.singular_point_near(p, width) {
         return true;
     }
     other_sheet(field, p, g, width, 1.0).is_some()
@@ -556,6 +557,15 @@ mod tests {
         let two = field("(x^2 + y^2 + z^2 - 1)*(x^2 + y^2 + z^2 - 1.0201)", 2.0);
         assert!(thin_at(&two, one, 0.1));
         assert!(!thin_at(&two, one, 0.001));
+        // Beside a node: a point of Kummer-like cone 0.01 from its apex, thin at 0.1 (the
+        // node within it, found by Newton's steps on ∇f = 0), not at 0.001.
+        let cone = field("x^2 + y^2 - z^2 + x^3", 2.0);
+        let near = DVec3::new(0.01, 0.0, (0.0001f64 + 1e-6).sqrt());
+        assert!(cone.singular_point_near(near, 0.1));
+        assert!(!cone.singular_point_near(near, 0.001));
+        assert!(thin_at(&cone, near, 0.1));
+        // A sphere's centre is a critical point of f but not on the surface.
+        assert!(!field("x^2 + y^2 + z^2 = 1", 2.0).singular_point_near(one, 1.5));
         // The apex of a cone, where ∇f vanishes, is thin at any width.
         assert!(thin_at(&field("x^2 + y^2 - z^2", 2.0), DVec3::ZERO, 1e-9));
         // The clip sphere 0.05 beyond the surface along the normal.

@@ -5,10 +5,11 @@
 //! shell of thickness `T` (the points where `|f|/|∇f| < T/2`, the first-order estimate of
 //! the distance to the surface). A point with `φ = 0` exactly counts as outside (a fixed
 //! sign: no label is ever zero), and so does any point on or outside the clip sphere; but a
-//! singular point of the surface (`f` and `∇f` zero) is in a shell's wall, whose `φ` is
-//! negative all about it ([`Field::value`] gives it the least negative value).
+//! singular point of the surface (`f` zero to its rounding, [`SINGULAR_ROUNDING`], and `∇f`
+//! with it) is in a shell's wall, whose `φ` is negative all about it ([`Field::value`] gives
+//! it the least negative value).
 
-use crate::geometry::DVec3;
+use crate::geometry::{DMat3, DVec3};
 use crate::roots::{sturm_roots, Solver};
 use crate::shapes::implicit::poly::{Compiled, Gradient, Poly, Powers};
 use crate::shapes::implicit::MAX_DEGREE;
@@ -66,6 +67,10 @@ pub const WALL_ROOT_SHARE: f64 = 1e-3;
 /// where `f` and `∇f` vanish and their computed values are rounding (far above `f64`'s
 /// 1.1·10⁻¹⁶ per operation, far below `f` a millionth of a grid step from the curve).
 pub const SINGULAR_ROUNDING: f64 = 1e-12;
+
+/// The most Newton steps [`Field::singular_point_near`] takes (from a grid step away they
+/// converge to a node, where the Hessian is invertible, in about five).
+pub const NODE_STEPS: usize = 12;
 
 /// The solid's indicator: see the module documentation.
 #[derive(Debug, Clone)]
@@ -187,6 +192,42 @@ impl Field {
         let (gradient, bound) = self.joint_gradient.eval_with_bound_on(&powers);
         let bound = DVec3::from_array(bound).length();
         DVec3::from_array(gradient).length() <= 1e-6 * bound
+    }
+
+    /// Whether Newton's steps on `∇f = 0` from `p` reach, within `width` of it, a point where
+    /// `∇f` vanishes ([`Field::is_singular`]) and `f` too (to [`SINGULAR_ROUNDING`] of its
+    /// terms): a node or other isolated singular point of the surface near `p`. Always false
+    /// for a shell.
+    pub fn singular_point_near(&self, p: DVec3, width: f64) -> bool {
+        if matches!(self.kind, SolidKind::Shell { .. }) {
+            return false;
+        }
+        let gradient = |q: DVec3| {
+            let powers = Powers::new(q.to_array(), self.f.degree);
+            DVec3::from_array(self.joint_gradient.eval_with_bound_on(&powers).0)
+        };
+        let h = 1e-6 * width;
+        let mut q = p;
+        for _ in 0..NODE_STEPS {
+            if self.is_singular(q) {
+                let f = self.f.eval(q.to_array()).abs();
+                return f <= SINGULAR_ROUNDING * self.f.magnitude_bound(q.to_array());
+            }
+            let hessian = DMat3::from_cols(
+                (gradient(q + DVec3::X * h) - gradient(q - DVec3::X * h)) / (2.0 * h),
+                (gradient(q + DVec3::Y * h) - gradient(q - DVec3::Y * h)) / (2.0 * h),
+                (gradient(q + DVec3::Z * h) - gradient(q - DVec3::Z * h)) / (2.0 * h),
+            );
+            let det = hessian.determinant();
+            if !det.is_normal() {
+                return false;
+            }
+            q -= hessian.inverse() * gradient(q);
+            if !(q.distance(p) <= width) {
+                return false;
+            }
+        }
+        false
     }
 
     /// `φ` at an object-space point (negative inside the solid, ignoring the ball).
