@@ -223,7 +223,8 @@ impl Field {
                 return false;
             }
             q -= hessian.inverse() * gradient(q);
-            if !(q.distance(p) <= width) {
+            let moved = q.distance(p);
+            if moved > width || moved.is_nan() {
                 return false;
             }
         }
