@@ -194,14 +194,17 @@ pub fn measure_cancellable(
         .count();
     let vertices_beyond = unresolved.len() - vertices_at_rounding;
 
-    let mesh_side: Vec<Option<f64>> = (0..mesh.triangles.len())
-        .into_par_iter()
+    // The triangles with every corner on the surface (or the crease).
+    let measured_triangles: Vec<usize> = (0..mesh.triangles.len())
         .filter(|&t| {
             mesh.triangles[t]
                 .iter()
                 .all(|&v| kinds[v as usize].on_surface())
         })
-        .map(|t| {
+        .collect();
+    let mesh_side: Vec<Option<f64>> = measured_triangles
+        .par_iter()
+        .map(|&t| {
             if cancelled() {
                 return None;
             }
@@ -237,13 +240,6 @@ pub fn measure_cancellable(
         .fold(0.0, f64::max);
     // The triangles beyond the tolerance, each with whether it lies where the solid or a
     // gap is thinner than a step (the boundary on both sides along its normal).
-    let measured_triangles: Vec<usize> = (0..mesh.triangles.len())
-        .filter(|&t| {
-            mesh.triangles[t]
-                .iter()
-                .all(|&v| kinds[v as usize].on_surface())
-        })
-        .collect();
     let far_triangles: Vec<(f64, bool)> = measured_triangles
         .par_iter()
         .zip(&mesh_side)
