@@ -77,10 +77,11 @@ pub struct Deviation {
     pub away_from_thin: f64,
     /// Samples (either way) farther than the tolerance at a place where the solid or a gap
     /// in it is thinner than the grid's step: a surface sample with another point of the
-    /// boundary within a step along `∇φ` (or a singular point, where `∇φ` vanishes), a
-    /// triangle with the boundary on both sides within a step along its normal. The labels
-    /// close or open such parts (beside a singular point or curve, or where two sheets
-    /// nearly touch), so they are counted apart from the rest.
+    /// boundary (or the clip sphere) within a step along `∇φ`, or at or within a step of a
+    /// singular point of the surface; a triangle with the boundary on both sides within a
+    /// step along its normal. The labels close or open such parts (beside a singular point
+    /// or curve, where two sheets nearly touch, where the surface meets the clip sphere at
+    /// a glancing angle), so they are counted apart from the rest.
     pub thin_samples: usize,
     /// The width below which a part counts as thin: the grid's step the samples are spaced
     /// by.
