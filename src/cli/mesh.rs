@@ -249,17 +249,17 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
                 d.mesh_to_surface,
                 d.surface_to_mesh,
                 d.surface_samples,
+                if d.beyond_reach > 0 {
+                    format!(", {} samples beyond reach", d.beyond_reach)
+                } else {
+                    String::new()
+                },
                 if d.touching_samples > 0 {
                     format!(
                         "; {} roots where f touches 0 without changing sign, on no solid's \
                          boundary, left out",
                         d.touching_samples
                     )
-                } else {
-                    String::new()
-                },
-                if d.beyond_reach > 0 {
-                    format!(", {} samples beyond reach", d.beyond_reach)
                 } else {
                     String::new()
                 }

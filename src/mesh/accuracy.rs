@@ -422,12 +422,14 @@ fn other_sheet(field: &Field, p: DVec3, dir: DVec3, width: f64, skip: f64) -> Op
         .reduce(f64::min)
 }
 
-/// Points of the solid's boundary inside the clip ball: every root of `φ` at which it
-/// changes sign on the lines parallel to each axis through the points `(i + ½)·step` of the
-/// other two axes (by the root finder; for a shell, those that are points of its wall,
-/// [`Field::is_boundary_root`]); with how many roots were left out because `φ` does not
-/// change sign there (it touches 0: a curve or point of `f = 0`, or a sheet along which
-/// `f` is a square, inside the solid or outside it but never on its boundary).
+/// Points of the solid's boundary inside the clip ball: every root of `φ` on the lines
+/// parallel to each axis through the points `(i + ½)·step` of the other two axes (by the
+/// root finder; for a shell, those that are points of its wall,
+/// [`Field::is_boundary_root`]) at which `φ` changes sign along the line, or takes both
+/// signs about it (where the line passes through a crossing of two sheets); with how many
+/// roots were left out because `φ` only touches 0 there (a curve or point of `f = 0`, or a
+/// sheet along which `f` is a square, inside the solid or outside it but never on its
+/// boundary).
 pub fn surface_samples(field: &Field, step: f64) -> (Vec<DVec3>, usize) {
     let r = field.radius();
     let count = (r / step).ceil() as i64;
@@ -469,7 +471,7 @@ pub fn surface_samples(field: &Field, step: f64) -> (Vec<DVec3>, usize) {
                 }
                 let before = 0.5 * (s + if i == 0 { 0.0 } else { roots[i - 1] });
                 let after = 0.5 * (s + roots.get(i + 1).copied().unwrap_or(1.0));
-                if sign_at(before) != sign_at(after) {
+                if sign_at(before) != sign_at(after) || both_signs_about(field, p, 1e-2 * step) {
                     boundary.push(p);
                 } else {
                     touching += 1;
@@ -483,6 +485,33 @@ pub fn surface_samples(field: &Field, step: f64) -> (Vec<DVec3>, usize) {
         per_line.into_iter().flat_map(|(b, _)| b).collect(),
         touching,
     )
+}
+
+/// Whether `φ` takes both signs at the 26 points `p + ε·d` (`d` the unit direction to a
+/// neighbour of a cube's centre; a value zero to its rounding, [`Field::at_rounding`],
+/// counts as neither): `p` is a point of the boundary where the
+/// line through it happened to pass where two sheets cross (a crossing curve, a node),
+/// not a curve or sheet along which `φ` only touches 0.
+fn both_signs_about(field: &Field, p: DVec3, epsilon: f64) -> bool {
+    let (mut negative, mut positive) = (false, false);
+    for k in 0..27 {
+        let d = DVec3::new(
+            f64::from(k % 3) - 1.0,
+            f64::from(k / 3 % 3) - 1.0,
+            f64::from(k / 9) - 1.0,
+        );
+        if d == DVec3::ZERO {
+            continue;
+        }
+        let q = p + epsilon * d.normalize();
+        if field.at_rounding(q) {
+            continue;
+        }
+        let v = field.value(q);
+        negative |= v < 0.0;
+        positive |= v > 0.0;
+    }
+    negative && positive
 }
 
 /// The mesh's triangles in a bounding volume hierarchy, for nearest-triangle distances.
