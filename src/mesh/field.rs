@@ -68,6 +68,10 @@ pub const WALL_ROOT_SHARE: f64 = 1e-3;
 /// 1.1·10⁻¹⁶ per operation, far below `f` a millionth of a grid step from the curve).
 pub const SINGULAR_ROUNDING: f64 = 1e-12;
 
+/// The share of the sums of `∇f`'s terms' magnitudes below which [`Field::is_singular`]
+/// takes `∇f` for zero.
+pub const SINGULAR_GRADIENT: f64 = 1e-6;
+
 /// The most Newton steps [`Field::singular_point_near`] takes (from a grid step away they
 /// converge to a node, where the Hessian is invertible, in about five).
 pub const NODE_STEPS: usize = 12;
@@ -188,10 +192,18 @@ impl Field {
         if matches!(self.kind, SolidKind::Shell { .. }) {
             return false;
         }
+        let (gradient, bound) = self.surface_gradient(p);
+        gradient.length() <= SINGULAR_GRADIENT * bound
+    }
+
+    /// `∇f` at `p` and the length of the sums of its partials' terms' magnitudes.
+    fn surface_gradient(&self, p: DVec3) -> (DVec3, f64) {
         let powers = Powers::new(p.to_array(), self.f.degree);
         let (gradient, bound) = self.joint_gradient.eval_with_bound_on(&powers);
-        let bound = DVec3::from_array(bound).length();
-        DVec3::from_array(gradient).length() <= 1e-6 * bound
+        (
+            DVec3::from_array(gradient),
+            DVec3::from_array(bound).length(),
+        )
     }
 
     /// Whether Newton's steps on `∇f = 0` from `p` reach, within `width` of it, a point where
@@ -202,14 +214,12 @@ impl Field {
         if matches!(self.kind, SolidKind::Shell { .. }) {
             return false;
         }
-        let gradient = |q: DVec3| {
-            let powers = Powers::new(q.to_array(), self.f.degree);
-            DVec3::from_array(self.joint_gradient.eval_with_bound_on(&powers).0)
-        };
+        let gradient = |q: DVec3| self.surface_gradient(q).0;
         let h = 1e-6 * width;
         let mut q = p;
         for _ in 0..NODE_STEPS {
-            if self.is_singular(q) {
+            let (g, bound) = self.surface_gradient(q);
+            if g.length() <= SINGULAR_GRADIENT * bound {
                 let f = self.f.eval(q.to_array()).abs();
                 return f <= SINGULAR_ROUNDING * self.f.magnitude_bound(q.to_array());
             }
@@ -222,7 +232,7 @@ impl Field {
             if !det.is_normal() {
                 return false;
             }
-            q -= hessian.inverse() * gradient(q);
+            q -= hessian.inverse() * g;
             let moved = q.distance(p);
             if moved > width || moved.is_nan() {
                 return false;
