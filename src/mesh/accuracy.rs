@@ -203,6 +203,10 @@ pub fn measure_cancellable(
                 .all(|&v| kinds[v as usize].on_surface())
         })
         .collect();
+    let mut distance_of_vertex = vec![None; mesh.vertices.len()];
+    for (&v, &d) in surface_vertices.iter().zip(&vertex_distances) {
+        distance_of_vertex[v] = d;
+    }
     let mesh_side: Vec<Option<f64>> = measured_triangles
         .par_iter()
         .map(|&t| {
@@ -211,6 +215,18 @@ pub fn measure_cancellable(
             }
             let [a, b, c] = mesh.corners(t);
             let centroid = (a + b + c) / 3.0;
+            // A corner's distance to the surface and the centroid's to the corner: a bound
+            // that needs no line to meet the surface, as none may beside a curve of the zero
+            // set (the z axis of x² + y⁴ + y³z², where f > 0 on both sides along x and the
+            // Newton steps stall in the valley x = 0).
+            let by_corner = mesh.triangles[t]
+                .iter()
+                .filter_map(|&v| {
+                    distance_of_vertex[v as usize]
+                        .map(|d: f64| d + centroid.distance(mesh.vertices[v as usize]))
+                })
+                .reduce(f64::min)
+                .filter(|&d| d <= reach);
             // Every corner on the crease: the triangle may be a piece of the cap.
             let off_sphere = mesh.triangles[t]
                 .iter()
@@ -231,6 +247,7 @@ pub fn measure_cancellable(
                     .into_iter()
                     .chain(nearest_along_edges(field, centroid, reach))
                     .chain(descent_to_zero(field, centroid, reach))
+                    .chain(by_corner)
                     .reduce(f64::min),
             }
         })
@@ -426,10 +443,12 @@ fn other_sheet(field: &Field, p: DVec3, dir: DVec3, width: f64, skip: f64) -> Op
 /// parallel to each axis through the points `(i + ½)·step` of the other two axes (by the
 /// root finder; for a shell, those that are points of its wall,
 /// [`Field::is_boundary_root`]) at which `φ` changes sign along the line, or takes both
-/// signs about it (where the line passes through a crossing of two sheets); with how many
-/// roots were left out because `φ` only touches 0 there (a curve or point of `f = 0`, or a
-/// sheet along which `f` is a square, inside the solid or outside it but never on its
-/// boundary).
+/// signs about it (where the line passes through a crossing of two sheets), each where `φ`
+/// itself changes sign or is zero to rounding ([`Field::value_at_rounding`]); with how many roots were left out because
+/// `φ` only touches 0 there (a curve or point of `f = 0`, or a sheet along which `f` is a
+/// square, inside the solid or outside it but never on its boundary). Roots of the line's
+/// polynomial where `φ` is neither zero to rounding nor changes sign (that polynomial's
+/// rounding) are neither.
 pub fn surface_samples(field: &Field, step: f64) -> (Vec<DVec3>, usize) {
     let r = field.radius();
     let count = (r / step).ceil() as i64;
@@ -460,8 +479,21 @@ pub fn surface_samples(field: &Field, step: f64) -> (Vec<DVec3>, usize) {
             let c = field.along(start, e);
             let roots = sturm_roots(&c, 0.0, 1.0);
             // The sign between consecutive roots (and the ends) is constant: a root changes
-            // sign when the midpoints on its two sides differ.
-            let sign_at = |s: f64| c.iter().rev().fold(0.0, |acc, &k| acc * s + k).signum();
+            // sign when the midpoints on its two sides differ. The sign is read off `φ` at the
+            // point itself, not the line's polynomial, whose coefficients (scaled by powers of
+            // the chord's length) can drown small values in their rounding, so that the root
+            // finder places a root where `φ` is not zero (SingSurf's Bour surface, degree 16:
+            // at z = 0 for z = 0.74 on lines across the clip ball). A value zero to the
+            // rounding of evaluating it has no sign.
+            let sign_at = |s: f64| {
+                let q = start + s * e;
+                let v = field.value(q);
+                if v == 0.0 || field.value_at_rounding(q) {
+                    0.0
+                } else {
+                    v.signum()
+                }
+            };
             let mut boundary = Vec::new();
             let mut touching = 0;
             for (i, &s) in roots.iter().enumerate() {
@@ -471,9 +503,21 @@ pub fn surface_samples(field: &Field, step: f64) -> (Vec<DVec3>, usize) {
                 }
                 let before = 0.5 * (s + if i == 0 { 0.0 } else { roots[i - 1] });
                 let after = 0.5 * (s + roots.get(i + 1).copied().unwrap_or(1.0));
-                if sign_at(before) != sign_at(after) || both_signs_about(field, p, 1e-2 * step) {
+                let (a, b) = (sign_at(before), sign_at(after));
+                if a * b < 0.0 {
+                    // Where the line's polynomial placed the root off the surface, the sign
+                    // change of `φ` itself between the midpoints.
+                    let q = if field.value_at_rounding(p) {
+                        p
+                    } else {
+                        sign_change(field, start, e, before, after, a)
+                    };
+                    if q.length_squared() < r * r {
+                        boundary.push(q);
+                    }
+                } else if both_signs_about(field, p, 1e-2 * step) {
                     boundary.push(p);
-                } else {
+                } else if field.value_at_rounding(p) {
                     touching += 1;
                 }
             }
@@ -485,6 +529,36 @@ pub fn surface_samples(field: &Field, step: f64) -> (Vec<DVec3>, usize) {
         per_line.into_iter().flat_map(|(b, _)| b).collect(),
         touching,
     )
+}
+
+/// The point where `φ` changes sign on the line `start + s·e` between `s0`, where its sign
+/// is `sign`, and `s1`, where it is the other, by bisection on `φ` at the points themselves
+/// (to the last bit of `s`, or to where `φ` is zero to rounding,
+/// [`Field::value_at_rounding`]).
+fn sign_change(
+    field: &Field,
+    start: DVec3,
+    e: DVec3,
+    mut s0: f64,
+    mut s1: f64,
+    sign: f64,
+) -> DVec3 {
+    loop {
+        let m = 0.5 * (s0 + s1);
+        let q = start + m * e;
+        if m <= s0 || m >= s1 {
+            return q;
+        }
+        let v = field.value(q);
+        if v == 0.0 || field.value_at_rounding(q) {
+            return q;
+        }
+        if v.signum() == sign {
+            s0 = m;
+        } else {
+            s1 = m;
+        }
+    }
 }
 
 /// Whether `φ` takes both signs at the 26 points `p + ε·d` (`d` the unit direction to a
@@ -635,5 +709,47 @@ mod tests {
         for p in samples {
             assert!((p.length() - 1.0).abs() < 1e-9, "{p}");
         }
+    }
+
+    #[test]
+    fn roots_the_line_polynomial_misplaces_are_moved_to_where_f_changes_sign() {
+        // Across a ball of radius 4 the line polynomial in z has a z¹⁶ coefficient of
+        // 8¹⁶ ≈ 3·10¹⁴, whose rounding (about 0.03) drowns the values of f about z = 0,
+        // where f has a minimum of about 10⁻⁵ between the roots z ≈ ±0.1: the root finder
+        // places roots where f is not 0 (up to 10⁻³ off).
+        let poly =
+            crate::shapes::implicit::expand("0.000001*(1 + x^2 + y^2) + 0.01*z^2 - z^4 + z^16 = 0")
+                .unwrap();
+        let field = Field::new(&poly, 4.0, super::super::SolidKind::Inside);
+        let (samples, _) = surface_samples(&field, 0.25);
+        let h = 1e-9;
+        let near_middle = samples.iter().filter(|p| p.z.abs() < 1.0).count();
+        assert!(near_middle > 50, "{near_middle}");
+        for p in samples {
+            let g = field.gradient(p, h);
+            let off = field.value(p).abs() / g.length();
+            assert!(field.value_at_rounding(p) || off < 1e-9, "{p}: {off}");
+        }
+    }
+
+    #[test]
+    fn a_small_triangle_beside_a_curve_of_the_zero_set_is_measured_by_its_corners() {
+        // x² + y⁴ + y³z² is zero on the z axis, with f > 0 on both sides of the plane x = 0
+        // where |y| > z²: no line through the centroid meets the zero set and Newton steps
+        // stall in that valley. The corners are within 3·10⁻⁴ of the axis.
+        let poly = crate::shapes::implicit::expand("x^2 + y^4 + y^3*z^2 = 0").unwrap();
+        let field = Field::new(&poly, 2.6, super::super::SolidKind::Inside);
+        let h = 2.0867513352992861e-4;
+        let mesh = TriangleMesh {
+            vertices: vec![
+                DVec3::new(-h, -h, 0.0),
+                DVec3::new(0.0, -0.5 * h, 0.5 * h),
+                DVec3::new(0.0, -h, 0.0),
+            ],
+            triangles: vec![[0, 1, 2]],
+        };
+        let kinds = vec![VertexKind::Surface; 3];
+        let d = measure(&field, &mesh, &kinds, 0.026, 0.052);
+        assert!(d.mesh_to_surface < 1e-3, "{}", d.mesh_to_surface);
     }
 }

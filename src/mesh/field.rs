@@ -185,6 +185,29 @@ impl Field {
         self.value(p).abs() <= margin * bound
     }
 
+    /// Whether `φ(p)` is zero up to the rounding of evaluating it at `p` itself: as
+    /// [`Field::at_rounding`], but with the sums of the terms' magnitudes at `p` (not a bound
+    /// from its largest coordinate, which where most terms vanish, as on a plane z = 0 for a
+    /// polynomial even in z, is orders of magnitude larger). False where `φ(p)`'s sign can be
+    /// trusted, as [`Field::at_rounding`] need not be: that one is the rounding of a line's
+    /// polynomial through `p`, this one of `φ` at the point.
+    pub fn value_at_rounding(&self, p: DVec3) -> bool {
+        let q = p.to_array();
+        let (margin, bound) = match self.kind {
+            SolidKind::Shell { .. } => {
+                let f = self.f.eval_with_bound(q).1;
+                let g: f64 = self
+                    .gradient
+                    .iter()
+                    .map(|d| d.eval_with_bound(q).1.powi(2))
+                    .sum();
+                (1e-16, f * f + self.half_thickness_sq * g)
+            }
+            _ => (1e-8, self.f.eval_with_bound(q).1),
+        };
+        self.value(p).abs() <= margin * bound
+    }
+
     /// Whether `∇f` vanishes at `p` up to the rounding of a root's place (a millionth of the
     /// sum of its terms' magnitudes): a singular point of the surface. Always false for a
     /// shell, whose wall is smooth wherever the surface is.
@@ -836,6 +859,19 @@ mod tests {
             .unwrap();
         assert!((d - 0.1).abs() < 1e-14);
         assert!(f.distance_along(DVec3::ZERO, DVec3::X, 0.5).is_none());
+    }
+
+    #[test]
+    fn a_small_value_where_most_terms_vanish_keeps_its_sign() {
+        // On y = z = 0 only the linear terms are left: f = 10⁻⁹ there is a million times its
+        // rounding at the point, though below the rounding of a line's polynomial, whose
+        // bound counts the quartic term at the largest coordinate.
+        let poly = crate::shapes::implicit::expand("1000000*z^4 + 0.001*(x - 0.3) = 0").unwrap();
+        let f = Field::new(&poly, 1.0, SolidKind::Inside);
+        let p = DVec3::new(0.3 + 1e-6, 0.0, 0.0);
+        assert!(f.value(p) > 0.0);
+        assert!(f.at_rounding(p) && !f.value_at_rounding(p));
+        assert!(f.value_at_rounding(DVec3::new(0.3, 0.0, 0.0)));
     }
 
     #[test]
