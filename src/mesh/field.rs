@@ -242,9 +242,15 @@ impl Field {
         let mut q = p;
         for _ in 0..NODE_STEPS {
             let (g, bound) = self.surface_gradient(q);
-            if g.length() <= SINGULAR_GRADIENT * bound {
-                let f = self.f.eval(q.to_array()).abs();
-                return f <= SINGULAR_ROUNDING * self.f.magnitude_bound(q.to_array());
+            // The gradient may pass its test a few steps before `f` passes its own (10⁻⁶ of
+            // the gradient's terms is not yet 10⁻¹² of f's beside a node away from the
+            // origin, where those terms do not vanish): a point off the surface, where `∇f`
+            // vanishes too, is told apart by stepping on until the steps run out.
+            if g.length() <= SINGULAR_GRADIENT * bound
+                && self.f.eval(q.to_array()).abs()
+                    <= SINGULAR_ROUNDING * self.f.magnitude_bound(q.to_array())
+            {
+                return true;
             }
             let hessian = DMat3::from_cols(
                 (gradient(q + DVec3::X * h) - gradient(q - DVec3::X * h)) / (2.0 * h),
@@ -899,5 +905,31 @@ mod tests {
         assert!(!shell.is_boundary_root(node) && shell.inside(near));
         let d = shell.distance_along(near, DVec3::new(1.0, 1.0, 0.0), 0.05);
         assert!(d.is_none_or(|d| d > 0.01), "{d:?}");
+    }
+
+    #[test]
+    fn a_node_away_from_the_origin_is_found_from_every_side() {
+        // A cone's apex at (5, 3, 4), bent by cubic terms so that Newton's steps on ∇f = 0
+        // take several steps: there the gradient's terms do not vanish, and its test passes
+        // a step or two before f is zero to its rounding (26 of these 200 starts were missed
+        // when the first step whose gradient passed decided).
+        let poly = crate::shapes::implicit::expand(
+            "(x - 5)^2 + (y - 3)^2 - (z - 4)^2 + (x - 5)^3 + (y - 3)^2*(z - 4) = 0",
+        )
+        .unwrap();
+        let f = Field::new(&poly, 9.0, SolidKind::Inside);
+        let node = DVec3::new(5.0, 3.0, 4.0);
+        for k in 0..200 {
+            let t = f64::from(k) * 0.7;
+            let d = DVec3::new(
+                t.cos() * (1.3 * t).sin(),
+                t.sin() * (1.3 * t).sin(),
+                (1.3 * t).cos(),
+            );
+            let p = node + d * (0.01 + 0.0004 * f64::from(k));
+            assert!(f.singular_point_near(p, 0.2), "{p}");
+        }
+        // A point 1.6 from the apex has none within 0.2.
+        assert!(!f.singular_point_near(DVec3::new(6.0, 3.0, 5.0 + 2f64.sqrt().recip()), 0.2));
     }
 }
