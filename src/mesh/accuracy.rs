@@ -444,11 +444,11 @@ fn other_sheet(field: &Field, p: DVec3, dir: DVec3, width: f64, skip: f64) -> Op
 /// root finder; for a shell, those that are points of its wall,
 /// [`Field::is_boundary_root`]) at which `φ` changes sign along the line, or takes both
 /// signs about it (where the line passes through a crossing of two sheets), each where `φ`
-/// itself changes sign or is zero to rounding ([`Field::value_at_rounding`]); with how many roots were left out because
-/// `φ` only touches 0 there (a curve or point of `f = 0`, or a sheet along which `f` is a
-/// square, inside the solid or outside it but never on its boundary). Roots of the line's
-/// polynomial where `φ` is neither zero to rounding nor changes sign (that polynomial's
-/// rounding) are neither.
+/// itself changes sign or is zero to rounding ([`Field::value_at_rounding`]); with how many
+/// roots were left out because `φ` only touches 0 there (a curve or point of `f = 0`, or a
+/// sheet along which `f` is a square, inside the solid or outside it but never on its
+/// boundary). Roots of the line's polynomial where `φ` is neither zero to rounding nor
+/// changes sign (that polynomial's rounding) are neither.
 pub fn surface_samples(field: &Field, step: f64) -> (Vec<DVec3>, usize) {
     let r = field.radius();
     let count = (r / step).ceil() as i64;
