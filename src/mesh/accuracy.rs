@@ -215,18 +215,6 @@ pub fn measure_cancellable(
             }
             let [a, b, c] = mesh.corners(t);
             let centroid = (a + b + c) / 3.0;
-            // A corner's distance to the surface and the centroid's to the corner: a bound
-            // that needs no line to meet the surface, as none may beside a curve of the zero
-            // set (the z axis of x² + y⁴ + y³z², where f > 0 on both sides along x and the
-            // Newton steps stall in the valley x = 0).
-            let by_corner = mesh.triangles[t]
-                .iter()
-                .filter_map(|&v| {
-                    distance_of_vertex[v as usize]
-                        .map(|d: f64| d + centroid.distance(mesh.vertices[v as usize]))
-                })
-                .reduce(f64::min)
-                .filter(|&d| d <= reach);
             // Every corner on the crease: the triangle may be a piece of the cap.
             let off_sphere = mesh.triangles[t]
                 .iter()
@@ -247,7 +235,15 @@ pub fn measure_cancellable(
                     .into_iter()
                     .chain(nearest_along_edges(field, centroid, reach))
                     .chain(descent_to_zero(field, centroid, reach))
-                    .chain(by_corner)
+                    // A corner's distance to the surface and the centroid's to the corner: a
+                    // bound that needs no line to meet the surface, as none may beside a
+                    // curve of the zero set (the z axis of x² + y⁴ + y³z², where f > 0 on
+                    // both sides along x and the Newton steps stall in the valley x = 0).
+                    .chain(mesh.triangles[t].iter().filter_map(|&v| {
+                        distance_of_vertex[v as usize]
+                            .map(|d: f64| d + centroid.distance(mesh.vertices[v as usize]))
+                            .filter(|&d| d <= reach)
+                    }))
                     .reduce(f64::min),
             }
         })
@@ -444,7 +440,7 @@ fn other_sheet(field: &Field, p: DVec3, dir: DVec3, width: f64, skip: f64) -> Op
 /// root finder; for a shell, those that are points of its wall,
 /// [`Field::is_boundary_root`]) at which `φ` changes sign along the line, or takes both
 /// signs about it (where the line passes through a crossing of two sheets), each where `φ`
-/// itself changes sign or is zero to rounding ([`Field::value_at_rounding`]); with how many
+/// itself changes sign or is zero to rounding ([`Field::sign_beyond_rounding`]); with how many
 /// roots were left out because `φ` only touches 0 there (a curve or point of `f = 0`, or a
 /// sheet along which `f` is a square, inside the solid or outside it but never on its
 /// boundary). Roots of the line's polynomial where `φ` is neither zero to rounding nor
@@ -485,15 +481,7 @@ pub fn surface_samples(field: &Field, step: f64) -> (Vec<DVec3>, usize) {
             // finder places a root where `φ` is not zero (SingSurf's Bour surface, degree 16:
             // at z = 0 for z = 0.74 on lines across the clip ball). A value zero to the
             // rounding of evaluating it has no sign.
-            let sign_at = |s: f64| {
-                let q = start + s * e;
-                let v = field.value(q);
-                if v == 0.0 || field.value_at_rounding(q) {
-                    0.0
-                } else {
-                    v.signum()
-                }
-            };
+            let sign_at = |s: f64| field.sign_beyond_rounding(start + s * e);
             let mut boundary = Vec::new();
             let mut touching = 0;
             for (i, &s) in roots.iter().enumerate() {
@@ -507,7 +495,7 @@ pub fn surface_samples(field: &Field, step: f64) -> (Vec<DVec3>, usize) {
                 if a * b < 0.0 {
                     // Where the line's polynomial placed the root off the surface, the sign
                     // change of `φ` itself between the midpoints.
-                    let q = if field.value_at_rounding(p) {
+                    let q = if field.sign_beyond_rounding(p) == 0.0 {
                         p
                     } else {
                         sign_change(field, start, e, before, after, a)
@@ -517,7 +505,7 @@ pub fn surface_samples(field: &Field, step: f64) -> (Vec<DVec3>, usize) {
                     }
                 } else if both_signs_about(field, p, 1e-2 * step) {
                     boundary.push(p);
-                } else if field.value_at_rounding(p) {
+                } else if field.sign_beyond_rounding(p) == 0.0 {
                     touching += 1;
                 }
             }
@@ -534,7 +522,7 @@ pub fn surface_samples(field: &Field, step: f64) -> (Vec<DVec3>, usize) {
 /// The point where `φ` changes sign on the line `start + s·e` between `s0`, where its sign
 /// is `sign`, and `s1`, where it is the other, by bisection on `φ` at the points themselves
 /// (to the last bit of `s`, or to where `φ` is zero to rounding,
-/// [`Field::value_at_rounding`]).
+/// [`Field::sign_beyond_rounding`]).
 fn sign_change(
     field: &Field,
     start: DVec3,
@@ -549,14 +537,10 @@ fn sign_change(
         if m <= s0 || m >= s1 {
             return q;
         }
-        let v = field.value(q);
-        if v == 0.0 || field.value_at_rounding(q) {
-            return q;
-        }
-        if v.signum() == sign {
-            s0 = m;
-        } else {
-            s1 = m;
+        match field.sign_beyond_rounding(q) {
+            0.0 => return q,
+            v if v == sign => s0 = m,
+            _ => s1 = m,
         }
     }
 }
@@ -728,7 +712,10 @@ mod tests {
         for p in samples {
             let g = field.gradient(p, h);
             let off = field.value(p).abs() / g.length();
-            assert!(field.value_at_rounding(p) || off < 1e-9, "{p}: {off}");
+            assert!(
+                field.sign_beyond_rounding(p) == 0.0 || off < 1e-9,
+                "{p}: {off}"
+            );
         }
     }
 

@@ -169,43 +169,38 @@ impl Field {
     /// partial derivatives (the square of the same margin). A point on the surface as far as
     /// `f64` can tell, where the root finder may see a double root at a node as none.
     pub fn at_rounding(&self, p: DVec3) -> bool {
-        let q = p.to_array();
-        let (margin, bound) = match self.kind {
-            SolidKind::Shell { .. } => {
-                let f = self.f.magnitude_bound(q);
-                let g: f64 = self
-                    .gradient
-                    .iter()
-                    .map(|d| d.magnitude_bound(q).powi(2))
-                    .sum();
-                (1e-16, f * f + self.half_thickness_sq * g)
-            }
-            _ => (1e-8, self.f.magnitude_bound(q)),
-        };
-        self.value(p).abs() <= margin * bound
+        self.value(p).abs() <= self.rounding(p, Compiled::magnitude_bound)
     }
 
-    /// Whether `φ(p)` is zero up to the rounding of evaluating it at `p` itself: as
-    /// [`Field::at_rounding`], but with the sums of the terms' magnitudes at `p` (not a bound
-    /// from its largest coordinate, which where most terms vanish, as on a plane z = 0 for a
-    /// polynomial even in z, is orders of magnitude larger). False where `φ(p)`'s sign can be
-    /// trusted, as [`Field::at_rounding`] need not be: that one is the rounding of a line's
-    /// polynomial through `p`, this one of `φ` at the point.
-    pub fn value_at_rounding(&self, p: DVec3) -> bool {
+    /// The sign of `φ(p)` (−1 or 1), or 0 where `φ(p)` is zero up to the rounding of
+    /// evaluating it at `p` itself: as [`Field::at_rounding`], but with the sums of the terms'
+    /// magnitudes at `p` (not a bound from its largest coordinate, which where most terms
+    /// vanish, as on a plane z = 0 for a polynomial even in z, is orders of magnitude
+    /// larger). A sign that can be trusted, as [`Field::at_rounding`] need not be: that one is
+    /// the rounding of a line's polynomial through `p`, this one of `φ` at the point.
+    pub fn sign_beyond_rounding(&self, p: DVec3) -> f64 {
+        let v = self.value(p);
+        if v == 0.0 || v.abs() <= self.rounding(p, |c, q| c.eval_with_bound(q).1) {
+            0.0
+        } else {
+            v.signum()
+        }
+    }
+
+    /// The rounding of `φ` at `p` from `magnitude`, a bound on the sum of a polynomial's
+    /// terms' magnitudes: for the inside and outside `1e-8` of `f`'s; for a shell, whose `φ`
+    /// is a square less a square, `1e-16 · (F² + (T/2)²·Σ Gᵢ²)` with `F`, `Gᵢ` those of `f`
+    /// and its partial derivatives (the square of the same margin).
+    fn rounding(&self, p: DVec3, magnitude: impl Fn(&Compiled, [f64; 3]) -> f64) -> f64 {
         let q = p.to_array();
-        let (margin, bound) = match self.kind {
+        match self.kind {
             SolidKind::Shell { .. } => {
-                let f = self.f.eval_with_bound(q).1;
-                let g: f64 = self
-                    .gradient
-                    .iter()
-                    .map(|d| d.eval_with_bound(q).1.powi(2))
-                    .sum();
-                (1e-16, f * f + self.half_thickness_sq * g)
+                let f = magnitude(&self.f, q);
+                let g: f64 = self.gradient.iter().map(|d| magnitude(d, q).powi(2)).sum();
+                1e-16 * (f * f + self.half_thickness_sq * g)
             }
-            _ => (1e-8, self.f.eval_with_bound(q).1),
-        };
-        self.value(p).abs() <= margin * bound
+            _ => 1e-8 * magnitude(&self.f, q),
+        }
     }
 
     /// Whether `∇f` vanishes at `p` up to the rounding of a root's place (a millionth of the
@@ -876,8 +871,8 @@ mod tests {
         let f = Field::new(&poly, 1.0, SolidKind::Inside);
         let p = DVec3::new(0.3 + 1e-6, 0.0, 0.0);
         assert!(f.value(p) > 0.0);
-        assert!(f.at_rounding(p) && !f.value_at_rounding(p));
-        assert!(f.value_at_rounding(DVec3::new(0.3, 0.0, 0.0)));
+        assert!(f.at_rounding(p) && f.sign_beyond_rounding(p) == 1.0);
+        assert_eq!(f.sign_beyond_rounding(DVec3::new(0.3, 0.0, 0.0)), 0.0);
     }
 
     #[test]
