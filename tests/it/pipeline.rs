@@ -548,11 +548,16 @@ fn a_small_render_does_not_wait_for_a_long_one_on_the_same_renderer() {
 }
 
 /// An interactive render goes ahead of a batch render already running on the same
-/// `Renderer`: while it runs, the batch render finishes no more than the tile each thread was
-/// in (it hands the threads over within a few pixels), and the batch render, suspended and
-/// resumed many times, still makes exactly the pixels and bands it makes alone (kept and
+/// `Renderer`: from the interactive render's first finished tile to its last, the batch render
+/// finishes no more than the tile each of its threads was in when the interactive render was
+/// counted in (it hands the threads over within a few pixels), and the batch render, suspended
+/// and resumed many times, still makes exactly the pixels and bands it makes alone (kept and
 /// streamed). Before the priority, the two shared the threads band by band: a 12-band
 /// interactive render let the batch render finish a band of 12 tiles before each of its own.
+///
+/// The window is read from the interactive render's own progress, not from around the call:
+/// on a loaded machine the test's thread can be held between reading the batch's count and the
+/// render counting itself in (or after it ends) while the batch render goes on, as it should.
 #[test]
 fn an_interactive_render_goes_ahead_of_a_batch_render() {
     let scene = Arc::new(default_heart());
@@ -570,7 +575,7 @@ fn an_interactive_render_goes_ahead_of_a_batch_render() {
     let interactive = RenderRequest {
         width: Some(48),
         height: Some(192),
-        spp: 1,
+        spp: 4,
         ..RenderRequest::default()
     };
     for streamed in [false, true] {
@@ -607,11 +612,26 @@ fn an_interactive_render_goes_ahead_of_a_batch_render() {
         let mut most_during = 0;
         let mut runs = 0;
         while finished.load(Ordering::SeqCst) == 0 && runs < 40 {
-            let before = tiles.load(Ordering::SeqCst);
-            let control = Control::default().with_priority(Priority::Interactive);
+            // The batch's finished tiles at the interactive render's first and last tile.
+            let window = Arc::new(Mutex::new((None::<u64>, None::<u64>)));
+            let progress = {
+                let (tiles, window) = (tiles.clone(), window.clone());
+                move |p: Progress| {
+                    let now = tiles.load(Ordering::SeqCst);
+                    let mut window = window.lock().unwrap();
+                    window.0.get_or_insert(now);
+                    if p.done == p.total {
+                        window.1 = Some(now);
+                    }
+                }
+            };
+            let control =
+                Control::new(CancelToken::new(), progress).with_priority(Priority::Interactive);
             renderer.render(&scene, &interactive, &control).unwrap();
-            let during = tiles.load(Ordering::SeqCst) - before;
-            most_during = most_during.max(during);
+            let (Some(first), Some(last)) = *window.lock().unwrap() else {
+                panic!("the interactive render reported no progress");
+            };
+            most_during = most_during.max(last - first);
             runs += 1;
             std::thread::sleep(Duration::from_millis(3));
         }
@@ -620,10 +640,10 @@ fn an_interactive_render_goes_ahead_of_a_batch_render() {
             runs >= 3,
             "only {runs} interactive renders ran during the batch render"
         );
-        // Each thread may finish the tile it was in, and one more may start before the
-        // interactive render is counted in.
+        // Each of the two threads may finish the tile it was in when the interactive render
+        // was counted in; none starts another while it runs.
         assert!(
-            most_during <= 4,
+            most_during <= 2,
             "the batch render finished {most_during} tiles during one interactive render"
         );
         if let Some(image) = image {
