@@ -193,11 +193,13 @@ fn mesh(args: &MeshArgs) -> Result<(), String> {
                     .collect();
                 outln!(
                     "    cut leaves by cube side: {}; bisected for a triangle's deviation {}, an \
-                     edge crossed twice {}, surface not proven absent {} ({} rounds)",
+                     edge crossed twice {}, surface not proven absent {}, a chamfered crease {} \
+                     ({} rounds)",
                     by_side.join(", "),
                     r.refined_for[0],
                     r.refined_for[1],
                     r.refined_for[2],
+                    r.refined_for[3],
                     r.rounds
                 );
             }

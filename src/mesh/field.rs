@@ -76,6 +76,16 @@ pub const SINGULAR_GRADIENT: f64 = 1e-6;
 /// converge to a node, where the Hessian is invertible, in about five).
 pub const NODE_STEPS: usize = 12;
 
+/// The crease beside a chamfered mesh edge ([`Field::chamfer`]), in object units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Chamfer {
+    /// How far the crease lies from the edge.
+    pub gap: f64,
+    /// How thick the solid's wedge is at the edge's surface vertex, along the surface's
+    /// normal (infinite where the wedge is a right angle or wider).
+    pub width: f64,
+}
+
 /// The solid's indicator: see the module documentation.
 #[derive(Debug, Clone)]
 pub struct Field {
@@ -540,6 +550,48 @@ impl Field {
         inside.iter().all(|&w| w >= END_GAP).then_some(x)
     }
 
+    /// The crease beside the mesh edge from the surface vertex `surface` to the cap vertex
+    /// `cap` where that edge is left without a crease point (a chamfer), by the line in which
+    /// the tangent planes of the surface and of the clip sphere meet, both taken at the
+    /// edge's midpoint (their linear approximations there, as `|φ|/|∇φ|` is for a distance):
+    /// how far it lies from the edge, and how thin the solid's wedge is at `surface`. `None`
+    /// where the two planes are parallel (the surface grazes the sphere) or `∇φ` vanishes.
+    pub fn chamfer(&self, surface: DVec3, cap: DVec3) -> Option<Chamfer> {
+        let m = 0.5 * (surface + cap);
+        let (v, g) = self.value_and_gradient(m, 1e-7 * self.radius);
+        let (g_len, m_len) = (g.length(), m.length());
+        if !(g_len > 0.0 && m_len > 0.0 && v.is_finite()) {
+            return None;
+        }
+        // The planes n_s·x = d_s (φ's linear part zero) and n_c·x = d_c (on the sphere),
+        // with x measured from m, each normal pointing out of the solid; their line's
+        // nearest point is a·n_s + b·n_c.
+        let (n_s, d_s) = (g / g_len, -v / g_len);
+        let (n_c, d_c) = (m / m_len, self.radius - m_len);
+        let k = n_s.dot(n_c);
+        let sin_sq = 1.0 - k * k;
+        if sin_sq.is_nan() || sin_sq <= 1e-12 {
+            return None;
+        }
+        let a = (d_s - k * d_c) / sin_sq;
+        let b = (d_c - k * d_s) / sin_sq;
+        let tip = m + a * n_s + b * n_c;
+        let side = cap - surface;
+        let along = ((tip - surface).dot(side) / side.length_squared()).clamp(0.0, 1.0);
+        // The wedge's angle θ has cos θ = −k (normals out of the solid): below a right
+        // angle, the line from `surface` along the surface's normal meets the sphere at
+        // tan θ times its distance from the crease.
+        let width = if k < 0.0 {
+            tip.distance(surface) * sin_sq.sqrt() / -k
+        } else {
+            f64::INFINITY
+        };
+        Some(Chamfer {
+            gap: tip.distance(surface + along * side),
+            width,
+        })
+    }
+
     /// The coefficients (ascending in `t`) of `φ` along the circle
     /// `centre + a·(1 − t²)/(1 + t²) + b·2t/(1 + t²)`, multiplied by `(1 + t²)^D` with `D`
     /// the degree of `φ` (so a polynomial of degree `2D` with the signs of `φ`); `None` when
@@ -686,6 +738,56 @@ mod tests {
     /// The inside of `equation`'s surface clipped to radius 2.
     fn inside(equation: &str) -> Field {
         Field::new(&expand(equation).unwrap(), 2.0, SolidKind::Inside)
+    }
+
+    #[test]
+    fn a_chamfer_s_gap_is_near_the_crease_s_distance_from_its_side() {
+        // The outside of the plane z = 1/2 in the unit ball: an acute wedge whose crease is
+        // the circle of radius √3/2 at z = 1/2. In the plane y = 0 a chamfer from the
+        // surface vertex (0.6, 0, 0.5) to the cap vertex at 50° from the pole misses the
+        // crease point (√3/2, 0, 1/2) by 0.1735.
+        let f = Field::new(&expand("z = 0.5").unwrap(), 1.0, SolidKind::Outside);
+        let surface = DVec3::new(0.6, 0.0, 0.5);
+        let angle = 50f64.to_radians();
+        let cap = DVec3::new(angle.sin(), 0.0, angle.cos());
+        let crease = DVec3::new(0.75f64.sqrt(), 0.0, 0.5);
+        let side = cap - surface;
+        let along = (crease - surface).dot(side) / side.length_squared();
+        let exact = crease.distance(surface + along * side);
+        assert!((exact - 0.1735).abs() < 1e-4, "{exact}");
+        let chamfer = f.chamfer(surface, cap).unwrap();
+        assert!(
+            chamfer.gap >= exact && chamfer.gap < 1.15 * exact,
+            "{chamfer:?} for {exact}"
+        );
+        // The wedge's angle is 60° (the sphere's normal at the crease 60° from the pole).
+        // Along the plane's normal the solid is √(1 − 0.6²) − 0.5 = 0.3 thick at the surface
+        // vertex; by the planes at the midpoint (the sphere's normal there 50° from the pole)
+        // it is 0.34.
+        let thick = (1.0f64 - 0.36).sqrt() - 0.5;
+        assert!(
+            (chamfer.width - thick).abs() < 0.15 * thick,
+            "{chamfer:?} for {thick}"
+        );
+        // A short chord of the crease (ends 2° apart on it) misses it by its sagitta,
+        // (√3/2)·(1 − cos 1°) = 1.3·10⁻⁴.
+        let on_crease = |degrees: f64| {
+            let (s, c) = degrees.to_radians().sin_cos();
+            DVec3::new(0.75f64.sqrt() * c, 0.75f64.sqrt() * s, 0.5)
+        };
+        let gap = f.chamfer(on_crease(0.0), on_crease(2.0)).unwrap().gap;
+        assert!((1.2e-4..1.5e-4).contains(&gap), "{gap}");
+        // Where the surface grazes the sphere there is no crease line to measure to.
+        let touching = Field::new(&expand("z = 1").unwrap(), 1.0, SolidKind::Inside);
+        assert_eq!(
+            touching.chamfer(DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.0, 0.0, 1.0)),
+            None
+        );
+        // The inside of the same plane: the wedge is obtuse (120°), never thin.
+        let inside = Field::new(&expand("z = 0.5").unwrap(), 1.0, SolidKind::Inside);
+        let below = DVec3::new(0.6, 0.0, 0.5);
+        let cap = DVec3::new(0.95, 0.0, -(1.0f64 - 0.95 * 0.95).sqrt());
+        assert_eq!(inside.chamfer(below, cap).unwrap().width, f64::INFINITY);
     }
 
     #[test]

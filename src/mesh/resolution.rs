@@ -11,7 +11,12 @@
 //!    [`EXTRACT_SHARE`] of the tolerance of the boundary by the estimate `|φ|/|∇φ|`, with a
 //!    second Newton step where the first leaves much of `φ` (beside a node:
 //!    [`Field::distance_estimate`]) (a triangle with all vertices on the clip sphere:
-//!    `|R − |x||`; one with vertices on both: the smaller of the two).
+//!    `|R − |x||`; one with vertices on both: the smaller of the two). And where a side of
+//!    its polygon joins a surface vertex to a cap vertex with no crease point in its face
+//!    (a chamfer that the extraction keeps, [`super::extract`]'s step 4), the crease within
+//!    the tolerance of that side by [`Field::chamfer`], unless the solid's wedge there is
+//!    thinner than twice the tolerance (a surface grazing the sphere, which the measurement
+//!    counts apart as thin).
 //! 2. **No edge crossed twice**: if its corners do not all have the same sign of `φ`, each of
 //!    its six edges holds at most one distinct root of `φ` inside the clip ball: proven at
 //!    once where `φ` is monotone along the edge by its coarse cube's bounds on `∇φ`, else
@@ -97,6 +102,10 @@ pub enum Reason {
     EdgeCrossedTwice = 1,
     /// Its corners agree in sign, and the Taylor bound does not prove it free of surface.
     SurfaceUnproven = 2,
+    /// A side of its polygon from a surface vertex to a cap vertex finds no crease point in
+    /// its face, and the crease lies farther than the tolerance from it where the solid's
+    /// wedge is no thinner than the floor step ([`Field::chamfer`]).
+    ChamferedCrease = 3,
 }
 
 /// What the refinement made (object units).
@@ -117,7 +126,7 @@ pub struct Refined {
     pub crossed_by_level: Vec<usize>,
     /// Tetrahedra bisected for each [`Reason`] (indexed by it), not counting those bisected
     /// to keep the leaves conforming.
-    pub refined_for: [usize; 3],
+    pub refined_for: [usize; 4],
     /// Rounds of examination.
     pub rounds: usize,
 }
@@ -259,6 +268,8 @@ pub fn refine(
         taylor: Taylor::new(field),
         table: marching_table(),
         shallow: EXTRACT_SHARE * tolerance,
+        tolerance,
+        thin_width: 2.0 * tolerance,
         floor_level,
         f_sign: if field.kind() == SolidKind::Outside {
             -1.0
@@ -337,7 +348,7 @@ pub fn refine(
         cube_leaves[c] = kuhn(c).map(|t| (t, false)).to_vec();
         todo.extend((0..6).map(|i| (c, i)));
     }
-    let mut refined_for = [0usize; 3];
+    let mut refined_for = [0usize; 4];
     let mut rounds = 0;
     let mut fresh = Vec::new();
     let mut twice = EdgeMap::default();
@@ -617,6 +628,13 @@ struct Examiner<'a> {
     /// The deepest graze allowed; also the deviation allowed ([`EXTRACT_SHARE`] of the
     /// tolerance).
     shallow: f64,
+    /// The tolerance: how far the crease may lie from a chamfered side (the coarsening never
+    /// changes the triangles joining a surface vertex to a cap vertex).
+    tolerance: f64,
+    /// Twice the tolerance, the width below which the measurement counts a part of the solid
+    /// as thin (`super::accuracy::measure`): a wedge thinner than it at a chamfered side's
+    /// surface vertex is not bisected for the chamfer.
+    thin_width: f64,
     /// The level of the floor step's tetrahedra, at and below which corners of the same sign
     /// are accepted (module doc, 3.).
     floor_level: u8,
@@ -707,6 +725,48 @@ impl Examiner<'_> {
             let worst = triangle_deviation(field, corners.map(|c| c.0), corners.map(|c| c.1));
             if worst.is_nan() || worst > self.shallow {
                 return Some(Reason::Deviation);
+            }
+        }
+        // A side from a surface vertex to a cap vertex cuts the solid's wedge at the crease
+        // unless the extraction finds a crease point in its face (step 4 of
+        // `extract::assemble`); the triangles' deviation cannot see how deep.
+        let n = placed.len();
+        for i in 0..n {
+            let (e1, e2) = (polygon[i], polygon[(i + 1) % n]);
+            let (v1, v2) = (placed[i], placed[(i + 1) % n]);
+            let (cap_edge, other_edge, cap, surface) = match (v1.1, v2.1) {
+                (VertexKind::Cap, VertexKind::Surface) => (e1, e2, v1.0, v2.0),
+                (VertexKind::Surface, VertexKind::Cap) => (e2, e1, v2.0, v1.0),
+                _ => continue,
+            };
+            // The corner both edges share, the cap edge's other end and the other's.
+            let Some(&shared) = cap_edge.iter().find(|c| other_edge.contains(c)) else {
+                continue;
+            };
+            let r = if cap_edge[0] == shared {
+                cap_edge[1]
+            } else {
+                cap_edge[0]
+            };
+            let q = if other_edge[0] == shared {
+                other_edge[1]
+            } else {
+                other_edge[0]
+            };
+            let face = [shared, q, r].map(|c| self.lattice.position(t.corners[c as usize]));
+            if field.crease(face, cap).is_some() {
+                continue;
+            }
+            // The crease farther than the tolerance, unless the solid is so thin there that
+            // the surface the chamfer cuts off is all within twice the tolerance of the
+            // sphere (where a grazing surface meets it): the measurement counts such places
+            // apart, and bisecting would not reach them before the floor.
+            let deep = match field.chamfer(surface, cap) {
+                Some(c) => c.gap > self.tolerance && c.width >= self.thin_width,
+                None => false,
+            };
+            if deep {
+                return Some(Reason::ChamferedCrease);
             }
         }
         None
@@ -1264,6 +1324,8 @@ mod tests {
             taylor: Taylor::new(&f),
             table: marching_table(),
             shallow: 0.01,
+            tolerance: 0.01 / EXTRACT_SHARE,
+            thin_width: 0.02 / EXTRACT_SHARE,
             floor_level: 3 * depth as u8,
             f_sign: 1.0,
         };
@@ -1328,6 +1390,37 @@ mod tests {
         );
         // Not wildly loose: within a few times the largest change seen.
         assert!(sums.linear + sums.quadratic < 10.0 * worst);
+    }
+
+    #[test]
+    fn a_chamfered_crease_is_refined_until_the_crease_is_within_the_tolerance() {
+        // The outside of a tilted plane in the unit ball: a cap whose wedge at the crease is
+        // acute, so that binary labels leave sides from a surface vertex to a cap vertex
+        // with no crease point in their face (docs/mesh.md, "How it is made", 4). Before
+        // the chamfer check the crease lay up to 0.028 from the mesh for 0.02 (0.019 with it).
+        let tolerance = 0.02;
+        let f = Field::new(&expand("z - 0.3*x - 0.5").unwrap(), 1.0, SolidKind::Outside);
+        let (mesh, _, refined) = adaptive(&f, tolerance);
+        assert!(refined.refined_for[Reason::ChamferedCrease as usize] > 0);
+        let n = DVec3::new(-0.3, 0.0, 1.0).normalize();
+        let d = 0.5 / DVec3::new(-0.3, 0.0, 1.0).length();
+        let (centre, rho) = (n * d, (1.0 - d * d).sqrt());
+        let u = DVec3::new(1.0, 0.0, 0.3).normalize();
+        let v = n.cross(u);
+        let worst = (0..720)
+            .map(|k| {
+                let (s, c) = (f64::from(k) * 0.5).to_radians().sin_cos();
+                let p = centre + rho * (c * u + s * v);
+                mesh.triangles
+                    .iter()
+                    .map(|t| {
+                        let corners = t.map(|i| mesh.vertices[i as usize]);
+                        p.distance(crate::shapes::triangles::closest_on_triangle(p, corners))
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0, f64::max);
+        assert!(worst <= tolerance, "the crease {worst} from the mesh");
     }
 
     #[test]
