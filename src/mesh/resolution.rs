@@ -104,7 +104,7 @@ pub enum Reason {
     SurfaceUnproven = 2,
     /// A side of its polygon from a surface vertex to a cap vertex finds no crease point in
     /// its face, and the crease lies farther than the tolerance from it where the solid's
-    /// wedge is no thinner than the floor step ([`Field::chamfer`]).
+    /// wedge is no thinner than twice the tolerance ([`Field::chamfer`]).
     ChamferedCrease = 3,
 }
 
