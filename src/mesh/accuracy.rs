@@ -605,10 +605,15 @@ impl<'a> NearestTriangle<'a> {
 mod tests {
     use super::*;
 
+    /// The inside of `equation`'s surface clipped to `radius`.
+    fn inside(equation: &str, radius: f64) -> Field {
+        let poly = crate::shapes::implicit::expand(equation).unwrap();
+        Field::new(&poly, radius, super::super::SolidKind::Inside)
+    }
+
     #[test]
     fn a_cancelled_measurement_stops_before_its_first_part_ends() {
-        let poly = crate::shapes::implicit::expand("x^2 + y^2 + z^2 = 1").unwrap();
-        let field = Field::new(&poly, 1.5, super::super::SolidKind::Inside);
+        let field = inside("x^2 + y^2 + z^2 = 1", 1.5);
         let grid = super::super::extract::Grid::covering(1.5, 0.05);
         let (mesh, kinds) = super::super::extract::march(&field, grid, &|_, _| {});
         let parts = std::sync::atomic::AtomicUsize::new(0);
@@ -629,31 +634,27 @@ mod tests {
 
     #[test]
     fn a_point_is_thin_beside_another_sheet_a_singular_point_or_the_clip_sphere() {
-        let field = |equation: &str, radius: f64| {
-            let poly = crate::shapes::implicit::expand(equation).unwrap();
-            Field::new(&poly, radius, super::super::SolidKind::Inside)
-        };
         let one = DVec3::X;
         // A sphere, far from its clip sphere: nowhere thin.
-        assert!(!thin_at(&field("x^2 + y^2 + z^2 = 1", 2.0), one, 0.1));
+        assert!(!thin_at(&inside("x^2 + y^2 + z^2 = 1", 2.0), one, 0.1));
         // Two spheres 0.01 apart along x: the solid between them is thinner than 0.1, not
         // than 0.001.
-        let two = field("(x^2 + y^2 + z^2 - 1)*(x^2 + y^2 + z^2 - 1.0201)", 2.0);
+        let two = inside("(x^2 + y^2 + z^2 - 1)*(x^2 + y^2 + z^2 - 1.0201)", 2.0);
         assert!(thin_at(&two, one, 0.1));
         assert!(!thin_at(&two, one, 0.001));
         // Beside a node: a point of Kummer-like cone 0.01 from its apex, thin at 0.1 (the
         // node within it, found by Newton's steps on ∇f = 0), not at 0.001.
-        let cone = field("x^2 + y^2 - z^2 + x^3", 2.0);
+        let cone = inside("x^2 + y^2 - z^2 + x^3", 2.0);
         let near = DVec3::new(0.01, 0.0, (0.0001f64 + 1e-6).sqrt());
         assert!(cone.singular_point_near(near, 0.1));
         assert!(!cone.singular_point_near(near, 0.001));
         assert!(thin_at(&cone, near, 0.1));
         // A sphere's centre is a critical point of f but not on the surface.
-        assert!(!field("x^2 + y^2 + z^2 = 1", 2.0).singular_point_near(one, 1.5));
+        assert!(!inside("x^2 + y^2 + z^2 = 1", 2.0).singular_point_near(one, 1.5));
         // The apex of a cone, where ∇f vanishes, is thin at any width.
-        assert!(thin_at(&field("x^2 + y^2 - z^2", 2.0), DVec3::ZERO, 1e-9));
+        assert!(thin_at(&inside("x^2 + y^2 - z^2", 2.0), DVec3::ZERO, 1e-9));
         // The clip sphere 0.05 beyond the surface along the normal.
-        let clipped = field("x^2 + y^2 + z^2 = 1", 1.05);
+        let clipped = inside("x^2 + y^2 + z^2 = 1", 1.05);
         assert!(thin_at(&clipped, one, 0.1));
         assert!(!thin_at(&clipped, one, 0.01));
         // A point between two sheets 0.01 apart, across them.
@@ -668,8 +669,7 @@ mod tests {
 
     #[test]
     fn surface_samples_are_on_the_surface() {
-        let poly = crate::shapes::implicit::expand("x^2 + y^2 + z^2 = 1").unwrap();
-        let field = Field::new(&poly, 1.5, super::super::SolidKind::Inside);
+        let field = inside("x^2 + y^2 + z^2 = 1", 1.5);
         let (samples, touching) = surface_samples(&field, 0.1);
         assert_eq!(touching, 0);
         assert!(samples.len() > 500);
@@ -683,10 +683,7 @@ mod tests {
         // The diagonal x = y = z is a curve of f = 0 inside the ball, where f ≤ 0 all
         // around (a factor that is a sum of squares): the lines parallel to an axis through
         // it (y = z for those along x) touch 0 there without a change of sign.
-        let poly =
-            crate::shapes::implicit::expand("(x^2 + y^2 + z^2 - 1)*((x - y)^2 + (y - z)^2) = 0")
-                .unwrap();
-        let field = Field::new(&poly, 1.5, super::super::SolidKind::Inside);
+        let field = inside("(x^2 + y^2 + z^2 - 1)*((x - y)^2 + (y - z)^2) = 0", 1.5);
         let (samples, touching) = surface_samples(&field, 0.1);
         assert!(touching > 10, "{touching}");
         assert!(samples.len() > 500);
@@ -701,10 +698,7 @@ mod tests {
         // 8¹⁶ ≈ 3·10¹⁴, whose rounding (about 0.03) drowns the values of f about z = 0,
         // where f has a minimum of about 10⁻⁵ between the roots z ≈ ±0.1: the root finder
         // places roots where f is not 0 (up to 10⁻³ off).
-        let poly =
-            crate::shapes::implicit::expand("0.000001*(1 + x^2 + y^2) + 0.01*z^2 - z^4 + z^16 = 0")
-                .unwrap();
-        let field = Field::new(&poly, 4.0, super::super::SolidKind::Inside);
+        let field = inside("0.000001*(1 + x^2 + y^2) + 0.01*z^2 - z^4 + z^16 = 0", 4.0);
         let (samples, _) = surface_samples(&field, 0.25);
         let h = 1e-9;
         let near_middle = samples.iter().filter(|p| p.z.abs() < 1.0).count();
@@ -724,8 +718,7 @@ mod tests {
         // x² + y⁴ + y³z² is zero on the z axis, with f > 0 on both sides of the plane x = 0
         // where |y| > z²: no line through the centroid meets the zero set and Newton steps
         // stall in that valley. The corners are within 3·10⁻⁴ of the axis.
-        let poly = crate::shapes::implicit::expand("x^2 + y^4 + y^3*z^2 = 0").unwrap();
-        let field = Field::new(&poly, 2.6, super::super::SolidKind::Inside);
+        let field = inside("x^2 + y^4 + y^3*z^2 = 0", 2.6);
         let h = 2.0867513352992861e-4;
         let mesh = TriangleMesh {
             vertices: vec![

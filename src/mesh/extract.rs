@@ -373,14 +373,8 @@ where
             };
             let (c0, c1) = ends(keys[cap as usize]);
             let (o0, o1) = ends(keys[other as usize]);
-            // The corner both edges share, and each edge's other end.
-            let (corner, r, q) = if c0 == o0 || c0 == o1 {
-                (c0, c1, if c0 == o0 { o1 } else { o0 })
-            } else {
-                (c1, c0, if c1 == o0 { o1 } else { o0 })
-            };
-            let face = [position(corner), position(q), position(r)];
-            field.crease(face, vertices[cap as usize])
+            let face = side_face([c0, c1], [o0, o1]).expect("a polygon's sides lie in faces");
+            field.crease(face.map(&position), vertices[cap as usize])
         })
         .collect();
     let mut crease_vertex: HashMap<(u32, u32), u32> = HashMap::new();
@@ -424,6 +418,19 @@ where
         },
         kinds,
     ))
+}
+
+/// The face of a tetrahedron that holds a polygon's side from the vertex on the edge
+/// `cap_edge` to the vertex on the edge `other_edge` (edges given by their ends), as
+/// [`Field::crease`] takes it: `[shared, q, r]` with `shared` the corner both edges share, `q`
+/// the other edge's other end and `r` the cap edge's; `None` when the edges share no corner.
+pub(crate) fn side_face<T: Copy + PartialEq>(
+    cap_edge: [T; 2],
+    other_edge: [T; 2],
+) -> Option<[T; 3]> {
+    let shared = *cap_edge.iter().find(|c| other_edge.contains(c))?;
+    let other_end = |edge: [T; 2]| if edge[0] == shared { edge[1] } else { edge[0] };
+    Some([shared, other_end(other_edge), other_end(cap_edge)])
 }
 
 /// Where the lattice of a [`Refinement`] lies in object space: lattice point `p` is at
@@ -574,6 +581,14 @@ mod tests {
             }
             assert!(near > 0);
         }
+    }
+
+    #[test]
+    fn a_side_s_face_has_the_shared_corner_first_and_the_cap_edge_s_end_last() {
+        assert_eq!(side_face([1, 2], [1, 3]), Some([1, 3, 2]));
+        assert_eq!(side_face([2, 1], [3, 1]), Some([1, 3, 2]));
+        assert_eq!(side_face([2, 1], [1, 3]), Some([1, 3, 2]));
+        assert_eq!(side_face([1, 2], [3, 4]), None);
     }
 
     #[test]

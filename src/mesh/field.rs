@@ -76,6 +76,10 @@ pub const SINGULAR_GRADIENT: f64 = 1e-6;
 /// converge to a node, where the Hessian is invertible, in about five).
 pub const NODE_STEPS: usize = 12;
 
+/// The share of the sum of `f`'s terms' magnitudes within which its value is zero to the
+/// rounding of evaluating it ([`Field::at_rounding`], [`Field::sign_beyond_rounding`]).
+const VALUE_ROUNDING: f64 = 1e-8;
+
 /// The crease beside a chamfered mesh edge ([`Field::chamfer`]), in object units.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Chamfer {
@@ -189,8 +193,23 @@ impl Field {
     /// larger). A sign that can be trusted, as [`Field::at_rounding`] need not be: that one is
     /// the rounding of a line's polynomial through `p`, this one of `φ` at the point.
     pub fn sign_beyond_rounding(&self, p: DVec3) -> f64 {
-        let v = self.value(p);
-        if v == 0.0 || v.abs() <= self.rounding(p, |c, q| c.eval_with_bound(q).1) {
+        let (v, rounding) = match self.kind {
+            // One evaluation of f gives its value and its terms' magnitudes.
+            SolidKind::Inside | SolidKind::Outside => {
+                let (f, terms) = self.f.eval_with_bound(p.to_array());
+                let v = if self.kind == SolidKind::Outside {
+                    -f
+                } else {
+                    f
+                };
+                (v, VALUE_ROUNDING * terms)
+            }
+            SolidKind::Shell { .. } => (
+                self.value(p),
+                self.rounding(p, |c, q| c.eval_with_bound(q).1),
+            ),
+        };
+        if v == 0.0 || v.abs() <= rounding {
             0.0
         } else {
             v.signum()
@@ -209,7 +228,7 @@ impl Field {
                 let g: f64 = self.gradient.iter().map(|d| magnitude(d, q).powi(2)).sum();
                 1e-16 * (f * f + self.half_thickness_sq * g)
             }
-            _ => 1e-8 * magnitude(&self.f, q),
+            _ => VALUE_ROUNDING * magnitude(&self.f, q),
         }
     }
 

@@ -267,9 +267,7 @@ pub fn refine(
         lattice,
         taylor: Taylor::new(field),
         table: marching_table(),
-        shallow: EXTRACT_SHARE * tolerance,
         tolerance,
-        thin_width: 2.0 * tolerance,
         floor_level,
         f_sign: if field.kind() == SolidKind::Outside {
             -1.0
@@ -388,7 +386,7 @@ pub fn refine(
                         field,
                         lattice.position(p),
                         lattice.position(q),
-                        examiner.shallow,
+                        examiner.shallow(),
                     )
             })
             .collect();
@@ -625,16 +623,11 @@ struct Examiner<'a> {
     lattice: Lattice,
     taylor: Taylor,
     table: Vec<Option<TablePolygon>>,
-    /// The deepest graze allowed; also the deviation allowed ([`EXTRACT_SHARE`] of the
-    /// tolerance).
-    shallow: f64,
-    /// The tolerance: how far the crease may lie from a chamfered side (the coarsening never
-    /// changes the triangles joining a surface vertex to a cap vertex).
+    /// The tolerance (object units): also how far the crease may lie from a chamfered side
+    /// (the coarsening never changes the triangles joining a surface vertex to a cap vertex),
+    /// and twice it the width below which the measurement counts a part of the solid as thin
+    /// (`super::accuracy::measure`), where a chamfer is left.
     tolerance: f64,
-    /// Twice the tolerance, the width below which the measurement counts a part of the solid
-    /// as thin (`super::accuracy::measure`): a wedge thinner than it at a chamfered side's
-    /// surface vertex is not bisected for the chamfer.
-    thin_width: f64,
     /// The level of the floor step's tetrahedra, at and below which corners of the same sign
     /// are accepted (module doc, 3.).
     floor_level: u8,
@@ -657,6 +650,12 @@ struct Spread {
 }
 
 impl Examiner<'_> {
+    /// The deepest graze allowed; also the deviation allowed ([`EXTRACT_SHARE`] of the
+    /// tolerance).
+    fn shallow(&self) -> f64 {
+        EXTRACT_SHARE * self.tolerance
+    }
+
     /// Whether `examine` asks whether `t`'s edges are crossed twice: its box meets the clip
     /// ball and its corners' signs of `φ` differ.
     fn edges_matter(&self, t: &Tet, values: &Values) -> bool {
@@ -723,13 +722,18 @@ impl Examiner<'_> {
         for k in 1..placed.len() - 1 {
             let corners = [placed[0], placed[k], placed[k + 1]];
             let worst = triangle_deviation(field, corners.map(|c| c.0), corners.map(|c| c.1));
-            if worst.is_nan() || worst > self.shallow {
+            if worst.is_nan() || worst > self.shallow() {
                 return Some(Reason::Deviation);
             }
         }
         // A side from a surface vertex to a cap vertex cuts the solid's wedge at the crease
         // unless the extraction finds a crease point in its face (step 4 of
-        // `extract::assemble`); the triangles' deviation cannot see how deep.
+        // `extract::assemble`); the triangles' deviation cannot see how deep. The crease is
+        // farther than the tolerance from it, unless the solid is so thin there that the
+        // surface the chamfer cuts off is all within twice the tolerance of the sphere (where
+        // a grazing surface meets it): the measurement counts such places apart, and
+        // bisecting would not reach them before the floor. The estimate is one gradient; the
+        // search for the crease point, the dearer test, is made only where it fails.
         let n = placed.len();
         for i in 0..n {
             let (e1, e2) = (polygon[i], polygon[(i + 1) % n]);
@@ -739,33 +743,20 @@ impl Examiner<'_> {
                 (VertexKind::Surface, VertexKind::Cap) => (e2, e1, v2.0, v1.0),
                 _ => continue,
             };
-            // The corner both edges share, the cap edge's other end and the other's.
-            let Some(&shared) = cap_edge.iter().find(|c| other_edge.contains(c)) else {
+            let Some(face) = extract::side_face(cap_edge, other_edge) else {
                 continue;
             };
-            let r = if cap_edge[0] == shared {
-                cap_edge[1]
-            } else {
-                cap_edge[0]
-            };
-            let q = if other_edge[0] == shared {
-                other_edge[1]
-            } else {
-                other_edge[0]
-            };
-            let face = [shared, q, r].map(|c| self.lattice.position(t.corners[c as usize]));
-            if field.crease(face, cap).is_some() {
-                continue;
-            }
-            // The crease farther than the tolerance, unless the solid is so thin there that
-            // the surface the chamfer cuts off is all within twice the tolerance of the
-            // sphere (where a grazing surface meets it): the measurement counts such places
-            // apart, and bisecting would not reach them before the floor.
-            let deep = match field.chamfer(surface, cap) {
-                Some(c) => c.gap > self.tolerance && c.width >= self.thin_width,
-                None => false,
-            };
-            if deep {
+            let deep = field
+                .chamfer(surface, cap)
+                .is_some_and(|c| c.gap > self.tolerance && c.width >= 2.0 * self.tolerance);
+            if deep
+                && field
+                    .crease(
+                        face.map(|c| self.lattice.position(t.corners[c as usize])),
+                        cap,
+                    )
+                    .is_none()
+            {
                 return Some(Reason::ChamferedCrease);
             }
         }
@@ -1323,9 +1314,7 @@ mod tests {
             lattice,
             taylor: Taylor::new(&f),
             table: marching_table(),
-            shallow: 0.01,
             tolerance: 0.01 / EXTRACT_SHARE,
-            thin_width: 0.02 / EXTRACT_SHARE,
             floor_level: 3 * depth as u8,
             f_sign: 1.0,
         };
